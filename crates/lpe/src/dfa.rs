@@ -1,0 +1,226 @@
+//! Subset construction over event classes, then Hopcroft minimisation.
+
+use crate::nfa::{Nfa, NfaState, NfaStateId};
+use std::collections::HashMap;
+
+/// A dense DFA: `next[state * classes + class]`. State 0 is dead (no rule can match any
+/// continuation), `start` is where every path begins.
+#[derive(Clone, Debug)]
+pub struct Dfa {
+    pub classes: usize,
+    pub next: Vec<u32>,
+    /// Rules accepted in each state, sorted.
+    pub accept: Vec<Vec<u32>>,
+    pub start: u32,
+}
+
+impl Dfa {
+    pub fn len(&self) -> usize {
+        self.accept.len()
+    }
+    pub fn is_empty(&self) -> bool {
+        self.accept.is_empty()
+    }
+}
+
+/// The DFA would exceed the state limit; the count reached is given.
+#[derive(Debug)]
+pub struct StateLimit(pub usize);
+
+/// Determinises `nfa` over classes, where `holds(class, pred)` tells whether every event
+/// of the class satisfies predicate `pred`.
+pub fn determinize(
+    nfa: &Nfa,
+    classes: usize,
+    holds: impl Fn(usize, u32) -> bool,
+    limit: usize,
+) -> Result<Dfa, StateLimit> {
+    let mut mark = Vec::new();
+    let mut ids: HashMap<Vec<NfaStateId>, u32> = HashMap::new();
+    let mut sets: Vec<Vec<NfaStateId>> = Vec::new();
+    // The dead state first: the empty set.
+    ids.insert(Vec::new(), 0);
+    sets.push(Vec::new());
+    let start_set = nfa.closure([nfa.start], &mut mark);
+    let start = *ids.entry(start_set.clone()).or_insert_with(|| {
+        sets.push(start_set);
+        (sets.len() - 1) as u32
+    });
+    let mut next = Vec::new();
+    let mut todo = 0usize;
+    while todo < sets.len() {
+        // Event transitions out of this subset.
+        let moves: Vec<(u32, NfaStateId)> = sets[todo]
+            .iter()
+            .filter_map(|&s| match &nfa.states[s as usize] {
+                NfaState::Event { pred, next } => Some((*pred, *next)),
+                _ => None,
+            })
+            .collect();
+        for class in 0..classes {
+            let targets = moves.iter().filter(|(p, _)| holds(class, *p)).map(|(_, n)| *n);
+            let set = nfa.closure(targets, &mut mark);
+            let id = match ids.get(&set) {
+                Some(&id) => id,
+                None => {
+                    if sets.len() >= limit {
+                        return Err(StateLimit(sets.len() + 1));
+                    }
+                    let id = sets.len() as u32;
+                    ids.insert(set.clone(), id);
+                    sets.push(set);
+                    id
+                }
+            };
+            next.push(id);
+        }
+        todo += 1;
+    }
+    let accept = sets
+        .iter()
+        .map(|set| {
+            let mut rules: Vec<u32> = set
+                .iter()
+                .filter_map(|&s| match nfa.states[s as usize] {
+                    NfaState::Match(r) => Some(r),
+                    _ => None,
+                })
+                .collect();
+            rules.sort_unstable();
+            rules
+        })
+        .collect();
+    Ok(Dfa { classes, next, accept, start })
+}
+
+/// Hopcroft's partition refinement: merges states with the same future (same accepted
+/// rule sets after every continuation). The dead state stays state 0.
+pub fn minimize(dfa: &Dfa) -> Dfa {
+    let n = dfa.len();
+    let k = dfa.classes;
+    if n == 0 {
+        return dfa.clone();
+    }
+    // Initial partition: by accepted rule set.
+    let mut block_of = vec![0u32; n];
+    let mut blocks: Vec<Vec<u32>> = Vec::new();
+    {
+        let mut by_accept: HashMap<&[u32], u32> = HashMap::new();
+        for s in 0..n {
+            let b = *by_accept.entry(&dfa.accept[s]).or_insert_with(|| {
+                blocks.push(Vec::new());
+                (blocks.len() - 1) as u32
+            });
+            block_of[s] = b;
+            blocks[b as usize].push(s as u32);
+        }
+    }
+    // Inverse transitions: for class c and target t, the states that go to t on c.
+    let mut inv_start = vec![0u32; n * k + 1];
+    for s in 0..n {
+        for c in 0..k {
+            let t = dfa.next[s * k + c] as usize;
+            inv_start[t * k + c + 1] += 1;
+        }
+    }
+    for i in 1..inv_start.len() {
+        inv_start[i] += inv_start[i - 1];
+    }
+    let mut fill = inv_start.clone();
+    let mut inv = vec![0u32; n * k];
+    for s in 0..n {
+        for c in 0..k {
+            let t = dfa.next[s * k + c] as usize;
+            inv[fill[t * k + c] as usize] = s as u32;
+            fill[t * k + c] += 1;
+        }
+    }
+    let mut in_work = vec![true; blocks.len()];
+    let mut work: Vec<u32> = (0..blocks.len() as u32).collect();
+    let mut marked = vec![false; n];
+    let mut touched: Vec<u32> = Vec::new();
+    let mut marked_count: Vec<u32> = vec![0; blocks.len()];
+    while let Some(a) = work.pop() {
+        in_work[a as usize] = false;
+        let splitter = blocks[a as usize].clone();
+        for c in 0..k {
+            // X = states that go into the splitter on class c.
+            for &t in &splitter {
+                let i = t as usize * k + c;
+                for &s in &inv[inv_start[i] as usize..inv_start[i + 1] as usize] {
+                    if !marked[s as usize] {
+                        marked[s as usize] = true;
+                        let b = block_of[s as usize];
+                        if marked_count[b as usize] == 0 {
+                            touched.push(b);
+                        }
+                        marked_count[b as usize] += 1;
+                    }
+                }
+            }
+            for &b in &touched {
+                let count = marked_count[b as usize] as usize;
+                marked_count[b as usize] = 0;
+                if count == blocks[b as usize].len() {
+                    continue;
+                }
+                let (inside, outside): (Vec<u32>, Vec<u32>) =
+                    blocks[b as usize].iter().partition(|&&s| marked[s as usize]);
+                let new_id = blocks.len() as u32;
+                for &s in &inside {
+                    block_of[s as usize] = new_id;
+                }
+                blocks[b as usize] = outside;
+                blocks.push(inside);
+                marked_count.push(0);
+                if in_work[b as usize] {
+                    in_work.push(true);
+                    work.push(new_id);
+                } else {
+                    // Only the smaller half needs to split others further.
+                    let smaller = if blocks[new_id as usize].len() <= blocks[b as usize].len() { new_id } else { b };
+                    in_work.push(false);
+                    in_work[smaller as usize] = true;
+                    work.push(smaller);
+                }
+            }
+            for &b in &touched {
+                for &s in &blocks[b as usize] {
+                    marked[s as usize] = false;
+                }
+            }
+            // The new halves were cleared above only if they kept id b; clear the rest.
+            for s in splitter.iter().flat_map(|&t| {
+                let base = t as usize * k + c;
+                inv[inv_start[base] as usize..inv_start[base + 1] as usize].iter().copied()
+            }) {
+                marked[s as usize] = false;
+            }
+            touched.clear();
+        }
+    }
+    // Renumber: the dead state's block first, then in order of first appearance.
+    let mut new_id = vec![u32::MAX; blocks.len()];
+    let mut order = Vec::with_capacity(blocks.len());
+    let mut assign = |b: u32, order: &mut Vec<u32>| {
+        if new_id[b as usize] == u32::MAX {
+            new_id[b as usize] = order.len() as u32;
+            order.push(b);
+        }
+    };
+    assign(block_of[0], &mut order);
+    assign(block_of[dfa.start as usize], &mut order);
+    for s in 0..n {
+        assign(block_of[s], &mut order);
+    }
+    let mut next = Vec::with_capacity(order.len() * k);
+    let mut accept = Vec::with_capacity(order.len());
+    for &b in &order {
+        let rep = blocks[b as usize][0] as usize;
+        for c in 0..k {
+            next.push(new_id[block_of[dfa.next[rep * k + c] as usize] as usize]);
+        }
+        accept.push(dfa.accept[rep].clone());
+    }
+    Dfa { classes: k, next, accept, start: new_id[block_of[dfa.start as usize] as usize] }
+}

@@ -1,0 +1,468 @@
+//! The compiled, immutable automaton a renderer steps at every path vertex, and the
+//! compiler that builds it from AOV definitions.
+
+use crate::dfa::{determinize, minimize};
+use crate::error::{Error, ErrorKind, Span};
+use crate::event::{all_scatters, Event, EventType};
+use crate::hir::{lower, Hir, Pred, RESERVED_TYPES};
+use crate::nfa::{Nfa, NfaBuilder, NfaState};
+use crate::prefix::{standard_name, Flags};
+use crate::syntax::ast::{Body, Definition};
+use crate::syntax::{parse_definition, print_definition};
+use std::collections::HashMap;
+
+/// The index of a rule (an AOV definition) in the order it was added.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub struct RuleId(pub u32);
+
+/// An event class: all events that every rule treats alike. Obtained from
+/// [`Automaton::classify`], once per distinct event (at scene build, not per vertex).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub struct ClassId(u32);
+
+impl ClassId {
+    pub fn index(self) -> usize {
+        self.0 as usize
+    }
+}
+
+/// The automaton state of a path prefix: one `u32`, pre-multiplied by the class count so
+/// that a step is one table load.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub struct StateId(u32);
+
+/// One parsed and lowered AOV definition.
+#[derive(Clone, Debug)]
+pub struct Rule {
+    /// `NAME` of `NAME=…`, if given.
+    pub name: Option<String>,
+    /// The definition as written.
+    pub source: String,
+    /// The expression after expanding standard names, without prefixes.
+    pub expression: String,
+    /// Prefixes, the written ones merged with a standard name's.
+    pub flags: Flags,
+    pub(crate) definition: Definition,
+    pub(crate) hir: Hir,
+}
+
+impl Rule {
+    /// Parses and lowers one definition.
+    pub fn parse(source: &str) -> Result<Rule, Error> {
+        let definition = parse_definition(source)?;
+        let mut flags: Flags = definition.prefixes.iter().copied().collect();
+        let (expr_def, expression) = match &definition.body {
+            Body::Expr(_) => {
+                let bare = Definition { name: None, lpe_marker: false, prefixes: vec![], body: definition.body.clone() };
+                (definition.clone(), print_definition(&bare))
+            }
+            Body::Standard(name) => {
+                let (_, text) = standard_name(name).expect("the parser only accepts known names");
+                let std_def = parse_definition(text).expect("standard definitions are valid");
+                for p in &std_def.prefixes {
+                    flags.insert(*p);
+                }
+                let bare = Definition { name: None, lpe_marker: false, prefixes: vec![], body: std_def.body.clone() };
+                (std_def, print_definition(&bare))
+            }
+        };
+        let Body::Expr(expr) = &expr_def.body else { unreachable!("standard names expand to expressions") };
+        let hir = lower(expr);
+        Ok(Rule { name: definition.name.clone(), source: source.to_string(), expression, flags, definition, hir })
+    }
+
+    /// The syntax tree as written.
+    pub fn definition(&self) -> &Definition {
+        &self.definition
+    }
+
+    /// The lowered expression.
+    pub fn hir(&self) -> &Hir {
+        &self.hir
+    }
+}
+
+/// A note about a valid rule that will probably not do what was meant.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct Warning {
+    pub rule: RuleId,
+    pub message: String,
+}
+
+/// Sizes of the compilation stages, for `lpe explain` and benchmarks.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Stats {
+    pub nfa_states: usize,
+    pub predicates: usize,
+    pub classes: usize,
+    pub dfa_states: usize,
+    pub min_dfa_states: usize,
+}
+
+/// Builds an [`Automaton`] from rules and the events it must classify.
+#[derive(Clone, Debug)]
+pub struct Compiler {
+    rules: Vec<Rule>,
+    vocabulary: Vec<Event>,
+    state_limit: usize,
+    nfa_limit: usize,
+}
+
+impl Default for Compiler {
+    fn default() -> Self {
+        Compiler::new()
+    }
+}
+
+/// Default limit on DFA states built by subset construction (LPE.md §8).
+pub const DEFAULT_STATE_LIMIT: usize = 10_000;
+
+impl Compiler {
+    pub fn new() -> Compiler {
+        Compiler { rules: Vec::new(), vocabulary: Vec::new(), state_limit: DEFAULT_STATE_LIMIT, nfa_limit: 1_000_000 }
+    }
+
+    /// The most DFA states subset construction may build before giving up with an error.
+    pub fn state_limit(mut self, limit: usize) -> Compiler {
+        self.state_limit = limit.max(2);
+        self
+    }
+
+    /// Parses a definition and adds it as the next rule.
+    pub fn add(&mut self, definition: &str) -> Result<RuleId, Error> {
+        let rule = Rule::parse(definition)?;
+        Ok(self.add_rule(rule))
+    }
+
+    pub fn add_rule(&mut self, rule: Rule) -> RuleId {
+        self.rules.push(rule);
+        RuleId(self.rules.len() as u32 - 1)
+    }
+
+    /// Events the automaton must classify beyond the default alphabet (every type and
+    /// scatter with no label or one label the rules name). A renderer passes every event
+    /// its scene can emit; events carrying several labels need this.
+    pub fn vocabulary(&mut self, events: impl IntoIterator<Item = Event>) -> &mut Compiler {
+        self.vocabulary.extend(events);
+        self
+    }
+
+    pub fn rules(&self) -> &[Rule] {
+        &self.rules
+    }
+
+    pub fn compile(&self) -> Result<Automaton, Error> {
+        let whole = |rules: &[Rule]| {
+            let len = rules.last().map_or(0, |r| r.source.len());
+            Span::new(0, len)
+        };
+        let too_large = |what: String| Error::new(ErrorKind::StateLimit, whole(&self.rules), what);
+        let mut builder = NfaBuilder::new(self.nfa_limit);
+        for rule in &self.rules {
+            builder
+                .add_rule(&rule.hir)
+                .map_err(|_| too_large(format!("expression too large: its NFA exceeds {} states", self.nfa_limit)))?;
+        }
+        let nfa = builder
+            .build()
+            .map_err(|_| too_large(format!("expression too large: its NFA exceeds {} states", self.nfa_limit)))?;
+
+        let alphabet = Alphabet::new(&nfa.preds, &self.vocabulary);
+        let dfa = determinize(&nfa, alphabet.classes.len(), |c, p| alphabet.holds(c, p), self.state_limit)
+            .map_err(|_| {
+                too_large(format!(
+                    "the automaton exceeds the state limit of {} DFA states: simplify the expression or raise the limit",
+                    self.state_limit
+                ))
+            })?;
+        let dfa_states = dfa.len();
+        let min = minimize(&dfa);
+        let stats = Stats {
+            nfa_states: nfa.states.len(),
+            predicates: nfa.preds.len(),
+            classes: alphabet.classes.len(),
+            dfa_states,
+            min_dfa_states: min.len(),
+        };
+        let warnings = self.warnings(&nfa);
+        Ok(Automaton::from_dfa(min, alphabet, nfa, self.rules.clone(), warnings, stats))
+    }
+
+    fn warnings(&self, nfa: &Nfa) -> Vec<Warning> {
+        let mut out = Vec::new();
+        for (i, rule) in self.rules.iter().enumerate() {
+            let id = RuleId(i as u32);
+            let alone = single_rule_nfa(&rule.hir);
+            if !alone.rule_can_match(0) {
+                out.push(Warning { rule: id, message: "this rule can never match: no event satisfies one of its parts".into() });
+            } else if !renderable(&rule.hir, false) {
+                if renderable(&rule.hir, true) {
+                    out.push(Warning {
+                        rule: id,
+                        message: "this rule needs a V (volume) or B (background) event, which Lightpath never emits: it will stay black".into(),
+                    });
+                } else {
+                    out.push(Warning {
+                        rule: id,
+                        message: "rendered paths start with the camera event C and have no other C: this rule never matches one (start it with C)".into(),
+                    });
+                }
+            }
+        }
+        let _ = nfa;
+        out
+    }
+}
+
+fn single_rule_nfa(hir: &Hir) -> Nfa {
+    let mut b = NfaBuilder::new(usize::MAX);
+    let _ = b.add_rule(hir);
+    b.build().unwrap_or_else(|_| unreachable!("no limit"))
+}
+
+/// Can the rule match a path of the shape renderers produce: `C` first, no other `C`, and
+/// (unless `allow_reserved`) no `V` or `B`? A walk of the rule's NFA paired with a flag
+/// "the first event is behind us".
+fn renderable(hir: &Hir, allow_reserved: bool) -> bool {
+    let excluded = EventType::Camera.bit() | if allow_reserved { 0 } else { RESERVED_TYPES };
+    let nfa = single_rule_nfa(hir);
+    let mut seen = vec![[false; 2]; nfa.states.len()];
+    let mut stack = vec![(nfa.start, 0usize)];
+    while let Some((s, after_first)) = stack.pop() {
+        if std::mem::replace(&mut seen[s as usize][after_first], true) {
+            continue;
+        }
+        match &nfa.states[s as usize] {
+            NfaState::Split(next) => stack.extend(next.iter().map(|&n| (n, after_first))),
+            NfaState::Event { pred, next } => {
+                let p = &nfa.preds[*pred as usize];
+                let ok = if after_first == 0 {
+                    p.matches(&Event::camera())
+                } else {
+                    !p.without_types(excluded).is_empty()
+                };
+                if ok {
+                    stack.push((*next, 1));
+                }
+            }
+            NfaState::Match(_) if after_first == 1 => return true,
+            NfaState::Match(_) => {}
+        }
+    }
+    false
+}
+
+/// Event classes: the distinct signatures (which predicates hold) of the events the
+/// automaton may see.
+#[derive(Clone, Debug)]
+struct Alphabet {
+    words: usize,
+    /// Signature bits of each class, `words` u64s per class.
+    classes: Vec<Vec<u64>>,
+    by_signature: HashMap<Vec<u64>, u32>,
+}
+
+impl Alphabet {
+    fn new(preds: &[Pred], vocabulary: &[Event]) -> Alphabet {
+        let words = preds.len().div_ceil(64).max(1);
+        let mut a = Alphabet { words, classes: Vec::new(), by_signature: HashMap::new() };
+        let mut labels: Vec<&str> = preds.iter().flat_map(|p| p.mentioned_labels()).collect();
+        labels.sort_unstable();
+        labels.dedup();
+        for ty in EventType::ALL {
+            for scatter in all_scatters() {
+                a.insert(preds, &Event::new::<&str>(ty, scatter, []));
+                for l in &labels {
+                    a.insert(preds, &Event::new(ty, scatter, [*l]));
+                }
+            }
+        }
+        for e in vocabulary {
+            a.insert(preds, e);
+        }
+        a
+    }
+
+    fn signature(&self, preds: &[Pred], e: &Event) -> Vec<u64> {
+        let mut sig = vec![0u64; self.words];
+        for (i, p) in preds.iter().enumerate() {
+            if p.matches(e) {
+                sig[i / 64] |= 1 << (i % 64);
+            }
+        }
+        sig
+    }
+
+    fn insert(&mut self, preds: &[Pred], e: &Event) {
+        let sig = self.signature(preds, e);
+        if !self.by_signature.contains_key(&sig) {
+            self.by_signature.insert(sig.clone(), self.classes.len() as u32);
+            self.classes.push(sig);
+        }
+    }
+
+    fn holds(&self, class: usize, pred: u32) -> bool {
+        self.classes[class][pred as usize / 64] & (1 << (pred % 64)) != 0
+    }
+}
+
+/// The immutable automaton: classify events once, then one table load per vertex.
+///
+/// ```
+/// let mut c = lpe::Compiler::new();
+/// let direct = c.add("lpe:C<RD>[<L.>O]").unwrap();
+/// let a = c.compile().unwrap();
+/// let path = lpe::parse_path("C<RD'floor'><L'key'>").unwrap();
+/// let mut s = a.start();
+/// for e in &path {
+///     s = a.step(s, a.classify(e).unwrap());
+/// }
+/// assert_eq!(a.accepting(s), &[direct]);
+/// ```
+#[derive(Clone, Debug)]
+pub struct Automaton {
+    /// `table[state + class]`, states pre-multiplied by `stride`.
+    table: Vec<StateId>,
+    stride: u32,
+    start: StateId,
+    /// States at or above this row accept at least one rule.
+    first_accepting: u32,
+    accept_offsets: Vec<u32>,
+    accept_rules: Vec<RuleId>,
+    alphabet: Alphabet,
+    nfa: Nfa,
+    rules: Vec<Rule>,
+    warnings: Vec<Warning>,
+    stats: Stats,
+}
+
+impl Automaton {
+    fn from_dfa(dfa: crate::dfa::Dfa, alphabet: Alphabet, nfa: Nfa, rules: Vec<Rule>, warnings: Vec<Warning>, stats: Stats) -> Automaton {
+        let n = dfa.len();
+        let k = dfa.classes.max(1);
+        // Order: dead (0), then non-accepting, then accepting, so one compare answers
+        // "accepting?" and another "dead?".
+        let mut order: Vec<usize> = (1..n).collect();
+        order.sort_by_key(|&s| (!dfa.accept[s].is_empty(), s));
+        order.insert(0, 0);
+        let mut rank = vec![0u32; n];
+        for (r, &s) in order.iter().enumerate() {
+            rank[s] = r as u32;
+        }
+        let first_accepting = order.iter().position(|&s| !dfa.accept[s].is_empty()).unwrap_or(n) as u32;
+        let mut table = Vec::with_capacity(n * k);
+        let mut accept_offsets = vec![0u32];
+        let mut accept_rules = Vec::new();
+        for &s in &order {
+            for c in 0..dfa.classes {
+                table.push(StateId(rank[dfa.next[s * dfa.classes + c] as usize] * k as u32));
+            }
+            accept_rules.extend(dfa.accept[s].iter().map(|&r| RuleId(r)));
+            accept_offsets.push(accept_rules.len() as u32);
+        }
+        Automaton {
+            table,
+            stride: k as u32,
+            start: StateId(rank[dfa.start as usize] * k as u32),
+            first_accepting: first_accepting * k as u32,
+            accept_offsets,
+            accept_rules,
+            alphabet,
+            nfa,
+            rules,
+            warnings,
+            stats,
+        }
+    }
+
+    /// The state before any event (the camera event is the first step).
+    #[inline]
+    pub fn start(&self) -> StateId {
+        self.start
+    }
+
+    /// The class of an event, or `None` if the automaton was not built for events like it
+    /// (add it to [`Compiler::vocabulary`]).
+    pub fn classify(&self, event: &Event) -> Option<ClassId> {
+        let sig = self.alphabet.signature(&self.nfa.preds, event);
+        self.alphabet.by_signature.get(&sig).map(|&c| ClassId(c))
+    }
+
+    /// Advances the path by one event: one table load.
+    #[inline(always)]
+    pub fn step(&self, state: StateId, class: ClassId) -> StateId {
+        self.table[(state.0 + class.0) as usize]
+    }
+
+    /// True if no rule can match any continuation: the path can stop.
+    #[inline(always)]
+    pub fn is_dead(&self, state: StateId) -> bool {
+        state.0 == 0
+    }
+
+    /// The rules that accept a path ending in this state.
+    #[inline]
+    pub fn accepting(&self, state: StateId) -> &[RuleId] {
+        if state.0 < self.first_accepting {
+            return &[];
+        }
+        let row = (state.0 / self.stride) as usize;
+        &self.accept_rules[self.accept_offsets[row] as usize..self.accept_offsets[row + 1] as usize]
+    }
+
+    /// Runs a whole path; `None` if one of its events cannot be classified.
+    pub fn run(&self, path: &[Event]) -> Option<&[RuleId]> {
+        let mut s = self.start;
+        for e in path {
+            s = self.step(s, self.classify(e)?);
+        }
+        Some(self.accepting(s))
+    }
+
+    /// The reference answer by NFA simulation (for tests).
+    pub fn simulate(&self, path: &[Event]) -> Vec<RuleId> {
+        self.nfa.simulate(path).into_iter().map(RuleId).collect()
+    }
+
+    pub fn rules(&self) -> &[Rule] {
+        &self.rules
+    }
+
+    pub fn rule(&self, id: RuleId) -> &Rule {
+        &self.rules[id.0 as usize]
+    }
+
+    pub fn warnings(&self) -> &[Warning] {
+        &self.warnings
+    }
+
+    pub fn stats(&self) -> Stats {
+        self.stats
+    }
+
+    pub fn class_count(&self) -> usize {
+        self.stride as usize
+    }
+
+    pub fn state_count(&self) -> usize {
+        self.table.len() / self.stride as usize
+    }
+}
+
+/// Compiles definitions into one automaton with the default alphabet.
+pub fn compile<S: AsRef<str>>(definitions: &[S]) -> Result<Automaton, Error> {
+    let mut c = Compiler::new();
+    for d in definitions {
+        c.add(d.as_ref())?;
+    }
+    c.compile()
+}
+
+/// Does `definition` match `path`? Compiles with the path's events in the vocabulary.
+pub fn matches(definition: &str, path: &[Event]) -> Result<bool, Error> {
+    let mut c = Compiler::new();
+    c.add(definition)?;
+    c.vocabulary(path.iter().cloned());
+    let a = c.compile()?;
+    Ok(!a.run(path).unwrap_or(&[]).is_empty())
+}
