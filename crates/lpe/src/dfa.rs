@@ -27,21 +27,77 @@ impl Dfa {
 #[derive(Debug)]
 pub struct StateLimit(pub usize);
 
-/// Determinises `nfa` over classes, where `holds(class, pred)` tells whether every event
-/// of the class satisfies predicate `pred`.
-pub fn determinize(
-    nfa: &Nfa,
-    classes: usize,
-    holds: impl Fn(usize, u32) -> bool,
-    limit: usize,
-) -> Result<Dfa, StateLimit> {
+/// How subsets of NFA states are stored: bitsets with each state's closure precomputed
+/// (fast, for NFAs up to `DENSE_LIMIT` states), or sorted id lists for larger ones.
+enum Subsets {
+    Dense { words: usize, closures: Vec<Vec<u64>> },
+    Sparse,
+}
+
+const DENSE_LIMIT: usize = 8192;
+
+impl Subsets {
+    fn new(nfa: &Nfa) -> Subsets {
+        let n = nfa.states.len();
+        if n > DENSE_LIMIT {
+            return Subsets::Sparse;
+        }
+        let words = n.div_ceil(64).max(1);
+        let mut mark = Vec::new();
+        let closures = (0..n as NfaStateId)
+            .map(|s| {
+                let mut bits = vec![0u64; words];
+                for t in nfa.closure([s], &mut mark) {
+                    bits[t as usize / 64] |= 1 << (t % 64);
+                }
+                bits
+            })
+            .collect();
+        Subsets::Dense { words, closures }
+    }
+
+    /// The epsilon closure of `targets`, as a hashable key.
+    fn closure(&self, nfa: &Nfa, targets: impl Iterator<Item = NfaStateId>, mark: &mut Vec<bool>) -> Vec<u64> {
+        match self {
+            Subsets::Dense { words, closures } => {
+                let mut bits = vec![0u64; *words];
+                for t in targets {
+                    for (b, c) in bits.iter_mut().zip(&closures[t as usize]) {
+                        *b |= c;
+                    }
+                }
+                bits
+            }
+            Subsets::Sparse => nfa.closure(targets, mark).into_iter().map(u64::from).collect(),
+        }
+    }
+
+    fn members(&self, set: &[u64]) -> Vec<NfaStateId> {
+        match self {
+            Subsets::Dense { .. } => set
+                .iter()
+                .enumerate()
+                .flat_map(|(w, &bits)| (0..64).filter(move |b| bits & (1 << b) != 0).map(move |b| (w * 64 + b) as NfaStateId))
+                .collect(),
+            Subsets::Sparse => set.iter().map(|&s| s as NfaStateId).collect(),
+        }
+    }
+}
+
+/// Determinises `nfa` over event classes, given as signatures: bit `p` of a class's
+/// signature is set when its events satisfy predicate `p`.
+pub fn determinize(nfa: &Nfa, class_sigs: &[Vec<u64>], limit: usize) -> Result<Dfa, StateLimit> {
+    let classes = class_sigs.len();
+    let pred_words = nfa.preds.len().div_ceil(64).max(1);
+    let subsets = Subsets::new(nfa);
     let mut mark = Vec::new();
-    let mut ids: HashMap<Vec<NfaStateId>, u32> = HashMap::new();
-    let mut sets: Vec<Vec<NfaStateId>> = Vec::new();
+    let mut ids: HashMap<Vec<u64>, u32> = HashMap::new();
+    let mut sets: Vec<Vec<u64>> = Vec::new();
     // The dead state first: the empty set.
-    ids.insert(Vec::new(), 0);
-    sets.push(Vec::new());
-    let start_set = nfa.closure([nfa.start], &mut mark);
+    let empty = subsets.closure(nfa, std::iter::empty(), &mut mark);
+    ids.insert(empty.clone(), 0);
+    sets.push(empty);
+    let start_set = subsets.closure(nfa, std::iter::once(nfa.start), &mut mark);
     let start = *ids.entry(start_set.clone()).or_insert_with(|| {
         sets.push(start_set);
         (sets.len() - 1) as u32
@@ -50,16 +106,29 @@ pub fn determinize(
     let mut todo = 0usize;
     while todo < sets.len() {
         // Event transitions out of this subset.
-        let moves: Vec<(u32, NfaStateId)> = sets[todo]
-            .iter()
-            .filter_map(|&s| match &nfa.states[s as usize] {
+        let moves: Vec<(u32, NfaStateId)> = subsets
+            .members(&sets[todo])
+            .into_iter()
+            .filter_map(|s| match &nfa.states[s as usize] {
                 NfaState::Event { pred, next } => Some((*pred, *next)),
                 _ => None,
             })
             .collect();
-        for class in 0..classes {
-            let targets = moves.iter().filter(|(p, _)| holds(class, *p)).map(|(_, n)| *n);
-            let set = nfa.closure(targets, &mut mark);
+        // A class's successor depends only on which of this subset's predicates hold for
+        // it: compute each distinct successor once.
+        let mut mask = vec![0u64; pred_words];
+        for (p, _) in &moves {
+            mask[*p as usize / 64] |= 1 << (p % 64);
+        }
+        let mut by_key: HashMap<Vec<u64>, u32> = HashMap::new();
+        for sig in class_sigs {
+            let key: Vec<u64> = sig.iter().zip(&mask).map(|(s, m)| s & m).collect();
+            if let Some(&id) = by_key.get(&key) {
+                next.push(id);
+                continue;
+            }
+            let targets = moves.iter().filter(|(p, _)| key[*p as usize / 64] & (1 << (p % 64)) != 0).map(|(_, n)| *n);
+            let set = subsets.closure(nfa, targets, &mut mark);
             let id = match ids.get(&set) {
                 Some(&id) => id,
                 None => {
@@ -72,6 +141,7 @@ pub fn determinize(
                     id
                 }
             };
+            by_key.insert(key, id);
             next.push(id);
         }
         todo += 1;
@@ -79,9 +149,10 @@ pub fn determinize(
     let accept = sets
         .iter()
         .map(|set| {
-            let mut rules: Vec<u32> = set
-                .iter()
-                .filter_map(|&s| match nfa.states[s as usize] {
+            let mut rules: Vec<u32> = subsets
+                .members(set)
+                .into_iter()
+                .filter_map(|s| match nfa.states[s as usize] {
                     NfaState::Match(r) => Some(r),
                     _ => None,
                 })

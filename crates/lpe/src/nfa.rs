@@ -121,9 +121,9 @@ impl NfaBuilder {
 }
 
 impl Nfa {
-    /// Adds the epsilon closure of `set` to itself, keeping it sorted and unique.
+    /// The epsilon closure of `seeds`, sorted and unique.
     pub fn closure(&self, seeds: impl IntoIterator<Item = NfaStateId>, mark: &mut Vec<bool>) -> Vec<NfaStateId> {
-        mark.clear();
+        // `mark` is all false between calls: only the visited entries are reset below.
         mark.resize(self.states.len(), false);
         let mut stack: Vec<NfaStateId> = seeds.into_iter().collect();
         let mut out = Vec::new();
@@ -135,6 +135,9 @@ impl Nfa {
             if let NfaState::Split(next) = &self.states[s as usize] {
                 stack.extend(next.iter().copied());
             }
+        }
+        for &s in &out {
+            mark[s as usize] = false;
         }
         out.sort_unstable();
         out

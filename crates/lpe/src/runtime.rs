@@ -106,6 +106,8 @@ pub struct Compiler {
     vocabulary: Vec<Event>,
     state_limit: usize,
     nfa_limit: usize,
+    minimize: bool,
+    default_alphabet: bool,
 }
 
 impl Default for Compiler {
@@ -119,12 +121,27 @@ pub const DEFAULT_STATE_LIMIT: usize = 10_000;
 
 impl Compiler {
     pub fn new() -> Compiler {
-        Compiler { rules: Vec::new(), vocabulary: Vec::new(), state_limit: DEFAULT_STATE_LIMIT, nfa_limit: 1_000_000 }
+        Compiler { rules: Vec::new(), vocabulary: Vec::new(), state_limit: DEFAULT_STATE_LIMIT, nfa_limit: 200_000, minimize: true, default_alphabet: true }
     }
 
     /// The most DFA states subset construction may build before giving up with an error.
     pub fn state_limit(mut self, limit: usize) -> Compiler {
         self.state_limit = limit.max(2);
+        self
+    }
+
+    /// Whether the alphabet includes the default events (every event of the shapes a
+    /// renderer emits, LPE.md §1: `C`, `L`, `O`, `V`, `B` without scatter, `R`/`T` with
+    /// any lobe; each with no label or one label the rules name). A renderer that passes
+    /// its whole scene as the vocabulary turns this off for the smallest table.
+    pub fn default_alphabet(mut self, on: bool) -> Compiler {
+        self.default_alphabet = on;
+        self
+    }
+
+    /// Whether to minimise the DFA (on by default; off only to test minimisation).
+    pub fn minimize(mut self, on: bool) -> Compiler {
+        self.minimize = on;
         self
     }
 
@@ -139,9 +156,9 @@ impl Compiler {
         RuleId(self.rules.len() as u32 - 1)
     }
 
-    /// Events the automaton must classify beyond the default alphabet (every type and
-    /// scatter with no label or one label the rules name). A renderer passes every event
-    /// its scene can emit; events carrying several labels need this.
+    /// Events the automaton must classify beyond the default alphabet. A renderer passes
+    /// every event its scene can emit; events with several labels, or of shapes renderers
+    /// do not emit (`<LD>`), need this.
     pub fn vocabulary(&mut self, events: impl IntoIterator<Item = Event>) -> &mut Compiler {
         self.vocabulary.extend(events);
         self
@@ -167,8 +184,8 @@ impl Compiler {
             .build()
             .map_err(|_| too_large(format!("expression too large: its NFA exceeds {} states", self.nfa_limit)))?;
 
-        let alphabet = Alphabet::new(&nfa.preds, &self.vocabulary);
-        let dfa = determinize(&nfa, alphabet.classes.len(), |c, p| alphabet.holds(c, p), self.state_limit)
+        let alphabet = Alphabet::new(&nfa.preds, &self.vocabulary, self.default_alphabet);
+        let dfa = determinize(&nfa, &alphabet.classes, self.state_limit)
             .map_err(|_| {
                 too_large(format!(
                     "the automaton exceeds the state limit of {} DFA states: simplify the expression or raise the limit",
@@ -176,7 +193,7 @@ impl Compiler {
                 ))
             })?;
         let dfa_states = dfa.len();
-        let min = minimize(&dfa);
+        let min = if self.minimize { minimize(&dfa) } else { dfa };
         let stats = Stats {
             nfa_states: nfa.states.len(),
             predicates: nfa.preds.len(),
@@ -263,14 +280,16 @@ struct Alphabet {
 }
 
 impl Alphabet {
-    fn new(preds: &[Pred], vocabulary: &[Event]) -> Alphabet {
+    fn new(preds: &[Pred], vocabulary: &[Event], default_events: bool) -> Alphabet {
         let words = preds.len().div_ceil(64).max(1);
         let mut a = Alphabet { words, classes: Vec::new(), by_signature: HashMap::new() };
         let mut labels: Vec<&str> = preds.iter().flat_map(|p| p.mentioned_labels()).collect();
         labels.sort_unstable();
         labels.dedup();
-        for ty in EventType::ALL {
-            for scatter in all_scatters() {
+        let types = if default_events { &EventType::ALL[..] } else { &[] };
+        for &ty in types {
+            let scattering = matches!(ty, EventType::Reflect | EventType::Transmit);
+            for scatter in all_scatters().filter(|s| s.is_some() == scattering) {
                 a.insert(preds, &Event::new::<&str>(ty, scatter, []));
                 for l in &labels {
                     a.insert(preds, &Event::new(ty, scatter, [*l]));
@@ -299,10 +318,6 @@ impl Alphabet {
             self.by_signature.insert(sig.clone(), self.classes.len() as u32);
             self.classes.push(sig);
         }
-    }
-
-    fn holds(&self, class: usize, pred: u32) -> bool {
-        self.classes[class][pred as usize / 64] & (1 << (pred % 64)) != 0
     }
 }
 
