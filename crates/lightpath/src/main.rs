@@ -1,1 +1,370 @@
-fn main(){}
+//! The `lightpath` command: render scenes and work with Light Path Expressions.
+
+use clap::{Parser, Subcommand};
+use lightpath::aov::{self, AovSpec};
+use lightpath::output;
+use std::io::{BufRead, Write};
+use std::path::PathBuf;
+use std::process::ExitCode;
+
+#[derive(Parser)]
+#[command(name = "lightpath", version, about = "A CPU path tracer whose every AOV is a Light Path Expression")]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// Render a scene file or a built-in scene (cornell, cornell-classic) to EXR and PNG.
+    Render(RenderArgs),
+    /// Check, match and explain Light Path Expressions.
+    #[command(subcommand)]
+    Lpe(LpeCommand),
+}
+
+#[derive(clap::Args)]
+struct RenderArgs {
+    /// A scene file (TOML) or the name of a built-in scene.
+    #[arg(default_value = "cornell")]
+    scene: String,
+    /// Output EXR; the PNG preview goes beside it. Default: <scene>.exr in this directory.
+    #[arg(short, long)]
+    output: Option<PathBuf>,
+    #[arg(long)]
+    spp: Option<u32>,
+    /// Path segments, as Mitsuba counts them (1: emitters seen directly, 2: + direct light).
+    #[arg(long)]
+    max_depth: Option<u32>,
+    /// WIDTHxHEIGHT
+    #[arg(long, value_parser = parse_resolution)]
+    resolution: Option<[u32; 2]>,
+    /// An extra AOV, NAME=DEFINITION (repeatable).
+    #[arg(long = "aov")]
+    aovs: Vec<String>,
+    /// Which standard AOVs to add: standard (the table of LPE.md §7) or none.
+    #[arg(long = "aovs", default_value = "standard", value_parser = ["standard", "none"])]
+    aov_set: String,
+    /// Split beauty per light group (beauty_<group>).
+    #[arg(long)]
+    light_groups: bool,
+    #[arg(long)]
+    threads: Option<usize>,
+    #[arg(long)]
+    seed: Option<u64>,
+    /// Write half-float channels instead of float32.
+    #[arg(long)]
+    half: bool,
+    /// Exposure of the PNG preview, in stops.
+    #[arg(long, default_value_t = 0.0)]
+    exposure: f32,
+    /// No progress bar.
+    #[arg(short, long)]
+    quiet: bool,
+}
+
+fn parse_resolution(s: &str) -> Result<[u32; 2], String> {
+    let (w, h) = s.split_once(['x', 'X']).ok_or("expected WIDTHxHEIGHT, e.g. 640x480")?;
+    let w: u32 = w.trim().parse().map_err(|_| format!("bad width '{w}'"))?;
+    let h: u32 = h.trim().parse().map_err(|_| format!("bad height '{h}'"))?;
+    if w == 0 || h == 0 || w > 32768 || h > 32768 {
+        return Err("resolution must be between 1 and 32768 in each direction".into());
+    }
+    Ok([w, h])
+}
+
+#[derive(Subcommand)]
+enum LpeCommand {
+    /// Exit 0 when every definition is valid; otherwise print diagnostics and exit 1.
+    Check { definitions: Vec<String> },
+    /// Print `match` or `no match` for each definition against a path; with --jsonl,
+    /// read {"expr", "path"} lines on stdin and answer one JSON line each.
+    Match {
+        definitions: Vec<String>,
+        #[arg(long)]
+        path: Option<String>,
+        #[arg(long)]
+        jsonl: bool,
+    },
+    /// Each rule in plain English, and the automaton's size.
+    Explain { definitions: Vec<String> },
+    /// The standard names and their expressions.
+    Names,
+}
+
+fn main() -> ExitCode {
+    let cli = Cli::parse();
+    match cli.command {
+        Command::Render(args) => render(args),
+        Command::Lpe(cmd) => lpe_command(cmd),
+    }
+}
+
+fn render(args: RenderArgs) -> ExitCode {
+    if let Some(n) = args.threads {
+        if let Err(e) = rayon::ThreadPoolBuilder::new().num_threads(n.max(1)).build_global() {
+            eprintln!("warning: cannot set the thread count: {e}");
+        }
+    }
+    let src = match lightpath::load_source(&args.scene) {
+        Ok(s) => s,
+        Err(e) => {
+            eprintln!("error: {e}");
+            return ExitCode::FAILURE;
+        }
+    };
+    let mut desc = match src.parse() {
+        Ok(d) => d,
+        Err(e) => {
+            eprintln!("error: {e}");
+            return ExitCode::FAILURE;
+        }
+    };
+    if let Some(spp) = args.spp {
+        desc.render.spp = spp;
+    }
+    if let Some(d) = args.max_depth {
+        desc.render.max_depth = d;
+    }
+    if let Some(r) = args.resolution {
+        desc.film.resolution = r;
+    }
+    if let Some(s) = args.seed {
+        desc.render.seed = s;
+    }
+    let mut specs = Vec::new();
+    if args.aov_set == "standard" {
+        specs.extend(aov::standard());
+    }
+    specs.extend(desc.aovs.iter().map(|(n, d)| AovSpec::new(n.clone(), d.get_ref().clone())));
+    for a in &args.aovs {
+        match AovSpec::parse(a) {
+            Ok(s) => specs.push(s),
+            Err(e) => {
+                eprintln!("error: --aov {a}: {e}");
+                return ExitCode::FAILURE;
+            }
+        }
+    }
+    if args.light_groups || desc.light_groups {
+        let mut groups: Vec<String> = desc.lights.iter().flat_map(|l| l.get_ref().groups.clone()).collect();
+        groups.sort();
+        groups.dedup();
+        if groups.len() + specs.len() > 64 {
+            eprintln!("warning: the light-group split makes {} AOVs", groups.len() + specs.len() + 1);
+        }
+        specs.extend(aov::light_group_split(&groups));
+    }
+    let specs = aov::assemble(specs);
+    let scene = match lightpath::Scene::build(&src, &desc, &specs) {
+        Ok(s) => s,
+        Err(e) => {
+            eprintln!("error: {e}");
+            return ExitCode::FAILURE;
+        }
+    };
+    for w in scene.automaton.warnings() {
+        let aov = &scene.aovs[w.rule.0 as usize];
+        eprintln!("warning: AOV '{}' ({}): {}", aov.name, aov.definition, w.message);
+    }
+    let stem = match args.output.as_ref() {
+        Some(p) => p.with_extension(""),
+        None => PathBuf::from(std::path::Path::new(&args.scene).file_stem().map(|s| s.to_os_string()).unwrap_or_else(|| "render".into())),
+    };
+    let exr_path = args.output.clone().unwrap_or_else(|| stem.with_extension("exr"));
+    let png_path = stem.with_extension("png");
+    let options = lightpath::RenderOptions { spp: scene.settings.spp, first_sample: 0, progress: !args.quiet };
+    let (film, stats) = lightpath::render(&scene, &options);
+    let extra = vec![
+        ("lightpath/scene".to_string(), src.name.clone()),
+        ("lightpath/spp".to_string(), scene.settings.spp.to_string()),
+        ("lightpath/seed".to_string(), scene.settings.seed.to_string()),
+    ];
+    if let Err(e) = output::write_exr(&exr_path, &film, &scene.aovs, args.half, &extra) {
+        eprintln!("error: {e}");
+        return ExitCode::FAILURE;
+    }
+    if let Err(e) = output::write_png(&png_path, &film, 0, args.exposure) {
+        eprintln!("error: {e}");
+        return ExitCode::FAILURE;
+    }
+    println!(
+        "{}x{} at {} spp, {} AOVs: {:.2} s, {:.2} M samples/s, {:.2} M rays/s{}",
+        film.width,
+        film.height,
+        film.spp,
+        scene.aovs.len(),
+        stats.seconds,
+        stats.samples as f64 / stats.seconds / 1e6,
+        stats.rays as f64 / stats.seconds / 1e6,
+        if stats.nonfinite > 0 { format!(", {} NaN/Inf contributions dropped", stats.nonfinite) } else { String::new() }
+    );
+    println!("wrote {} and {}", exr_path.display(), png_path.display());
+    ExitCode::SUCCESS
+}
+
+fn lpe_command(cmd: LpeCommand) -> ExitCode {
+    match cmd {
+        LpeCommand::Check { definitions } => {
+            let mut ok = true;
+            let mut compiler = lpe::Compiler::new();
+            for d in &definitions {
+                match compiler.add(d) {
+                    Ok(_) => {}
+                    Err(e) => {
+                        ok = false;
+                        eprint!("{}", e.render(d));
+                    }
+                }
+            }
+            if !ok {
+                return ExitCode::FAILURE;
+            }
+            match compiler.compile() {
+                Ok(a) => {
+                    for w in a.warnings() {
+                        eprintln!("warning: {}: {}", definitions[w.rule.0 as usize], w.message);
+                    }
+                    println!("{} definition{} valid", definitions.len(), if definitions.len() == 1 { "" } else { "s" });
+                    ExitCode::SUCCESS
+                }
+                Err(e) => {
+                    eprintln!("error[{}]: {}", e.kind.name(), e.message);
+                    ExitCode::FAILURE
+                }
+            }
+        }
+        LpeCommand::Match { definitions, path, jsonl } => {
+            if jsonl {
+                return match_jsonl();
+            }
+            let Some(path_text) = path else {
+                eprintln!("error: give --path PATH, or --jsonl to read cases on stdin");
+                return ExitCode::FAILURE;
+            };
+            let path = match lpe::parse_path(&path_text) {
+                Ok(p) => p,
+                Err(e) => {
+                    eprint!("{}", e.render(&path_text));
+                    return ExitCode::FAILURE;
+                }
+            };
+            let mut status = ExitCode::SUCCESS;
+            for d in &definitions {
+                match lpe::matches(d, &path) {
+                    Ok(true) => println!("match"),
+                    Ok(false) => println!("no match"),
+                    Err(e) => {
+                        eprint!("{}", e.render(d));
+                        status = ExitCode::FAILURE;
+                    }
+                }
+            }
+            status
+        }
+        LpeCommand::Explain { definitions } => {
+            let mut compiler = lpe::Compiler::new();
+            let mut ok = true;
+            for d in &definitions {
+                match lpe::Rule::parse(d) {
+                    Ok(rule) => {
+                        let name = rule.name.clone().map(|n| format!("{n}: ")).unwrap_or_default();
+                        println!("{name}{d}\n  {}", lpe::explain::explain(&rule));
+                        if let Ok(alone) = lpe::compile(&[d]) {
+                            let s = alone.stats();
+                            println!(
+                                "  automaton: {} NFA states, {} DFA states before minimisation, {} after, {} event classes",
+                                s.nfa_states, s.dfa_states, s.min_dfa_states, s.classes
+                            );
+                        }
+                        compiler.add_rule(rule);
+                    }
+                    Err(e) => {
+                        ok = false;
+                        eprint!("{}", e.render(d));
+                    }
+                }
+            }
+            if definitions.len() > 1 && ok {
+                match compiler.compile() {
+                    Ok(a) => {
+                        let s = a.stats();
+                        println!(
+                            "all {} rules together: {} NFA states, {} DFA states before minimisation, {} after, {} event classes",
+                            definitions.len(),
+                            s.nfa_states,
+                            s.dfa_states,
+                            s.min_dfa_states,
+                            s.classes
+                        );
+                    }
+                    Err(e) => eprintln!("error[{}]: {}", e.kind.name(), e.message),
+                }
+            }
+            if ok {
+                ExitCode::SUCCESS
+            } else {
+                ExitCode::FAILURE
+            }
+        }
+        LpeCommand::Names => {
+            for (name, expr) in lpe::STANDARD_NAMES {
+                println!("{name:<18} {expr}");
+            }
+            ExitCode::SUCCESS
+        }
+    }
+}
+
+/// The conformance interface: one JSON object per input line, in order.
+fn match_jsonl() -> ExitCode {
+    let stdin = std::io::stdin();
+    let stdout = std::io::stdout();
+    let mut out = std::io::BufWriter::new(stdout.lock());
+    for line in stdin.lock().lines() {
+        let Ok(line) = line else { break };
+        if line.trim().is_empty() {
+            continue;
+        }
+        let answer = answer_case(&line);
+        if writeln!(out, "{answer}").is_err() {
+            break;
+        }
+    }
+    let _ = out.flush();
+    ExitCode::SUCCESS
+}
+
+fn answer_case(line: &str) -> serde_json::Value {
+    use serde_json::json;
+    let case: serde_json::Value = match serde_json::from_str(line) {
+        Ok(v) => v,
+        Err(e) => return json!({ "input_error": format!("invalid JSON: {e}") }),
+    };
+    let Some(expr) = case.get("expr").and_then(|v| v.as_str()) else {
+        return json!({ "input_error": "expected a string field \"expr\"" });
+    };
+    let rule = match lpe::Rule::parse(expr) {
+        Ok(r) => r,
+        Err(e) => return json!({ "error": e.message, "span": [e.span.start, e.span.end] }),
+    };
+    let path_text = case.get("path").and_then(|v| v.as_str());
+    let Some(path_text) = path_text else {
+        // A valid expression without a path: compile it, report a compile error if any.
+        return match lpe::compile(&[expr]) {
+            Ok(_) => json!({ "valid": true }),
+            Err(e) => json!({ "error": e.message, "span": [e.span.start, e.span.end] }),
+        };
+    };
+    let path = match lpe::parse_path(path_text) {
+        Ok(p) => p,
+        Err(e) => return json!({ "path_error": e.message }),
+    };
+    let mut compiler = lpe::Compiler::new();
+    compiler.add_rule(rule);
+    compiler.vocabulary(path.iter().cloned());
+    match compiler.compile() {
+        Ok(a) => json!({ "match": !a.run(&path).unwrap_or(&[]).is_empty() }),
+        Err(e) => json!({ "error": e.message, "span": [e.span.start, e.span.end] }),
+    }
+}

@@ -136,7 +136,7 @@ mod miette_impl {
     #[error("{}", error.message)]
     pub struct Report {
         pub error: Error,
-        pub source: String,
+        pub text: String,
     }
 
     impl miette::Diagnostic for Report {
@@ -147,7 +147,7 @@ mod miette_impl {
             self.error.help.as_ref().map(|h| Box::new(h) as Box<dyn std::fmt::Display>)
         }
         fn source_code(&self) -> Option<&dyn miette::SourceCode> {
-            Some(&self.source)
+            Some(&self.text)
         }
         fn labels(&self) -> Option<Box<dyn Iterator<Item = miette::LabeledSpan> + '_>> {
             let s = self.error.span;

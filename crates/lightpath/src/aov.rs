@@ -1,0 +1,83 @@
+//! Which AOVs a render produces: beauty first, then the standard set, the scene's own,
+//! the command line's, and light-group splits. One owner for AOV names.
+
+use lpe::STANDARD_NAMES;
+
+/// An AOV to render: its channel name and its LPE definition.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct AovSpec {
+    pub name: String,
+    pub definition: String,
+}
+
+impl AovSpec {
+    pub fn new(name: impl Into<String>, definition: impl Into<String>) -> AovSpec {
+        AovSpec { name: name.into(), definition: definition.into() }
+    }
+
+    /// Parses `NAME=DEF` (as `--aov` takes it); a bare standard name is its own name.
+    pub fn parse(arg: &str) -> Result<AovSpec, String> {
+        if let Some((name, def)) = arg.split_once('=') {
+            let name = name.trim();
+            if !name.is_empty() && name.chars().all(|c| c.is_ascii_alphanumeric() || c == '_') && !name.starts_with(|c: char| c.is_ascii_digit()) {
+                return Ok(AovSpec::new(name, def.trim()));
+            }
+        }
+        let word = arg.trim().trim_start_matches("lpe:");
+        match lpe::standard_name(word) {
+            Some((name, _)) => Ok(AovSpec::new(name, format!("lpe:{name}"))),
+            None => Err(format!("expected NAME=DEFINITION or a standard name, got '{arg}'")),
+        }
+    }
+}
+
+/// The standard AOVs of LPE.md §7 other than beauty.
+pub fn standard() -> Vec<AovSpec> {
+    STANDARD_NAMES.iter().filter(|(n, _)| *n != "beauty").map(|(n, _)| AovSpec::new(*n, format!("lpe:{n}"))).collect()
+}
+
+/// Beauty plus the given AOVs, in order, without duplicate names (a later definition
+/// replaces an earlier one; an AOV named `beauty` replaces the default beauty).
+pub fn assemble(extra: impl IntoIterator<Item = AovSpec>) -> Vec<AovSpec> {
+    let mut out = vec![AovSpec::new("beauty", "lpe:beauty")];
+    for a in extra {
+        match out.iter_mut().find(|o| o.name == a.name) {
+            Some(existing) => *existing = a,
+            None => out.push(a),
+        }
+    }
+    out
+}
+
+/// Beauty split per light group: `beauty_<group>` for each group, and
+/// `beauty__default` for lights without a group (and glowing objects), so that the split
+/// sums to beauty when every light has at most one group.
+pub fn light_group_split(groups: &[String]) -> Vec<AovSpec> {
+    let mut out: Vec<AovSpec> = groups
+        .iter()
+        .map(|g| AovSpec::new(format!("beauty_{g}"), format!("C[DS]*[<L.'{g}'><O'{g}'>]")))
+        .collect();
+    let all: String = groups.iter().map(|g| format!("'{g}'")).collect::<Vec<_>>().join(" ");
+    let default = if groups.is_empty() { "C[DS]*[<L.>O]".to_string() } else { format!("C[DS]*[<L.[^{all}]><O[^{all}]>]") };
+    out.push(AovSpec::new("beauty__default", default));
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn aov_arguments_parse() {
+        assert_eq!(AovSpec::parse("key=C<.>*<L.'key'>").unwrap(), AovSpec::new("key", "C<.>*<L.'key'>"));
+        assert_eq!(AovSpec::parse("directdiffuse").unwrap(), AovSpec::new("directDiffuse", "lpe:directDiffuse"));
+        assert!(AovSpec::parse("C<RD>L").is_err());
+    }
+
+    #[test]
+    fn a_named_beauty_replaces_the_default() {
+        let a = assemble([AovSpec::new("beauty", "C<RD>L"), AovSpec::new("x", "CO")]);
+        assert_eq!(a.len(), 2);
+        assert_eq!(a[0].definition, "C<RD>L");
+    }
+}

@@ -1,0 +1,122 @@
+//! A perspective camera with an optional thin lens, and the pixel filter that places
+//! samples in the pixel.
+//!
+//! ```toml
+//! [camera]
+//! position = [0, 0, 3.9]
+//! look_at = [0, 0, 0]
+//! up = [0, 1, 0]
+//! fov = 39.3077            # degrees, along fov_axis
+//! fov_axis = "smaller"     # x | y | smaller | larger
+//! aperture_radius = 0.0    # thin lens; 0 is a pinhole
+//! focus_distance = 3.9
+//! ```
+
+use crate::geometry::Ray;
+use crate::sampling::square_to_disk;
+use glam::{Vec2, Vec3A};
+
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum PixelFilter {
+    /// Uniform over the pixel (each sample counts only for its own pixel).
+    Box,
+    /// Samples offset by a Gaussian of this standard deviation in pixels (filter
+    /// importance sampling, so samples still land in one pixel each).
+    Gaussian { stddev: f32 },
+}
+
+impl PixelFilter {
+    /// Offset from the pixel centre for two uniform numbers.
+    pub fn offset(&self, u: Vec2) -> Vec2 {
+        match *self {
+            PixelFilter::Box => u - Vec2::splat(0.5),
+            PixelFilter::Gaussian { stddev } => {
+                // Box–Muller, truncated at 3σ.
+                let r = (-2.0 * (1.0 - u.x).max(1e-12).ln()).sqrt().min(3.0) * stddev;
+                let phi = 2.0 * std::f32::consts::PI * u.y;
+                Vec2::new(r * phi.cos(), r * phi.sin())
+            }
+        }
+    }
+}
+
+#[derive(Clone, Debug)]
+pub struct Camera {
+    pub position: Vec3A,
+    forward: Vec3A,
+    right: Vec3A,
+    up: Vec3A,
+    tan_half: Vec2,
+    pub aperture_radius: f32,
+    pub focus_distance: f32,
+    pub width: u32,
+    pub height: u32,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum FovAxis {
+    X,
+    Y,
+    Smaller,
+    Larger,
+}
+
+impl Camera {
+    #[allow(clippy::too_many_arguments)]
+    pub fn new(
+        position: Vec3A,
+        look_at: Vec3A,
+        up: Vec3A,
+        fov_deg: f32,
+        axis: FovAxis,
+        width: u32,
+        height: u32,
+        aperture_radius: f32,
+        focus_distance: f32,
+    ) -> Camera {
+        let forward = (look_at - position).normalize();
+        let right = forward.cross(up).normalize();
+        let up = right.cross(forward);
+        let aspect = width as f32 / height as f32;
+        let t = (fov_deg.to_radians() * 0.5).tan();
+        let along_x = match axis {
+            FovAxis::X => true,
+            FovAxis::Y => false,
+            FovAxis::Smaller => width <= height,
+            FovAxis::Larger => width >= height,
+        };
+        let tan_half = if along_x { Vec2::new(t, t / aspect) } else { Vec2::new(t * aspect, t) };
+        Camera { position, forward, right, up, tan_half, aperture_radius, focus_distance, width, height }
+    }
+
+    /// The primary ray through film position `film` (in pixels, origin top-left).
+    pub fn ray(&self, film: Vec2, lens: Vec2) -> Ray {
+        let ndc = Vec2::new(2.0 * film.x / self.width as f32 - 1.0, 1.0 - 2.0 * film.y / self.height as f32);
+        let dir = (self.forward + self.right * (ndc.x * self.tan_half.x) + self.up * (ndc.y * self.tan_half.y)).normalize();
+        if self.aperture_radius <= 0.0 {
+            return Ray { origin: self.position, dir, tmax: f32::INFINITY };
+        }
+        // Thin lens: every ray through the lens meets the chief ray on the focal plane.
+        let focus = self.position + dir * (self.focus_distance / dir.dot(self.forward));
+        let d = square_to_disk(lens) * self.aperture_radius;
+        let origin = self.position + self.right * d.x + self.up * d.y;
+        Ray { origin, dir: (focus - origin).normalize(), tmax: f32::INFINITY }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn image_x_is_world_right_and_row_zero_is_top() {
+        let c = Camera::new(Vec3A::new(0.0, 0.0, 3.9), Vec3A::ZERO, Vec3A::Y, 40.0, FovAxis::Smaller, 100, 50, 0.0, 1.0);
+        let centre = c.ray(Vec2::new(50.0, 25.0), Vec2::ZERO);
+        assert!((centre.dir - (-Vec3A::Z)).length() < 1e-6);
+        assert!(c.ray(Vec2::new(99.0, 25.0), Vec2::ZERO).dir.x > 0.0);
+        assert!(c.ray(Vec2::new(50.0, 0.0), Vec2::ZERO).dir.y > 0.0);
+        // The smaller axis (y here) spans the field of view.
+        let top = c.ray(Vec2::new(50.0, 0.0), Vec2::ZERO).dir;
+        assert!((top.y.atan2(-top.z).to_degrees() - 20.0).abs() < 1e-3);
+    }
+}

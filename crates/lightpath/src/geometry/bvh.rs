@@ -1,0 +1,115 @@
+//! The acceleration structure: an 8-wide compressed BVH from `obvhs` over our primitives,
+//! reordered so that leaf indices address the primitive array directly.
+
+use super::{Hit, Prim, Ray};
+use glam::Vec3A;
+use obvhs::aabb::Aabb;
+use obvhs::cwbvh::builder::build_cwbvh;
+use obvhs::cwbvh::CwBvh;
+use obvhs::ray::{Ray as BvhRay, RayHit};
+use obvhs::{BvhBuildParams, Boundable};
+
+struct Bounded(Aabb);
+
+impl Boundable for Bounded {
+    fn aabb(&self) -> Aabb {
+        self.0
+    }
+}
+
+pub struct Accel {
+    bvh: CwBvh,
+    prims: Vec<Prim>,
+    /// Object id of each primitive, in the same order.
+    objects: Vec<u32>,
+    /// Per-vertex shading normals of triangles that have them, three per entry.
+    normals: Vec<[Vec3A; 3]>,
+    empty: bool,
+}
+
+impl Accel {
+    /// Builds the BVH. `prims[i]` belongs to object `objects[i]`.
+    pub fn build(prims: Vec<Prim>, objects: Vec<u32>, normals: Vec<[Vec3A; 3]>) -> Accel {
+        if prims.is_empty() {
+            let dummy = [Bounded(Aabb::new(Vec3A::ZERO, Vec3A::ZERO))];
+            let bvh = build_cwbvh(&dummy, BvhBuildParams::fast_build(), &mut Default::default());
+            return Accel { bvh, prims, objects, normals, empty: true };
+        }
+        let boxes: Vec<Bounded> = prims
+            .iter()
+            .map(|p| {
+                let (lo, hi) = p.bounds();
+                Bounded(Aabb::new(lo, hi))
+            })
+            .collect();
+        let mut bvh = build_cwbvh(&boxes, BvhBuildParams::medium_build(), &mut Default::default());
+        // Lay the primitives out in leaf order so traversal indexes them directly.
+        let order = std::mem::take(&mut bvh.primitive_indices);
+        let prims: Vec<Prim> = order.iter().map(|&i| prims[i as usize]).collect();
+        let objects: Vec<u32> = order.iter().map(|&i| objects[i as usize]).collect();
+        bvh.primitive_indices = (0..order.len() as u32).collect();
+        Accel { bvh, prims, objects, normals, empty: false }
+    }
+
+    pub fn prims(&self) -> &[Prim] {
+        &self.prims
+    }
+
+    pub fn object_of(&self, prim: u32) -> u32 {
+        self.objects[prim as usize]
+    }
+
+    /// The nearest hit along the ray.
+    pub fn intersect(&self, ray: &Ray, tmin: f32) -> Option<Hit> {
+        if self.empty {
+            return None;
+        }
+        let bray = BvhRay::new(ray.origin, ray.dir, tmin, ray.tmax);
+        let mut hit = RayHit::none();
+        let prims = &self.prims;
+        let found = self.bvh.ray_traverse(bray, &mut hit, |r, i| prims[i].intersect(r.origin, r.direction, r.tmin, r.tmax));
+        if !found {
+            return None;
+        }
+        Some(self.surface(ray, hit.primitive_id, hit.t))
+    }
+
+    /// Is anything between the origin and `tmax`?
+    pub fn occluded(&self, ray: &Ray, tmin: f32) -> bool {
+        if self.empty {
+            return false;
+        }
+        let bray = BvhRay::new(ray.origin, ray.dir, tmin, ray.tmax);
+        let prims = &self.prims;
+        !self.bvh.ray_traverse_miss(bray, |r, i| prims[i].intersect(r.origin, r.direction, r.tmin, r.tmax))
+    }
+
+    fn surface(&self, ray: &Ray, prim: u32, t: f32) -> Hit {
+        let p = ray.origin + ray.dir * t;
+        let (ng, ns) = match self.prims[prim as usize] {
+            Prim::Triangle { p0, e1, e2, normals } => {
+                let ng = e1.cross(e2).normalize();
+                let ns = if normals == u32::MAX {
+                    ng
+                } else {
+                    // Barycentrics of the hit point.
+                    let d = p - p0;
+                    let (d00, d01, d11) = (e1.dot(e1), e1.dot(e2), e2.dot(e2));
+                    let (d20, d21) = (d.dot(e1), d.dot(e2));
+                    let denom = d00 * d11 - d01 * d01;
+                    let v = (d11 * d20 - d01 * d21) / denom;
+                    let w = (d00 * d21 - d01 * d20) / denom;
+                    let [n0, n1, n2] = self.normals[normals as usize];
+                    let n = (n0 * (1.0 - v - w) + n1 * v + n2 * w).normalize_or(ng);
+                    if n.dot(ng) < 0.0 { -n } else { n }
+                };
+                (ng, ns)
+            }
+            Prim::Sphere { center, radius } => {
+                let n = (p - center) / radius;
+                (n, n)
+            }
+        };
+        Hit { t, p, ng, ns, prim, object: self.objects[prim as usize] }
+    }
+}

@@ -1,0 +1,413 @@
+//! Unidirectional path tracing with light sampling and MIS (power heuristic), Russian
+//! roulette and depth limits, feeding the LPE automaton one event per vertex (DESIGN.md):
+//! the camera event, the sampled lobe's event at each scattering vertex, every lobe of a
+//! light sample through its own event then `L`, light hits through `L` with the
+//! complementary weight, emission through `O`. A dead automaton state ends the path.
+
+use crate::film::{Film, SampleAccumulator};
+use crate::geometry::{Hit, Ray};
+use crate::light::luminance;
+use crate::material::Shading;
+use crate::sampling::{power_heuristic, Rng};
+use crate::scene::{DataLobe, Scene};
+use glam::{Vec2, Vec3A};
+use lpe::{Prefix, ScatterClass, StateId};
+use rayon::prelude::*;
+use std::sync::atomic::{AtomicU64, Ordering};
+
+/// How a contribution reached the camera: decides what prefixed AOVs receive.
+#[derive(Clone, Copy, Debug)]
+enum Via {
+    /// Emission found by a ray; `light_sampled` if light sampling also covered it.
+    Hit { light_sampled: bool },
+    /// A light sample, with its shadow-ray result.
+    LightSample { visible: bool },
+    /// A user (data) lobe.
+    Data,
+}
+
+/// Per-rule routing flags, unpacked from the prefixes for the hot loop.
+#[derive(Clone, Copy, Debug, Default)]
+struct Route {
+    unoccluded: bool,
+    shadows: bool,
+    holdouts: bool,
+    nothruput: bool,
+    overwrite: bool,
+    noclamp: bool,
+    noinfinitecheck: bool,
+}
+
+#[derive(Clone, Debug, Default)]
+pub struct RenderStats {
+    pub samples: u64,
+    pub rays: u64,
+    /// Contributions dropped by the NaN/Inf filter.
+    pub nonfinite: u64,
+    pub seconds: f64,
+}
+
+/// Options of one render call.
+#[derive(Clone, Debug)]
+pub struct RenderOptions {
+    /// Samples per pixel to take, starting at sample index `first_sample`.
+    pub spp: u32,
+    pub first_sample: u32,
+    pub progress: bool,
+}
+
+struct Tracer<'a> {
+    scene: &'a Scene,
+    routes: Vec<Route>,
+}
+
+struct PathCounters {
+    rays: u64,
+    nonfinite: u64,
+    holdout: bool,
+}
+
+impl<'a> Tracer<'a> {
+    fn new(scene: &'a Scene) -> Tracer<'a> {
+        let routes = scene
+            .aovs
+            .iter()
+            .map(|a| Route {
+                unoccluded: a.flags.contains(Prefix::Unoccluded),
+                shadows: a.flags.contains(Prefix::Shadows),
+                holdouts: a.flags.contains(Prefix::Holdouts),
+                nothruput: a.flags.contains(Prefix::NoThruput),
+                overwrite: a.flags.contains(Prefix::Overwrite),
+                noclamp: a.flags.contains(Prefix::NoClamp),
+                noinfinitecheck: a.flags.contains(Prefix::NoInfiniteCheck),
+            })
+            .collect();
+        Tracer { scene, routes }
+    }
+
+    /// Adds `throughput × local × weight` to every AOV whose rule accepts `state`.
+    #[allow(clippy::too_many_arguments)]
+    #[inline]
+    fn contribute(
+        &self,
+        acc: &mut SampleAccumulator,
+        counters: &mut PathCounters,
+        state: StateId,
+        throughput: Vec3A,
+        local: Vec3A,
+        mis: f32,
+        via: Via,
+        scatters: u32,
+    ) {
+        let rules = self.scene.automaton.accepting(state);
+        if rules.is_empty() {
+            return;
+        }
+        let settings = &self.scene.settings;
+        let clamp = if scatters <= 1 { settings.clamp_direct } else { settings.clamp_indirect };
+        let mut dropped = false;
+        for rule in rules {
+            let k = rule.0 as usize;
+            let r = self.routes[k];
+            if r.holdouts != counters.holdout {
+                continue;
+            }
+            let weight = match via {
+                Via::Hit { light_sampled } => {
+                    if r.shadows || (r.unoccluded && light_sampled) {
+                        continue;
+                    }
+                    if r.unoccluded {
+                        1.0
+                    } else {
+                        mis
+                    }
+                }
+                Via::LightSample { visible } => {
+                    if r.shadows {
+                        if visible {
+                            continue;
+                        }
+                        1.0
+                    } else if r.unoccluded {
+                        1.0
+                    } else if visible {
+                        mis
+                    } else {
+                        continue;
+                    }
+                }
+                Via::Data => 1.0,
+            };
+            let mut v = if r.nothruput { local } else { throughput * local } * weight;
+            if !r.noinfinitecheck && !v.is_finite() {
+                dropped = true;
+                continue;
+            }
+            if clamp > 0.0 && !r.noclamp {
+                let l = luminance(v);
+                if l > clamp {
+                    v *= clamp / l;
+                }
+            }
+            acc.add(k, v, r.overwrite);
+        }
+        counters.nonfinite += dropped as u64;
+    }
+
+    fn spawn(&self, hit: &Hit, dir: Vec3A, tmax: f32) -> Ray {
+        let side = if dir.dot(hit.ng) >= 0.0 { 1.0 } else { -1.0 };
+        Ray { origin: hit.p + hit.ng * (self.scene.epsilon * side), dir, tmax }
+    }
+
+    /// Traces one camera path; returns its alpha.
+    fn trace(&self, mut ray: Ray, rng: &mut Rng, acc: &mut SampleAccumulator, counters: &mut PathCounters) -> f32 {
+        let scene = self.scene;
+        let a = &scene.automaton;
+        let settings = &scene.settings;
+        let mut state = a.step(a.start(), scene.camera_class);
+        let mut throughput = Vec3A::ONE;
+        let mut eta_scale = 1.0f32;
+        let (mut prev_p, mut prev_pdf, mut prev_delta) = (ray.origin, 0.0f32, true);
+        let (mut diffuse, mut specular) = (0u32, 0u32);
+        let mut alpha = 0.0;
+        let mut depth = 0u32;
+        counters.holdout = false;
+        // Camera rays pass through lights that are invisible to the camera.
+        let mut passes = 0;
+        loop {
+            counters.rays += 1;
+            let Some(hit) = scene.accel.intersect(&ray, 0.0) else {
+                for &li in &scene.escape_lights {
+                    let light = &scene.lights[li as usize];
+                    let le = light.emitted_escaped(ray.dir);
+                    if le == Vec3A::ZERO {
+                        continue;
+                    }
+                    let (l_class, o_class) = scene.light_classes[li as usize];
+                    if depth == 0 {
+                        if light.camera_visible {
+                            let s = a.step(state, o_class);
+                            self.contribute(acc, counters, s, throughput, le, 1.0, Via::Hit { light_sampled: false }, 0);
+                        }
+                    } else {
+                        let s = a.step(state, l_class);
+                        let w = if prev_delta {
+                            1.0
+                        } else {
+                            power_heuristic(prev_pdf, scene.light_select.pmf(li as usize) * light.pdf_hit(prev_p, ray.dir, f32::INFINITY, Vec3A::ZERO))
+                        };
+                        self.contribute(acc, counters, s, throughput, le, w, Via::Hit { light_sampled: !prev_delta }, depth);
+                    }
+                }
+                break;
+            };
+            let obj = &scene.objects[hit.object as usize];
+            if depth == 0 {
+                alpha = if obj.holdout { 0.0 } else { 1.0 };
+            }
+            counters.holdout |= obj.holdout;
+
+            // Emission arriving along the ray.
+            if let Some(li) = obj.light {
+                let light = &scene.lights[li as usize];
+                if depth == 0 && !light.camera_visible {
+                    passes += 1;
+                    if passes > 16 {
+                        break;
+                    }
+                    ray = self.spawn(&hit, ray.dir, f32::INFINITY);
+                    alpha = 0.0;
+                    continue;
+                }
+                let le = light.emitted_at(hit.ng, ray.dir);
+                if le != Vec3A::ZERO {
+                    let (l_class, o_class) = scene.light_classes[li as usize];
+                    if depth == 0 {
+                        let s = a.step(state, o_class);
+                        self.contribute(acc, counters, s, throughput, le, 1.0, Via::Hit { light_sampled: false }, 0);
+                    } else {
+                        let s = a.step(state, l_class);
+                        let w = if prev_delta {
+                            1.0
+                        } else {
+                            power_heuristic(prev_pdf, scene.light_select.pmf(li as usize) * light.pdf_hit(prev_p, ray.dir, hit.t, hit.ng))
+                        };
+                        self.contribute(acc, counters, s, throughput, le, w, Via::Hit { light_sampled: !prev_delta }, depth);
+                    }
+                }
+            } else if let Some(glow) = obj.glow_class {
+                let s = a.step(state, glow);
+                self.contribute(acc, counters, s, throughput, obj.emission, 1.0, Via::Hit { light_sampled: false }, depth);
+            }
+
+            // Mitsuba's convention: `max_depth` counts segments; scattering here adds one.
+            if depth + 1 >= settings.max_depth {
+                break;
+            }
+            let Some(material) = obj.material.map(|m| &scene.materials[m as usize]) else { break };
+            let bsdf = &material.bsdf;
+            let sh = Shading::new(bsdf, hit.ns, hit.ng, -ray.dir);
+            if sh.wo.z == 0.0 {
+                break;
+            }
+
+            // Data lobes, each as if lit by a unit light (LPE.md §1).
+            for &(kind, class) in &obj.data_lobes {
+                let s1 = a.step(state, class);
+                if a.is_dead(s1) {
+                    continue;
+                }
+                let s2 = a.step(s1, scene.data_light_class);
+                if a.accepting(s2).is_empty() {
+                    continue;
+                }
+                let value = match kind {
+                    DataLobe::Albedo => bsdf.albedo(),
+                    DataLobe::Position => hit.p,
+                    DataLobe::Normal => sh.frame.n,
+                    DataLobe::UserColor => material.user_color.unwrap_or(Vec3A::ZERO),
+                };
+                self.contribute(acc, counters, s2, throughput, value, 1.0, Via::Data, depth + 1);
+            }
+
+            // Light sampling: every non-delta lobe through its own event, then `L`.
+            let lobes = bsdf.lobes();
+            let u_light = rng.next_f32();
+            let u_point = rng.next_2d();
+            if !scene.lights.is_empty() && lobes.iter().any(|l| !l.delta) {
+                let (li, select_pmf, _) = scene.light_select.sample(u_light);
+                let light = &scene.lights[li];
+                if let Some(ls) = light.sample(hit.p, u_point) {
+                    let wi = sh.frame.to_local(ls.wi);
+                    let l_class = scene.light_classes[li].0;
+                    let light_pdf = select_pmf * ls.pdf;
+                    let mut visible: Option<bool> = None;
+                    for (k, tag) in lobes.iter().enumerate() {
+                        if tag.delta {
+                            continue;
+                        }
+                        let s_lobe = a.step(state, obj.lobe_classes[k]);
+                        if a.is_dead(s_lobe) {
+                            continue;
+                        }
+                        let s_light = a.step(s_lobe, l_class);
+                        if a.accepting(s_light).is_empty() {
+                            continue;
+                        }
+                        let (f, lobe_pdf) = bsdf.eval_lobe(k, &sh, wi);
+                        if f == Vec3A::ZERO {
+                            continue;
+                        }
+                        let w = if ls.delta { 1.0 } else { power_heuristic(light_pdf, lobe_pdf) };
+                        let vis = *visible.get_or_insert_with(|| {
+                            counters.rays += 1;
+                            let tmax = if ls.dist.is_finite() { ls.dist - 2.0 * scene.epsilon } else { f32::INFINITY };
+                            tmax <= 0.0 || !scene.accel.occluded(&self.spawn(&hit, ls.wi, tmax), 0.0)
+                        });
+                        self.contribute(acc, counters, s_light, throughput, f * ls.radiance / light_pdf, w, Via::LightSample { visible: vis }, depth + 1);
+                    }
+                }
+            }
+
+            // Continue the path through one sampled lobe.
+            let u_lobe = rng.next_f32();
+            let u_dir = rng.next_2d();
+            let Some(bs) = bsdf.sample(&sh, u_lobe, u_dir) else { break };
+            let tag = lobes[bs.lobe];
+            match tag.scatter.class {
+                ScatterClass::Diffuse => {
+                    diffuse += 1;
+                    if diffuse > settings.max_diffuse_depth {
+                        break;
+                    }
+                }
+                _ => {
+                    specular += 1;
+                    if specular > settings.max_specular_depth {
+                        break;
+                    }
+                }
+            }
+            state = a.step(state, obj.lobe_classes[bs.lobe]);
+            if a.is_dead(state) {
+                break;
+            }
+            throughput *= bs.weight;
+            eta_scale *= bs.eta;
+            prev_p = hit.p;
+            prev_pdf = bs.pdf;
+            prev_delta = bs.delta;
+            ray = self.spawn(&hit, bs.wi, f32::INFINITY);
+            depth += 1;
+            // Russian roulette as Mitsuba does it: from `rr_depth` on, continue with
+            // probability max(throughput)·η², at most 0.95.
+            let t_max = throughput.max_element();
+            if t_max <= 0.0 || !t_max.is_finite() {
+                break;
+            }
+            if depth >= settings.rr_depth {
+                let q = (t_max * eta_scale * eta_scale).min(0.95);
+                if rng.next_f32() >= q {
+                    break;
+                }
+                throughput /= q;
+            }
+        }
+        alpha
+    }
+}
+
+/// Renders the scene into a film holding every AOV.
+pub fn render(scene: &Scene, options: &RenderOptions) -> (Film, RenderStats) {
+    let start = std::time::Instant::now();
+    let cam = &scene.camera;
+    let (w, h) = (cam.width, cam.height);
+    let mut film = Film::new(w, h, scene.aovs.len(), options.spp);
+    let stride = film.stride();
+    let tracer = Tracer::new(scene);
+    let rays = AtomicU64::new(0);
+    let nonfinite = AtomicU64::new(0);
+    let bar = if options.progress {
+        let bar = indicatif::ProgressBar::new(h as u64);
+        bar.set_style(
+            indicatif::ProgressStyle::with_template("{spinner} rendering [{bar:40}] {pos}/{len} rows {elapsed_precise} (eta {eta})")
+                .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar())
+                .progress_chars("=> "),
+        );
+        bar
+    } else {
+        indicatif::ProgressBar::hidden()
+    };
+    let row_len = stride * w as usize;
+    film.data.par_chunks_mut(row_len).enumerate().for_each_init(
+        || SampleAccumulator::new(scene.aovs.len()),
+        |acc, (y, row)| {
+            let mut counters = PathCounters { rays: 0, nonfinite: 0, holdout: false };
+            for x in 0..w {
+                let pixel = &mut row[x as usize * stride..(x as usize + 1) * stride];
+                let index = y as u64 * w as u64 + x as u64;
+                for s in options.first_sample..options.first_sample + options.spp {
+                    let mut rng = Rng::for_sample(scene.settings.seed, index, s as u64);
+                    let offset = scene.filter.offset(rng.next_2d());
+                    let film_pos = Vec2::new(x as f32 + 0.5, y as f32 + 0.5) + offset;
+                    let ray = cam.ray(film_pos, rng.next_2d());
+                    let alpha = tracer.trace(ray, &mut rng, acc, &mut counters);
+                    acc.flush(pixel);
+                    pixel[stride - 1] += alpha;
+                }
+            }
+            rays.fetch_add(counters.rays, Ordering::Relaxed);
+            nonfinite.fetch_add(counters.nonfinite, Ordering::Relaxed);
+            bar.inc(1);
+        },
+    );
+    bar.finish_and_clear();
+    let stats = RenderStats {
+        samples: w as u64 * h as u64 * options.spp as u64,
+        rays: rays.into_inner(),
+        nonfinite: nonfinite.into_inner(),
+        seconds: start.elapsed().as_secs_f64(),
+    };
+    (film, stats)
+}
