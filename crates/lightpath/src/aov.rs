@@ -12,28 +12,40 @@ pub struct AovSpec {
 
 impl AovSpec {
     pub fn new(name: impl Into<String>, definition: impl Into<String>) -> AovSpec {
-        AovSpec { name: name.into(), definition: definition.into() }
+        AovSpec {
+            name: name.into(),
+            definition: definition.into(),
+        }
     }
 
     /// Parses `NAME=DEF` (as `--aov` takes it); a bare standard name is its own name.
     pub fn parse(arg: &str) -> Result<AovSpec, String> {
         if let Some((name, def)) = arg.split_once('=') {
             let name = name.trim();
-            if !name.is_empty() && name.chars().all(|c| c.is_ascii_alphanumeric() || c == '_') && !name.starts_with(|c: char| c.is_ascii_digit()) {
+            if !name.is_empty()
+                && name.chars().all(|c| c.is_ascii_alphanumeric() || c == '_')
+                && !name.starts_with(|c: char| c.is_ascii_digit())
+            {
                 return Ok(AovSpec::new(name, def.trim()));
             }
         }
         let word = arg.trim().trim_start_matches("lpe:");
         match lpe::standard_name(word) {
             Some((name, _)) => Ok(AovSpec::new(name, format!("lpe:{name}"))),
-            None => Err(format!("expected NAME=DEFINITION or a standard name, got '{arg}'")),
+            None => Err(format!(
+                "expected NAME=DEFINITION or a standard name, got '{arg}'"
+            )),
         }
     }
 }
 
 /// The standard AOVs of LPE.md §7 other than beauty.
 pub fn standard() -> Vec<AovSpec> {
-    STANDARD_NAMES.iter().filter(|(n, _)| *n != "beauty").map(|(n, _)| AovSpec::new(*n, format!("lpe:{n}"))).collect()
+    STANDARD_NAMES
+        .iter()
+        .filter(|(n, _)| *n != "beauty")
+        .map(|(n, _)| AovSpec::new(*n, format!("lpe:{n}")))
+        .collect()
 }
 
 /// Beauty plus the given AOVs, in order, without duplicate names (a later definition
@@ -57,8 +69,16 @@ pub fn light_group_split(groups: &[String]) -> Vec<AovSpec> {
         .iter()
         .map(|g| AovSpec::new(format!("beauty_{g}"), format!("C[DS]*[<L.'{g}'><O'{g}'>]")))
         .collect();
-    let all: String = groups.iter().map(|g| format!("'{g}'")).collect::<Vec<_>>().join(" ");
-    let default = if groups.is_empty() { "C[DS]*[<L.>O]".to_string() } else { format!("C[DS]*[<L.[^{all}]><O[^{all}]>]") };
+    let all: String = groups
+        .iter()
+        .map(|g| format!("'{g}'"))
+        .collect::<Vec<_>>()
+        .join(" ");
+    let default = if groups.is_empty() {
+        "C[DS]*[<L.>O]".to_string()
+    } else {
+        format!("C[DS]*[<L.[^{all}]><O[^{all}]>]")
+    };
     out.push(AovSpec::new("beauty__default", default));
     out
 }
@@ -69,8 +89,14 @@ mod tests {
 
     #[test]
     fn aov_arguments_parse() {
-        assert_eq!(AovSpec::parse("key=C<.>*<L.'key'>").unwrap(), AovSpec::new("key", "C<.>*<L.'key'>"));
-        assert_eq!(AovSpec::parse("directdiffuse").unwrap(), AovSpec::new("directDiffuse", "lpe:directDiffuse"));
+        assert_eq!(
+            AovSpec::parse("key=C<.>*<L.'key'>").unwrap(),
+            AovSpec::new("key", "C<.>*<L.'key'>")
+        );
+        assert_eq!(
+            AovSpec::parse("directdiffuse").unwrap(),
+            AovSpec::new("directDiffuse", "lpe:directDiffuse")
+        );
         assert!(AovSpec::parse("C<RD>L").is_err());
     }
 

@@ -85,22 +85,50 @@ impl Camera {
             FovAxis::Smaller => width <= height,
             FovAxis::Larger => width >= height,
         };
-        let tan_half = if along_x { Vec2::new(t, t / aspect) } else { Vec2::new(t * aspect, t) };
-        Camera { position, forward, right, up, tan_half, aperture_radius, focus_distance, width, height }
+        let tan_half = if along_x {
+            Vec2::new(t, t / aspect)
+        } else {
+            Vec2::new(t * aspect, t)
+        };
+        Camera {
+            position,
+            forward,
+            right,
+            up,
+            tan_half,
+            aperture_radius,
+            focus_distance,
+            width,
+            height,
+        }
     }
 
     /// The primary ray through film position `film` (in pixels, origin top-left).
     pub fn ray(&self, film: Vec2, lens: Vec2) -> Ray {
-        let ndc = Vec2::new(2.0 * film.x / self.width as f32 - 1.0, 1.0 - 2.0 * film.y / self.height as f32);
-        let dir = (self.forward + self.right * (ndc.x * self.tan_half.x) + self.up * (ndc.y * self.tan_half.y)).normalize();
+        let ndc = Vec2::new(
+            2.0 * film.x / self.width as f32 - 1.0,
+            1.0 - 2.0 * film.y / self.height as f32,
+        );
+        let dir = (self.forward
+            + self.right * (ndc.x * self.tan_half.x)
+            + self.up * (ndc.y * self.tan_half.y))
+            .normalize();
         if self.aperture_radius <= 0.0 {
-            return Ray { origin: self.position, dir, tmax: f32::INFINITY };
+            return Ray {
+                origin: self.position,
+                dir,
+                tmax: f32::INFINITY,
+            };
         }
         // Thin lens: every ray through the lens meets the chief ray on the focal plane.
         let focus = self.position + dir * (self.focus_distance / dir.dot(self.forward));
         let d = square_to_disk(lens) * self.aperture_radius;
         let origin = self.position + self.right * d.x + self.up * d.y;
-        Ray { origin, dir: (focus - origin).normalize(), tmax: f32::INFINITY }
+        Ray {
+            origin,
+            dir: (focus - origin).normalize(),
+            tmax: f32::INFINITY,
+        }
     }
 }
 
@@ -110,7 +138,17 @@ mod tests {
 
     #[test]
     fn image_x_is_world_right_and_row_zero_is_top() {
-        let c = Camera::new(Vec3A::new(0.0, 0.0, 3.9), Vec3A::ZERO, Vec3A::Y, 40.0, FovAxis::Smaller, 100, 50, 0.0, 1.0);
+        let c = Camera::new(
+            Vec3A::new(0.0, 0.0, 3.9),
+            Vec3A::ZERO,
+            Vec3A::Y,
+            40.0,
+            FovAxis::Smaller,
+            100,
+            50,
+            0.0,
+            1.0,
+        );
         let centre = c.ray(Vec2::new(50.0, 25.0), Vec2::ZERO);
         assert!((centre.dir - (-Vec3A::Z)).length() < 1e-6);
         assert!(c.ray(Vec2::new(99.0, 25.0), Vec2::ZERO).dir.x > 0.0);

@@ -17,7 +17,13 @@ pub struct Film {
 impl Film {
     pub fn new(width: u32, height: u32, aovs: usize, spp: u32) -> Film {
         let stride = 3 * aovs + 1;
-        Film { width, height, aovs, spp, data: vec![0.0; width as usize * height as usize * stride] }
+        Film {
+            width,
+            height,
+            aovs,
+            spp,
+            data: vec![0.0; width as usize * height as usize * stride],
+        }
     }
 
     pub fn stride(&self) -> usize {
@@ -33,13 +39,19 @@ impl Film {
     /// AOV `k` as RGB planes of means, row by row.
     pub fn channel(&self, k: usize, c: usize) -> Vec<f32> {
         let inv = 1.0 / self.spp as f32;
-        self.data.chunks_exact(self.stride()).map(|px| px[3 * k + c] * inv).collect()
+        self.data
+            .chunks_exact(self.stride())
+            .map(|px| px[3 * k + c] * inv)
+            .collect()
     }
 
     pub fn alpha(&self) -> Vec<f32> {
         let inv = 1.0 / self.spp as f32;
         let a = 3 * self.aovs;
-        self.data.chunks_exact(self.stride()).map(|px| px[a] * inv).collect()
+        self.data
+            .chunks_exact(self.stride())
+            .map(|px| px[a] * inv)
+            .collect()
     }
 
     /// Merges a film of the same frame rendered with other samples (a farm's sample
@@ -67,7 +79,11 @@ pub struct SampleAccumulator {
 
 impl SampleAccumulator {
     pub fn new(aovs: usize) -> SampleAccumulator {
-        SampleAccumulator { values: vec![Vec3A::ZERO; aovs], touched: Vec::with_capacity(aovs), is_touched: vec![false; aovs] }
+        SampleAccumulator {
+            values: vec![Vec3A::ZERO; aovs],
+            touched: Vec::with_capacity(aovs),
+            is_touched: vec![false; aovs],
+        }
     }
 
     #[inline]

@@ -104,7 +104,11 @@ impl<'a> Tracer<'a> {
             return;
         }
         let settings = &self.scene.settings;
-        let clamp = if scatters <= 1 { settings.clamp_direct } else { settings.clamp_indirect };
+        let clamp = if scatters <= 1 {
+            settings.clamp_direct
+        } else {
+            settings.clamp_indirect
+        };
         let mut dropped = false;
         for rule in rules {
             let k = rule.0 as usize;
@@ -139,7 +143,11 @@ impl<'a> Tracer<'a> {
                 }
                 Via::Data => 1.0,
             };
-            let mut v = if r.nothruput { local } else { throughput * local } * weight;
+            let mut v = if r.nothruput {
+                local
+            } else {
+                throughput * local
+            } * weight;
             if !r.noinfinitecheck && !v.is_finite() {
                 dropped = true;
                 continue;
@@ -157,11 +165,21 @@ impl<'a> Tracer<'a> {
 
     fn spawn(&self, hit: &Hit, dir: Vec3A, tmax: f32) -> Ray {
         let side = if dir.dot(hit.ng) >= 0.0 { 1.0 } else { -1.0 };
-        Ray { origin: hit.p + hit.ng * (self.scene.epsilon * side), dir, tmax }
+        Ray {
+            origin: hit.p + hit.ng * (self.scene.epsilon * side),
+            dir,
+            tmax,
+        }
     }
 
     /// Traces one camera path; returns its alpha.
-    fn trace(&self, mut ray: Ray, rng: &mut Rng, acc: &mut SampleAccumulator, counters: &mut PathCounters) -> f32 {
+    fn trace(
+        &self,
+        mut ray: Ray,
+        rng: &mut Rng,
+        acc: &mut SampleAccumulator,
+        counters: &mut PathCounters,
+    ) -> f32 {
         let scene = self.scene;
         let a = &scene.automaton;
         let settings = &scene.settings;
@@ -188,16 +206,42 @@ impl<'a> Tracer<'a> {
                     if depth == 0 {
                         if light.camera_visible {
                             let s = a.step(state, o_class);
-                            self.contribute(acc, counters, s, throughput, le, 1.0, Via::Hit { light_sampled: false }, 0);
+                            self.contribute(
+                                acc,
+                                counters,
+                                s,
+                                throughput,
+                                le,
+                                1.0,
+                                Via::Hit {
+                                    light_sampled: false,
+                                },
+                                0,
+                            );
                         }
                     } else {
                         let s = a.step(state, l_class);
                         let w = if prev_delta {
                             1.0
                         } else {
-                            power_heuristic(prev_pdf, scene.light_select.pmf(li as usize) * light.pdf_hit(prev_p, ray.dir, f32::INFINITY, Vec3A::ZERO))
+                            power_heuristic(
+                                prev_pdf,
+                                scene.light_select.pmf(li as usize)
+                                    * light.pdf_hit(prev_p, ray.dir, f32::INFINITY, Vec3A::ZERO),
+                            )
                         };
-                        self.contribute(acc, counters, s, throughput, le, w, Via::Hit { light_sampled: !prev_delta }, depth);
+                        self.contribute(
+                            acc,
+                            counters,
+                            s,
+                            throughput,
+                            le,
+                            w,
+                            Via::Hit {
+                                light_sampled: !prev_delta,
+                            },
+                            depth,
+                        );
                     }
                 }
                 break;
@@ -225,27 +269,66 @@ impl<'a> Tracer<'a> {
                     let (l_class, o_class) = scene.light_classes[li as usize];
                     if depth == 0 {
                         let s = a.step(state, o_class);
-                        self.contribute(acc, counters, s, throughput, le, 1.0, Via::Hit { light_sampled: false }, 0);
+                        self.contribute(
+                            acc,
+                            counters,
+                            s,
+                            throughput,
+                            le,
+                            1.0,
+                            Via::Hit {
+                                light_sampled: false,
+                            },
+                            0,
+                        );
                     } else {
                         let s = a.step(state, l_class);
                         let w = if prev_delta {
                             1.0
                         } else {
-                            power_heuristic(prev_pdf, scene.light_select.pmf(li as usize) * light.pdf_hit(prev_p, ray.dir, hit.t, hit.ng))
+                            power_heuristic(
+                                prev_pdf,
+                                scene.light_select.pmf(li as usize)
+                                    * light.pdf_hit(prev_p, ray.dir, hit.t, hit.ng),
+                            )
                         };
-                        self.contribute(acc, counters, s, throughput, le, w, Via::Hit { light_sampled: !prev_delta }, depth);
+                        self.contribute(
+                            acc,
+                            counters,
+                            s,
+                            throughput,
+                            le,
+                            w,
+                            Via::Hit {
+                                light_sampled: !prev_delta,
+                            },
+                            depth,
+                        );
                     }
                 }
             } else if let Some(glow) = obj.glow_class {
                 let s = a.step(state, glow);
-                self.contribute(acc, counters, s, throughput, obj.emission, 1.0, Via::Hit { light_sampled: false }, depth);
+                self.contribute(
+                    acc,
+                    counters,
+                    s,
+                    throughput,
+                    obj.emission,
+                    1.0,
+                    Via::Hit {
+                        light_sampled: false,
+                    },
+                    depth,
+                );
             }
 
             // Mitsuba's convention: `max_depth` counts segments; scattering here adds one.
             if depth + 1 >= settings.max_depth {
                 break;
             }
-            let Some(material) = obj.material.map(|m| &scene.materials[m as usize]) else { break };
+            let Some(material) = obj.material.map(|m| &scene.materials[m as usize]) else {
+                break;
+            };
             let bsdf = &material.bsdf;
             let sh = Shading::new(bsdf, hit.ns, hit.ng, -ray.dir);
             if sh.wo.z == 0.0 {
@@ -268,7 +351,16 @@ impl<'a> Tracer<'a> {
                     DataLobe::Normal => sh.frame.n,
                     DataLobe::UserColor => material.user_color.unwrap_or(Vec3A::ZERO),
                 };
-                self.contribute(acc, counters, s2, throughput, value, 1.0, Via::Data, depth + 1);
+                self.contribute(
+                    acc,
+                    counters,
+                    s2,
+                    throughput,
+                    value,
+                    1.0,
+                    Via::Data,
+                    depth + 1,
+                );
             }
 
             // Light sampling: every non-delta lobe through its own event, then `L`.
@@ -299,13 +391,31 @@ impl<'a> Tracer<'a> {
                         if f == Vec3A::ZERO {
                             continue;
                         }
-                        let w = if ls.delta { 1.0 } else { power_heuristic(light_pdf, lobe_pdf) };
+                        let w = if ls.delta {
+                            1.0
+                        } else {
+                            power_heuristic(light_pdf, lobe_pdf)
+                        };
                         let vis = *visible.get_or_insert_with(|| {
                             counters.rays += 1;
-                            let tmax = if ls.dist.is_finite() { ls.dist - 2.0 * scene.epsilon } else { f32::INFINITY };
-                            tmax <= 0.0 || !scene.accel.occluded(&self.spawn(&hit, ls.wi, tmax), 0.0)
+                            let tmax = if ls.dist.is_finite() {
+                                ls.dist - 2.0 * scene.epsilon
+                            } else {
+                                f32::INFINITY
+                            };
+                            tmax <= 0.0
+                                || !scene.accel.occluded(&self.spawn(&hit, ls.wi, tmax), 0.0)
                         });
-                        self.contribute(acc, counters, s_light, throughput, f * ls.radiance / light_pdf, w, Via::LightSample { visible: vis }, depth + 1);
+                        self.contribute(
+                            acc,
+                            counters,
+                            s_light,
+                            throughput,
+                            f * ls.radiance / light_pdf,
+                            w,
+                            Via::LightSample { visible: vis },
+                            depth + 1,
+                        );
                     }
                 }
             }
@@ -313,7 +423,9 @@ impl<'a> Tracer<'a> {
             // Continue the path through one sampled lobe.
             let u_lobe = rng.next_f32();
             let u_dir = rng.next_2d();
-            let Some(bs) = bsdf.sample(&sh, u_lobe, u_dir) else { break };
+            let Some(bs) = bsdf.sample(&sh, u_lobe, u_dir) else {
+                break;
+            };
             let tag = lobes[bs.lobe];
             match tag.scatter.class {
                 ScatterClass::Diffuse => {
@@ -371,9 +483,11 @@ pub fn render(scene: &Scene, options: &RenderOptions) -> (Film, RenderStats) {
     let bar = if options.progress {
         let bar = indicatif::ProgressBar::new(h as u64);
         bar.set_style(
-            indicatif::ProgressStyle::with_template("{spinner} rendering [{bar:40}] {pos}/{len} rows {elapsed_precise} (eta {eta})")
-                .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar())
-                .progress_chars("=> "),
+            indicatif::ProgressStyle::with_template(
+                "{spinner} rendering [{bar:40}] {pos}/{len} rows {elapsed_precise} (eta {eta})",
+            )
+            .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar())
+            .progress_chars("=> "),
         );
         bar
     } else {
@@ -383,7 +497,11 @@ pub fn render(scene: &Scene, options: &RenderOptions) -> (Film, RenderStats) {
     film.data.par_chunks_mut(row_len).enumerate().for_each_init(
         || SampleAccumulator::new(scene.aovs.len()),
         |acc, (y, row)| {
-            let mut counters = PathCounters { rays: 0, nonfinite: 0, holdout: false };
+            let mut counters = PathCounters {
+                rays: 0,
+                nonfinite: 0,
+                holdout: false,
+            };
             for x in 0..w {
                 let pixel = &mut row[x as usize * stride..(x as usize + 1) * stride];
                 let index = y as u64 * w as u64 + x as u64;

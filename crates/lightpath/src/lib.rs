@@ -21,7 +21,11 @@ pub use scene::{Scene, SceneError, Source};
 /// Loads a built-in scene by name or a scene file by path.
 pub fn load_source(scene: &str) -> Result<Source, SceneError> {
     if let Some(text) = scene::builtin::get(scene) {
-        return Ok(Source { name: format!("builtin:{scene}"), text: text.to_string(), dir: std::path::PathBuf::new() });
+        return Ok(Source {
+            name: format!("builtin:{scene}"),
+            text: text.to_string(),
+            dir: std::path::PathBuf::new(),
+        });
     }
     Source::from_file(std::path::Path::new(scene))
 }

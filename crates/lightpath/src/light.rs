@@ -13,7 +13,9 @@
 //! ```
 
 use crate::geometry::Prim;
-use crate::sampling::{uniform_cone, uniform_cone_pdf, uniform_sphere, uniform_triangle, Distribution1D, Frame};
+use crate::sampling::{
+    uniform_cone, uniform_cone_pdf, uniform_sphere, uniform_triangle, Distribution1D, Frame,
+};
 use glam::{Vec2, Vec3A};
 use std::f32::consts::PI;
 
@@ -34,12 +36,21 @@ impl EnvMap {
         for y in 0..height {
             // sin θ: texels near the poles cover less solid angle.
             let sin_t = (PI * (y as f32 + 0.5) / height as f32).sin();
-            let w: Vec<f32> = texels[y * width..(y + 1) * width].iter().map(|t| luminance(*t) * sin_t + 1e-6).collect();
+            let w: Vec<f32> = texels[y * width..(y + 1) * width]
+                .iter()
+                .map(|t| luminance(*t) * sin_t + 1e-6)
+                .collect();
             let d = Distribution1D::new(&w);
             row_weights.push(d.total());
             columns.push(d);
         }
-        EnvMap { width, height, texels, rows: Distribution1D::new(&row_weights), columns }
+        EnvMap {
+            width,
+            height,
+            texels,
+            rows: Distribution1D::new(&row_weights),
+            columns,
+        }
     }
 
     /// Lat-long lookup: +Y up; u runs with the azimuth from −Z towards +X.
@@ -52,7 +63,11 @@ impl EnvMap {
     fn dir(uv: Vec2) -> Vec3A {
         let phi = (uv.x - 0.5) * 2.0 * PI;
         let theta = uv.y * PI;
-        Vec3A::new(theta.sin() * phi.sin(), theta.cos(), -theta.sin() * phi.cos())
+        Vec3A::new(
+            theta.sin() * phi.sin(),
+            theta.cos(),
+            -theta.sin() * phi.cos(),
+        )
     }
 
     fn lookup(&self, d: Vec3A) -> Vec3A {
@@ -65,7 +80,10 @@ impl EnvMap {
     fn sample(&self, u: Vec2) -> (Vec3A, f32) {
         let (y, py, _) = self.rows.sample(u.y);
         let (x, px, rx) = self.columns[y].sample(u.x);
-        let uv = Vec2::new((x as f32 + rx) / self.width as f32, (y as f32 + 0.5) / self.height as f32);
+        let uv = Vec2::new(
+            (x as f32 + rx) / self.width as f32,
+            (y as f32 + 0.5) / self.height as f32,
+        );
         let d = Self::dir(uv);
         let sin_t = (PI * uv.y).sin().max(1e-6);
         // Texel probability over its solid angle: (2π/W)(π/H) sin θ.
@@ -78,7 +96,8 @@ impl EnvMap {
         let x = ((uv.x * self.width as f32) as usize).min(self.width - 1);
         let y = ((uv.y * self.height as f32) as usize).min(self.height - 1);
         let sin_t = (PI * (y as f32 + 0.5) / self.height as f32).sin().max(1e-6);
-        self.rows.pmf(y) * self.columns[y].pmf(x) * (self.width * self.height) as f32 / (2.0 * PI * PI * sin_t)
+        self.rows.pmf(y) * self.columns[y].pmf(x) * (self.width * self.height) as f32
+            / (2.0 * PI * PI * sin_t)
     }
 
     pub fn average(&self) -> Vec3A {
@@ -103,14 +122,33 @@ pub fn luminance(c: Vec3A) -> f32 {
 pub enum LightShape {
     /// Triangles (of a rectangle, quad or disk) sampled by area; emits on the side of
     /// their normal unless two-sided.
-    Triangles { prims: Vec<Prim>, by_area: Distribution1D, area: f32, two_sided: bool },
-    Sphere { center: Vec3A, radius: f32 },
-    Point { position: Vec3A },
+    Triangles {
+        prims: Vec<Prim>,
+        by_area: Distribution1D,
+        area: f32,
+        two_sided: bool,
+    },
+    Sphere {
+        center: Vec3A,
+        radius: f32,
+    },
+    Point {
+        position: Vec3A,
+    },
     /// Intensity falls off smoothly from the inner to the outer cone.
-    Spot { position: Vec3A, axis: Vec3A, cos_inner: f32, cos_outer: f32 },
+    Spot {
+        position: Vec3A,
+        axis: Vec3A,
+        cos_inner: f32,
+        cos_outer: f32,
+    },
     /// Light travelling along `dir` (towards the scene).
-    Distant { dir: Vec3A },
-    Dome { map: Option<EnvMap> },
+    Distant {
+        dir: Vec3A,
+    },
+    Dome {
+        map: Option<EnvMap>,
+    },
 }
 
 #[derive(Clone, Debug)]
@@ -139,21 +177,33 @@ pub struct LightSample {
 
 impl Light {
     pub fn is_delta(&self) -> bool {
-        matches!(self.shape, LightShape::Point { .. } | LightShape::Spot { .. } | LightShape::Distant { .. })
+        matches!(
+            self.shape,
+            LightShape::Point { .. } | LightShape::Spot { .. } | LightShape::Distant { .. }
+        )
     }
 
     pub fn is_infinite(&self) -> bool {
-        matches!(self.shape, LightShape::Dome { .. } | LightShape::Distant { .. })
+        matches!(
+            self.shape,
+            LightShape::Dome { .. } | LightShape::Distant { .. }
+        )
     }
 
     /// Rough emitted power, for choosing lights in proportion to it.
     pub fn power(&self, scene_radius: f32) -> f32 {
         let l = luminance(self.color).max(0.0);
         match &self.shape {
-            LightShape::Triangles { area, two_sided, .. } => l * area * PI * if *two_sided { 2.0 } else { 1.0 },
+            LightShape::Triangles {
+                area, two_sided, ..
+            } => l * area * PI * if *two_sided { 2.0 } else { 1.0 },
             LightShape::Sphere { radius, .. } => l * 4.0 * PI * radius * radius * PI,
             LightShape::Point { .. } => l * 4.0 * PI,
-            LightShape::Spot { cos_inner, cos_outer, .. } => l * 2.0 * PI * (1.0 - 0.5 * (cos_inner + cos_outer)),
+            LightShape::Spot {
+                cos_inner,
+                cos_outer,
+                ..
+            } => l * 2.0 * PI * (1.0 - 0.5 * (cos_inner + cos_outer)),
             LightShape::Distant { .. } => l * PI * scene_radius * scene_radius,
             LightShape::Dome { map } => {
                 let avg = map.as_ref().map_or(1.0, |m| luminance(m.average()));
@@ -165,9 +215,16 @@ impl Light {
     /// Samples a point of the light as seen from `p`.
     pub fn sample(&self, p: Vec3A, u: Vec2) -> Option<LightSample> {
         match &self.shape {
-            LightShape::Triangles { prims, by_area, area, two_sided } => {
+            LightShape::Triangles {
+                prims,
+                by_area,
+                area,
+                two_sided,
+            } => {
                 let (i, _, ux) = by_area.sample(u.x);
-                let Prim::Triangle { p0, e1, e2, .. } = prims[i] else { return None };
+                let Prim::Triangle { p0, e1, e2, .. } = prims[i] else {
+                    return None;
+                };
                 let (b1, b2) = uniform_triangle(Vec2::new(ux, u.y));
                 let q = p0 + e1 * b1 + e2 * b2;
                 let n = e1.cross(e2).normalize();
@@ -179,7 +236,13 @@ impl Light {
                 if cos_l <= 0.0 && !two_sided || cos_l == 0.0 {
                     return None;
                 }
-                Some(LightSample { wi, dist, radiance: self.color, pdf: dist2 / (cos_l.abs() * area), delta: false })
+                Some(LightSample {
+                    wi,
+                    dist,
+                    radiance: self.color,
+                    pdf: dist2 / (cos_l.abs() * area),
+                    delta: false,
+                })
             }
             LightShape::Sphere { center, radius } => {
                 let to_c = *center - p;
@@ -190,18 +253,38 @@ impl Light {
                 let cos_max = (1.0 - radius * radius / d2).max(0.0).sqrt();
                 let frame = Frame::new(to_c / d2.sqrt());
                 let wi = frame.to_world(uniform_cone(u, cos_max));
-                let dist = crate::geometry::Prim::Sphere { center: *center, radius: *radius }
-                    .intersect(p, wi, 0.0, f32::INFINITY)
-                    .min(d2.sqrt());
-                Some(LightSample { wi, dist, radiance: self.color, pdf: uniform_cone_pdf(cos_max), delta: false })
+                let dist = crate::geometry::Prim::Sphere {
+                    center: *center,
+                    radius: *radius,
+                }
+                .intersect(p, wi, 0.0, f32::INFINITY)
+                .min(d2.sqrt());
+                Some(LightSample {
+                    wi,
+                    dist,
+                    radiance: self.color,
+                    pdf: uniform_cone_pdf(cos_max),
+                    delta: false,
+                })
             }
             LightShape::Point { position } => {
                 let d = *position - p;
                 let dist2 = d.length_squared();
                 let dist = dist2.sqrt();
-                Some(LightSample { wi: d / dist, dist, radiance: self.color / dist2, pdf: 1.0, delta: true })
+                Some(LightSample {
+                    wi: d / dist,
+                    dist,
+                    radiance: self.color / dist2,
+                    pdf: 1.0,
+                    delta: true,
+                })
             }
-            LightShape::Spot { position, axis, cos_inner, cos_outer } => {
+            LightShape::Spot {
+                position,
+                axis,
+                cos_inner,
+                cos_outer,
+            } => {
                 let d = *position - p;
                 let dist2 = d.length_squared();
                 let dist = dist2.sqrt();
@@ -211,22 +294,44 @@ impl Light {
                 if falloff <= 0.0 {
                     return None;
                 }
-                Some(LightSample { wi, dist, radiance: self.color * falloff / dist2, pdf: 1.0, delta: true })
+                Some(LightSample {
+                    wi,
+                    dist,
+                    radiance: self.color * falloff / dist2,
+                    pdf: 1.0,
+                    delta: true,
+                })
             }
-            LightShape::Distant { dir } => {
-                Some(LightSample { wi: -*dir, dist: f32::INFINITY, radiance: self.color, pdf: 1.0, delta: true })
-            }
+            LightShape::Distant { dir } => Some(LightSample {
+                wi: -*dir,
+                dist: f32::INFINITY,
+                radiance: self.color,
+                pdf: 1.0,
+                delta: true,
+            }),
             LightShape::Dome { map } => match map {
                 None => {
                     let wi = uniform_sphere(u);
-                    Some(LightSample { wi, dist: f32::INFINITY, radiance: self.color, pdf: 1.0 / (4.0 * PI), delta: false })
+                    Some(LightSample {
+                        wi,
+                        dist: f32::INFINITY,
+                        radiance: self.color,
+                        pdf: 1.0 / (4.0 * PI),
+                        delta: false,
+                    })
                 }
                 Some(m) => {
                     let (wi, pdf) = m.sample(u);
                     if pdf <= 0.0 {
                         return None;
                     }
-                    Some(LightSample { wi, dist: f32::INFINITY, radiance: self.color * m.lookup(wi), pdf, delta: false })
+                    Some(LightSample {
+                        wi,
+                        dist: f32::INFINITY,
+                        radiance: self.color * m.lookup(wi),
+                        pdf,
+                        delta: false,
+                    })
                 }
             },
         }
@@ -305,7 +410,9 @@ mod tests {
     #[test]
     fn env_map_pdf_matches_its_sampling() {
         let (w, h) = (16, 8);
-        let texels: Vec<Vec3A> = (0..w * h).map(|i| Vec3A::splat(1.0 + (i % 7) as f32)).collect();
+        let texels: Vec<Vec3A> = (0..w * h)
+            .map(|i| Vec3A::splat(1.0 + (i % 7) as f32))
+            .collect();
         let m = EnvMap::new(w, h, texels);
         let mut rng = Rng::for_sample(1, 2, 3);
         for _ in 0..100 {
@@ -315,7 +422,10 @@ mod tests {
         }
         // ∫ pdf dω = 1, by uniform sphere sampling.
         let n = 200_000;
-        let integral: f32 = (0..n).map(|_| m.pdf(uniform_sphere(rng.next_2d())) * 4.0 * PI).sum::<f32>() / n as f32;
+        let integral: f32 = (0..n)
+            .map(|_| m.pdf(uniform_sphere(rng.next_2d())) * 4.0 * PI)
+            .sum::<f32>()
+            / n as f32;
         assert!((integral - 1.0).abs() < 0.02, "{integral}");
     }
 }

@@ -8,7 +8,11 @@ use std::path::PathBuf;
 use std::process::ExitCode;
 
 #[derive(Parser)]
-#[command(name = "lightpath", version, about = "A CPU path tracer whose every AOV is a Light Path Expression")]
+#[command(
+    name = "lightpath",
+    version,
+    about = "A CPU path tracer whose every AOV is a Light Path Expression"
+)]
 struct Cli {
     #[command(subcommand)]
     command: Command,
@@ -64,7 +68,9 @@ struct RenderArgs {
 }
 
 fn parse_resolution(s: &str) -> Result<[u32; 2], String> {
-    let (w, h) = s.split_once(['x', 'X']).ok_or("expected WIDTHxHEIGHT, e.g. 640x480")?;
+    let (w, h) = s
+        .split_once(['x', 'X'])
+        .ok_or("expected WIDTHxHEIGHT, e.g. 640x480")?;
     let w: u32 = w.trim().parse().map_err(|_| format!("bad width '{w}'"))?;
     let h: u32 = h.trim().parse().map_err(|_| format!("bad height '{h}'"))?;
     if w == 0 || h == 0 || w > 32768 || h > 32768 {
@@ -102,7 +108,10 @@ fn main() -> ExitCode {
 
 fn render(args: RenderArgs) -> ExitCode {
     if let Some(n) = args.threads {
-        if let Err(e) = rayon::ThreadPoolBuilder::new().num_threads(n.max(1)).build_global() {
+        if let Err(e) = rayon::ThreadPoolBuilder::new()
+            .num_threads(n.max(1))
+            .build_global()
+        {
             eprintln!("warning: cannot set the thread count: {e}");
         }
     }
@@ -136,7 +145,11 @@ fn render(args: RenderArgs) -> ExitCode {
     if args.aov_set == "standard" {
         specs.extend(aov::standard());
     }
-    specs.extend(desc.aovs.iter().map(|(n, d)| AovSpec::new(n.clone(), d.get_ref().clone())));
+    specs.extend(
+        desc.aovs
+            .iter()
+            .map(|(n, d)| AovSpec::new(n.clone(), d.get_ref().clone())),
+    );
     for a in &args.aovs {
         match AovSpec::parse(a) {
             Ok(s) => specs.push(s),
@@ -147,11 +160,18 @@ fn render(args: RenderArgs) -> ExitCode {
         }
     }
     if args.light_groups || desc.light_groups {
-        let mut groups: Vec<String> = desc.lights.iter().flat_map(|l| l.get_ref().groups.clone()).collect();
+        let mut groups: Vec<String> = desc
+            .lights
+            .iter()
+            .flat_map(|l| l.get_ref().groups.clone())
+            .collect();
         groups.sort();
         groups.dedup();
         if groups.len() + specs.len() > 64 {
-            eprintln!("warning: the light-group split makes {} AOVs", groups.len() + specs.len() + 1);
+            eprintln!(
+                "warning: the light-group split makes {} AOVs",
+                groups.len() + specs.len() + 1
+            );
         }
         specs.extend(aov::light_group_split(&groups));
     }
@@ -165,20 +185,38 @@ fn render(args: RenderArgs) -> ExitCode {
     };
     for w in scene.automaton.warnings() {
         let aov = &scene.aovs[w.rule.0 as usize];
-        eprintln!("warning: AOV '{}' ({}): {}", aov.name, aov.definition, w.message);
+        eprintln!(
+            "warning: AOV '{}' ({}): {}",
+            aov.name, aov.definition, w.message
+        );
     }
     let stem = match args.output.as_ref() {
         Some(p) => p.with_extension(""),
-        None => PathBuf::from(std::path::Path::new(&args.scene).file_stem().map(|s| s.to_os_string()).unwrap_or_else(|| "render".into())),
+        None => PathBuf::from(
+            std::path::Path::new(&args.scene)
+                .file_stem()
+                .map(|s| s.to_os_string())
+                .unwrap_or_else(|| "render".into()),
+        ),
     };
-    let exr_path = args.output.clone().unwrap_or_else(|| stem.with_extension("exr"));
+    let exr_path = args
+        .output
+        .clone()
+        .unwrap_or_else(|| stem.with_extension("exr"));
     let png_path = stem.with_extension("png");
-    let options = lightpath::RenderOptions { spp: scene.settings.spp, first_sample: 0, progress: !args.quiet };
+    let options = lightpath::RenderOptions {
+        spp: scene.settings.spp,
+        first_sample: 0,
+        progress: !args.quiet,
+    };
     let (film, stats) = lightpath::render(&scene, &options);
     let extra = vec![
         ("lightpath/scene".to_string(), src.name.clone()),
         ("lightpath/spp".to_string(), scene.settings.spp.to_string()),
-        ("lightpath/seed".to_string(), scene.settings.seed.to_string()),
+        (
+            "lightpath/seed".to_string(),
+            scene.settings.seed.to_string(),
+        ),
     ];
     if let Err(e) = output::write_exr(&exr_path, &film, &scene.aovs, args.half, &extra) {
         eprintln!("error: {e}");
@@ -197,7 +235,11 @@ fn render(args: RenderArgs) -> ExitCode {
         stats.seconds,
         stats.samples as f64 / stats.seconds / 1e6,
         stats.rays as f64 / stats.seconds / 1e6,
-        if stats.nonfinite > 0 { format!(", {} NaN/Inf contributions dropped", stats.nonfinite) } else { String::new() }
+        if stats.nonfinite > 0 {
+            format!(", {} NaN/Inf contributions dropped", stats.nonfinite)
+        } else {
+            String::new()
+        }
     );
     println!("wrote {} and {}", exr_path.display(), png_path.display());
     ExitCode::SUCCESS
@@ -225,7 +267,11 @@ fn lpe_command(cmd: LpeCommand) -> ExitCode {
                     for w in a.warnings() {
                         eprintln!("warning: {}: {}", definitions[w.rule.0 as usize], w.message);
                     }
-                    println!("{} definition{} valid", definitions.len(), if definitions.len() == 1 { "" } else { "s" });
+                    println!(
+                        "{} definition{} valid",
+                        definitions.len(),
+                        if definitions.len() == 1 { "" } else { "s" }
+                    );
                     ExitCode::SUCCESS
                 }
                 Err(e) => {
@@ -234,7 +280,11 @@ fn lpe_command(cmd: LpeCommand) -> ExitCode {
                 }
             }
         }
-        LpeCommand::Match { definitions, path, jsonl } => {
+        LpeCommand::Match {
+            definitions,
+            path,
+            jsonl,
+        } => {
             if jsonl {
                 return match_jsonl();
             }
@@ -268,7 +318,11 @@ fn lpe_command(cmd: LpeCommand) -> ExitCode {
             for d in &definitions {
                 match lpe::Rule::parse(d) {
                     Ok(rule) => {
-                        let name = rule.name.clone().map(|n| format!("{n}: ")).unwrap_or_default();
+                        let name = rule
+                            .name
+                            .clone()
+                            .map(|n| format!("{n}: "))
+                            .unwrap_or_default();
                         println!("{name}{d}\n  {}", lpe::explain::explain(&rule));
                         if let Ok(alone) = lpe::compile(&[d]) {
                             let s = alone.stats();

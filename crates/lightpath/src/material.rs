@@ -27,7 +27,11 @@ pub struct LobeTag {
 }
 
 const fn tag(transmit: bool, scatter: Scatter, delta: bool) -> LobeTag {
-    LobeTag { transmit, scatter, delta }
+    LobeTag {
+        transmit,
+        scatter,
+        delta,
+    }
 }
 
 #[derive(Clone, Debug, PartialEq)]
@@ -79,7 +83,10 @@ impl Shading {
             }
         };
         let frame = Frame::new(n);
-        Shading { frame, wo: frame.to_local(wo_world) }
+        Shading {
+            frame,
+            wo: frame.to_local(wo_world),
+        }
     }
 }
 
@@ -90,7 +97,11 @@ fn luminance(c: Vec3A) -> f32 {
 /// Unpolarised Fresnel reflectance of a dielectric; `eta` = inside / outside, `cos_i`
 /// signed (negative: arriving from inside).
 pub fn fresnel_dielectric(cos_i: f32, eta: f32) -> f32 {
-    let (cos_i, eta) = if cos_i < 0.0 { (-cos_i, 1.0 / eta) } else { (cos_i, eta) };
+    let (cos_i, eta) = if cos_i < 0.0 {
+        (-cos_i, 1.0 / eta)
+    } else {
+        (cos_i, eta)
+    };
     let sin2_t = (1.0 - cos_i * cos_i) / (eta * eta);
     if sin2_t >= 1.0 {
         return 1.0;
@@ -159,7 +170,11 @@ impl Ggx {
         let wo = if wo.z < 0.0 { -wo } else { wo };
         let vh = Vec3A::new(self.alpha * wo.x, self.alpha * wo.y, wo.z).normalize();
         let len2 = vh.x * vh.x + vh.y * vh.y;
-        let t1 = if len2 > 0.0 { Vec3A::new(-vh.y, vh.x, 0.0) / len2.sqrt() } else { Vec3A::X };
+        let t1 = if len2 > 0.0 {
+            Vec3A::new(-vh.y, vh.x, 0.0) / len2.sqrt()
+        } else {
+            Vec3A::X
+        };
         let t2 = vh.cross(t1);
         let r = u.x.sqrt();
         let phi = 2.0 * PI * u.y;
@@ -190,8 +205,14 @@ impl Bsdf {
         const TRANSLUCENT: [LobeTag; 2] = [RD2, TD3];
         const MIRROR: [LobeTag; 1] = [tag(false, Scatter::specular(2), true)];
         const METAL: [LobeTag; 1] = [tag(false, Scatter::specular(3), false)];
-        const GLASS: [LobeTag; 2] = [tag(false, Scatter::specular(8), true), tag(true, Scatter::specular(8), true)];
-        const ROUGH_GLASS: [LobeTag; 2] = [tag(false, Scatter::specular(8), false), tag(true, Scatter::specular(8), false)];
+        const GLASS: [LobeTag; 2] = [
+            tag(false, Scatter::specular(8), true),
+            tag(true, Scatter::specular(8), true),
+        ];
+        const ROUGH_GLASS: [LobeTag; 2] = [
+            tag(false, Scatter::specular(8), false),
+            tag(true, Scatter::specular(8), false),
+        ];
         const PLASTIC: [LobeTag; 2] = [RD2, tag(false, Scatter::specular(4), true)];
         const ROUGH_PLASTIC: [LobeTag; 2] = [RD2, tag(false, Scatter::specular(4), false)];
         match self {
@@ -248,13 +269,21 @@ impl Bsdf {
         let wo = sh.wo;
         let sel = self.selection(wo);
         match (self, k) {
-            (Bsdf::Diffuse { albedo }, _) | (Bsdf::Translucent { reflect: albedo, .. }, 0) | (Bsdf::Plastic { albedo, .. }, 0) => {
+            (Bsdf::Diffuse { albedo }, _)
+            | (
+                Bsdf::Translucent {
+                    reflect: albedo, ..
+                },
+                0,
+            )
+            | (Bsdf::Plastic { albedo, .. }, 0) => {
                 if wo.z <= 0.0 || wi.z <= 0.0 {
                     return (Vec3A::ZERO, 0.0);
                 }
                 let mut f = *albedo * FRAC_1_PI * wi.z;
                 if let Bsdf::Plastic { eta, .. } = self {
-                    f *= (1.0 - fresnel_dielectric(wo.z, *eta)) * (1.0 - fresnel_dielectric(wi.z, *eta));
+                    f *= (1.0 - fresnel_dielectric(wo.z, *eta))
+                        * (1.0 - fresnel_dielectric(wi.z, *eta));
                 }
                 (f, sel[0] * cosine_hemisphere_pdf(wi.z))
             }
@@ -262,7 +291,10 @@ impl Bsdf {
                 if wo.z <= 0.0 || wi.z >= 0.0 {
                     return (Vec3A::ZERO, 0.0);
                 }
-                (*transmit * FRAC_1_PI * wi.z.abs(), sel[1] * cosine_hemisphere_pdf(wi.z.abs()))
+                (
+                    *transmit * FRAC_1_PI * wi.z.abs(),
+                    sel[1] * cosine_hemisphere_pdf(wi.z.abs()),
+                )
             }
             (Bsdf::Conductor { f0, alpha }, _) => {
                 if *alpha == 0.0 || wo.z <= 0.0 || wi.z <= 0.0 {
@@ -280,7 +312,10 @@ impl Bsdf {
                 let g = Ggx { alpha: *alpha };
                 let m = (wo + wi).normalize();
                 let f = fresnel_dielectric(wi.dot(m), *eta) * g.d(m) * g.g(wo, wi) / (4.0 * wo.z);
-                (Vec3A::splat(f), sel[1] * g.pdf_visible(wo, m) / (4.0 * wo.dot(m)))
+                (
+                    Vec3A::splat(f),
+                    sel[1] * g.pdf_visible(wo, m) / (4.0 * wo.dot(m)),
+                )
             }
             (Bsdf::Dielectric { eta, alpha, tint }, k) => {
                 if *alpha == 0.0 || wo.z == 0.0 || wi.z == 0.0 {
@@ -296,15 +331,33 @@ impl Bsdf {
         let wo = sh.wo;
         let sel = self.selection(wo);
         let lobe = if u_lobe < sel[0] { 0 } else { 1 };
-        let sample = |lobe: usize, wi: Vec3A, delta_weight: Option<(Vec3A, f32)>, eta: f32| -> Option<BsdfSample> {
+        let sample = |lobe: usize,
+                      wi: Vec3A,
+                      delta_weight: Option<(Vec3A, f32)>,
+                      eta: f32|
+         -> Option<BsdfSample> {
             if let Some((weight, pdf)) = delta_weight {
-                return Some(BsdfSample { lobe, wi: sh.frame.to_world(wi), weight, pdf, delta: true, eta });
+                return Some(BsdfSample {
+                    lobe,
+                    wi: sh.frame.to_world(wi),
+                    weight,
+                    pdf,
+                    delta: true,
+                    eta,
+                });
             }
             let (f, pdf) = self.eval_lobe(lobe, sh, wi);
             if pdf <= 0.0 || f == Vec3A::ZERO {
                 return None;
             }
-            Some(BsdfSample { lobe, wi: sh.frame.to_world(wi), weight: f / pdf, pdf, delta: false, eta })
+            Some(BsdfSample {
+                lobe,
+                wi: sh.frame.to_world(wi),
+                weight: f / pdf,
+                pdf,
+                delta: false,
+                eta,
+            })
         };
         match self {
             Bsdf::Diffuse { .. } => sample(0, cosine_hemisphere(u), None, 1.0),
@@ -383,8 +436,23 @@ impl Bsdf {
                 if pdf <= 0.0 || fv == Vec3A::ZERO {
                     return None;
                 }
-                let etap = if k == 1 { if wo.z > 0.0 { *eta } else { 1.0 / eta } } else { 1.0 };
-                Some(BsdfSample { lobe: k, wi: sh.frame.to_world(wi), weight: fv / pdf, pdf, delta: false, eta: etap })
+                let etap = if k == 1 {
+                    if wo.z > 0.0 {
+                        *eta
+                    } else {
+                        1.0 / eta
+                    }
+                } else {
+                    1.0
+                };
+                Some(BsdfSample {
+                    lobe: k,
+                    wi: sh.frame.to_world(wi),
+                    weight: fv / pdf,
+                    pdf,
+                    delta: false,
+                    eta: etap,
+                })
             }
         }
     }
@@ -403,13 +471,26 @@ fn reflect(wo: Vec3A, m: Vec3A) -> Vec3A {
 
 /// Rough dielectric lobe `k` (0 reflection, 1 transmission): `f · |cos θi|` and pdf,
 /// both including the per-microfacet Fresnel choice (pbrt-v4's DielectricBxDF).
-fn rough_dielectric_eval(k: usize, eta: f32, g: Ggx, tint: Vec3A, wo: Vec3A, wi: Vec3A) -> (Vec3A, f32) {
+fn rough_dielectric_eval(
+    k: usize,
+    eta: f32,
+    g: Ggx,
+    tint: Vec3A,
+    wo: Vec3A,
+    wi: Vec3A,
+) -> (Vec3A, f32) {
     let (cos_o, cos_i) = (wo.z, wi.z);
     let reflect = cos_o * cos_i > 0.0;
     if reflect != (k == 0) {
         return (Vec3A::ZERO, 0.0);
     }
-    let etap = if reflect { 1.0 } else if cos_o > 0.0 { eta } else { 1.0 / eta };
+    let etap = if reflect {
+        1.0
+    } else if cos_o > 0.0 {
+        eta
+    } else {
+        1.0 / eta
+    };
     let mut m = wi * etap + wo;
     if m.length_squared() == 0.0 {
         return (Vec3A::ZERO, 0.0);
@@ -433,7 +514,9 @@ fn rough_dielectric_eval(k: usize, eta: f32, g: Ggx, tint: Vec3A, wo: Vec3A, wi:
         (tint * val, pdf)
     } else {
         let denom = (wi.dot(m) + wo.dot(m) / etap).powi(2);
-        let val = (1.0 - f) * g.d(m) * g.g(wo, wi) * (wi.dot(m) * wo.dot(m)).abs() / (denom * cos_o.abs()) / (etap * etap);
+        let val = (1.0 - f) * g.d(m) * g.g(wo, wi) * (wi.dot(m) * wo.dot(m)).abs()
+            / (denom * cos_o.abs())
+            / (etap * etap);
         let pdf = pdf_m * wi.dot(m).abs() / denom * (1.0 - f);
         (tint * val, pdf)
     }
@@ -447,7 +530,10 @@ mod tests {
     /// Estimates ∫ f cos dωi by sampling: the directional albedo, and checks that
     /// sampling weights agree with eval / pdf.
     fn albedo(bsdf: &Bsdf, wo: Vec3A, n: usize) -> Vec3A {
-        let sh = Shading { frame: Frame::new(Vec3A::Z), wo };
+        let sh = Shading {
+            frame: Frame::new(Vec3A::Z),
+            wo,
+        };
         let mut rng = Rng::for_sample(7, 0, 0);
         let mut sum = Vec3A::ZERO;
         for _ in 0..n {
@@ -460,7 +546,11 @@ mod tests {
 
     #[test]
     fn white_diffuse_reflects_everything() {
-        let a = albedo(&Bsdf::Diffuse { albedo: Vec3A::ONE }, Vec3A::new(0.3, 0.0, 0.95).normalize(), 1000);
+        let a = albedo(
+            &Bsdf::Diffuse { albedo: Vec3A::ONE },
+            Vec3A::new(0.3, 0.0, 0.95).normalize(),
+            1000,
+        );
         assert!((a - Vec3A::ONE).abs().max_element() < 1e-4, "{a}");
     }
 
@@ -468,8 +558,15 @@ mod tests {
     fn lossless_glass_conserves_energy_up_to_radiance_scaling() {
         // Smooth and rough: reflection + transmission·η² sum to one (no absorption).
         for alpha in [0.0, 0.3] {
-            let bsdf = Bsdf::Dielectric { eta: 1.5, alpha, tint: Vec3A::ONE };
-            let sh = Shading { frame: Frame::new(Vec3A::Z), wo: Vec3A::new(0.4, 0.0, 0.9).normalize() };
+            let bsdf = Bsdf::Dielectric {
+                eta: 1.5,
+                alpha,
+                tint: Vec3A::ONE,
+            };
+            let sh = Shading {
+                frame: Frame::new(Vec3A::Z),
+                wo: Vec3A::new(0.4, 0.0, 0.9).normalize(),
+            };
             let mut rng = Rng::for_sample(3, 0, 0);
             let n = 200_000;
             let mut total = 0.0;
@@ -488,16 +585,33 @@ mod tests {
     #[test]
     fn sampled_weights_match_evaluation_for_rough_lobes() {
         for bsdf in [
-            Bsdf::Conductor { f0: Vec3A::splat(0.9), alpha: 0.2 },
-            Bsdf::Plastic { albedo: Vec3A::splat(0.5), eta: 1.5, alpha: 0.3 },
-            Bsdf::Translucent { reflect: Vec3A::splat(0.3), transmit: Vec3A::splat(0.6) },
+            Bsdf::Conductor {
+                f0: Vec3A::splat(0.9),
+                alpha: 0.2,
+            },
+            Bsdf::Plastic {
+                albedo: Vec3A::splat(0.5),
+                eta: 1.5,
+                alpha: 0.3,
+            },
+            Bsdf::Translucent {
+                reflect: Vec3A::splat(0.3),
+                transmit: Vec3A::splat(0.6),
+            },
         ] {
-            let sh = Shading { frame: Frame::new(Vec3A::Z), wo: Vec3A::new(0.5, 0.1, 0.8).normalize() };
+            let sh = Shading {
+                frame: Frame::new(Vec3A::Z),
+                wo: Vec3A::new(0.5, 0.1, 0.8).normalize(),
+            };
             let mut rng = Rng::for_sample(5, 0, 0);
             for _ in 0..200 {
                 if let Some(s) = bsdf.sample(&sh, rng.next_f32(), rng.next_2d()) {
                     let (f, pdf) = bsdf.eval_lobe(s.lobe, &sh, sh.frame.to_local(s.wi));
-                    assert!((pdf - s.pdf).abs() <= 1e-3 * pdf.max(1.0), "{bsdf:?}: {pdf} vs {}", s.pdf);
+                    assert!(
+                        (pdf - s.pdf).abs() <= 1e-3 * pdf.max(1.0),
+                        "{bsdf:?}: {pdf} vs {}",
+                        s.pdf
+                    );
                     assert!((f / pdf - s.weight).abs().max_element() < 1e-3, "{bsdf:?}");
                 }
             }
@@ -506,7 +620,10 @@ mod tests {
 
     #[test]
     fn translucent_energy_is_reflect_plus_transmit() {
-        let bsdf = Bsdf::Translucent { reflect: Vec3A::splat(0.3), transmit: Vec3A::splat(0.5) };
+        let bsdf = Bsdf::Translucent {
+            reflect: Vec3A::splat(0.3),
+            transmit: Vec3A::splat(0.5),
+        };
         let a = albedo(&bsdf, Vec3A::new(0.0, 0.2, 0.98).normalize(), 20_000);
         assert!((a.x - 0.8).abs() < 0.02, "{a}");
     }

@@ -16,18 +16,28 @@ pub fn channel_names(name: &str) -> [String; 3] {
     if name == "beauty" {
         ["R".into(), "G".into(), "B".into()]
     } else {
-        [format!("{name}.R"), format!("{name}.G"), format!("{name}.B")]
+        [
+            format!("{name}.R"),
+            format!("{name}.G"),
+            format!("{name}.B"),
+        ]
     }
 }
 
 fn temp_path(path: &Path) -> PathBuf {
-    let mut name = path.file_name().map(|n| n.to_os_string()).unwrap_or_default();
+    let mut name = path
+        .file_name()
+        .map(|n| n.to_os_string())
+        .unwrap_or_default();
     name.push(format!(".tmp-{}", std::process::id()));
     path.with_file_name(name)
 }
 
 /// Runs `write` on a temporary path, then renames it to `path`.
-fn atomically(path: &Path, write: impl FnOnce(&Path) -> std::result::Result<(), String>) -> std::result::Result<(), String> {
+fn atomically(
+    path: &Path,
+    write: impl FnOnce(&Path) -> std::result::Result<(), String>,
+) -> std::result::Result<(), String> {
     let tmp = temp_path(path);
     match write(&tmp) {
         Ok(()) => std::fs::rename(&tmp, path).map_err(|e| {
@@ -41,8 +51,20 @@ fn atomically(path: &Path, write: impl FnOnce(&Path) -> std::result::Result<(), 
     }
 }
 
-pub fn write_exr(path: &Path, film: &Film, aovs: &[Aov], half: bool, extra: &[(String, String)]) -> std::result::Result<(), String> {
-    let samples = |v: Vec<f32>| if half { FlatSamples::F16(v.into_iter().map(f16::from_f32).collect()) } else { FlatSamples::F32(v) };
+pub fn write_exr(
+    path: &Path,
+    film: &Film,
+    aovs: &[Aov],
+    half: bool,
+    extra: &[(String, String)],
+) -> std::result::Result<(), String> {
+    let samples = |v: Vec<f32>| {
+        if half {
+            FlatSamples::F16(v.into_iter().map(f16::from_f32).collect())
+        } else {
+            FlatSamples::F32(v)
+        }
+    };
     let mut channels = Vec::new();
     for (k, aov) in aovs.iter().enumerate() {
         for (c, name) in channel_names(&aov.name).into_iter().enumerate() {
@@ -58,7 +80,10 @@ pub fn write_exr(path: &Path, film: &Film, aovs: &[Aov], half: bool, extra: &[(S
         );
     }
     for (k, v) in extra {
-        attributes.other.insert(Text::from(k.as_str()), AttributeValue::Text(Text::from(v.as_str())));
+        attributes.other.insert(
+            Text::from(k.as_str()),
+            AttributeValue::Text(Text::from(v.as_str())),
+        );
     }
     let layer = Layer::new(
         (film.width as usize, film.height as usize),
@@ -67,7 +92,12 @@ pub fn write_exr(path: &Path, film: &Film, aovs: &[Aov], half: bool, extra: &[(S
         AnyChannels::sort(SmallVec::from_vec(channels)),
     );
     let image = Image::from_layer(layer);
-    atomically(path, |tmp| image.write().to_file(tmp).map_err(|e| format!("cannot write {}: {e}", path.display())))
+    atomically(path, |tmp| {
+        image
+            .write()
+            .to_file(tmp)
+            .map_err(|e| format!("cannot write {}: {e}", path.display()))
+    })
 }
 
 /// An EXR read back: its channels by name and the header's AOV definitions.
@@ -80,13 +110,19 @@ pub struct ExrContents {
 
 impl ExrContents {
     pub fn channel(&self, name: &str) -> Option<&[f32]> {
-        self.channels.iter().find(|(n, _)| n == name).map(|(_, v)| v.as_slice())
+        self.channels
+            .iter()
+            .find(|(n, _)| n == name)
+            .map(|(_, v)| v.as_slice())
     }
     /// AOV names with their definitions, from the header.
     pub fn aovs(&self) -> Vec<(String, String)> {
         self.attributes
             .iter()
-            .filter_map(|(k, v)| k.strip_prefix(AOV_ATTRIBUTE_PREFIX).map(|n| (n.to_string(), v.clone())))
+            .filter_map(|(k, v)| {
+                k.strip_prefix(AOV_ATTRIBUTE_PREFIX)
+                    .map(|n| (n.to_string(), v.clone()))
+            })
             .collect()
     }
 }
@@ -116,17 +152,31 @@ pub fn read_exr(path: &Path) -> std::result::Result<ExrContents, String> {
             _ => None,
         })
         .collect();
-    Ok(ExrContents { width: layer.size.width(), height: layer.size.height(), channels, attributes })
+    Ok(ExrContents {
+        width: layer.size.width(),
+        height: layer.size.height(),
+        channels,
+        attributes,
+    })
 }
 
 fn srgb(linear: f32) -> u8 {
     let c = linear.max(0.0);
-    let s = if c <= 0.003_130_8 { 12.92 * c } else { 1.055 * c.powf(1.0 / 2.4) - 0.055 };
+    let s = if c <= 0.003_130_8 {
+        12.92 * c
+    } else {
+        1.055 * c.powf(1.0 / 2.4) - 0.055
+    };
     (s.clamp(0.0, 1.0) * 255.0 + 0.5) as u8
 }
 
 /// A PNG of AOV `k` in sRGB, scaled by 2^`exposure`.
-pub fn write_png(path: &Path, film: &Film, k: usize, exposure: f32) -> std::result::Result<(), String> {
+pub fn write_png(
+    path: &Path,
+    film: &Film,
+    k: usize,
+    exposure: f32,
+) -> std::result::Result<(), String> {
     let scale = 2f32.powf(exposure);
     let (r, g, b) = (film.channel(k, 0), film.channel(k, 1), film.channel(k, 2));
     let mut bytes = Vec::with_capacity(r.len() * 3);
@@ -134,7 +184,14 @@ pub fn write_png(path: &Path, film: &Film, k: usize, exposure: f32) -> std::resu
         bytes.extend_from_slice(&[srgb(r[i] * scale), srgb(g[i] * scale), srgb(b[i] * scale)]);
     }
     atomically(path, |tmp| {
-        image::save_buffer_with_format(tmp, &bytes, film.width, film.height, image::ColorType::Rgb8, image::ImageFormat::Png)
-            .map_err(|e| format!("cannot write {}: {e}", path.display()))
+        image::save_buffer_with_format(
+            tmp,
+            &bytes,
+            film.width,
+            film.height,
+            image::ColorType::Rgb8,
+            image::ImageFormat::Png,
+        )
+        .map_err(|e| format!("cannot write {}: {e}", path.display()))
     })
 }

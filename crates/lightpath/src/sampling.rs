@@ -22,9 +22,14 @@ impl Rng {
     /// The generator of one camera sample: seeded by (seed, pixel, sample index) so a
     /// render is identical for any thread count and sample ranges merge exactly.
     pub fn for_sample(seed: u64, pixel: u64, sample: u64) -> Rng {
-        let a = splitmix64(seed ^ splitmix64(pixel.wrapping_mul(0x2545_f491_4f6c_dd1d) ^ splitmix64(sample)));
+        let a = splitmix64(
+            seed ^ splitmix64(pixel.wrapping_mul(0x2545_f491_4f6c_dd1d) ^ splitmix64(sample)),
+        );
         let b = splitmix64(a ^ 0x6a09_e667_f3bc_c909);
-        let mut r = Rng { state: 0, inc: (b << 1) | 1 };
+        let mut r = Rng {
+            state: 0,
+            inc: (b << 1) | 1,
+        };
         r.next_u32();
         r.state = r.state.wrapping_add(a);
         r.next_u32();
@@ -34,7 +39,9 @@ impl Rng {
     #[inline]
     pub fn next_u32(&mut self) -> u32 {
         let old = self.state;
-        self.state = old.wrapping_mul(6_364_136_223_846_793_005).wrapping_add(self.inc);
+        self.state = old
+            .wrapping_mul(6_364_136_223_846_793_005)
+            .wrapping_add(self.inc);
         let xorshifted = (((old >> 18) ^ old) >> 27) as u32;
         let rot = (old >> 59) as u32;
         xorshifted.rotate_right(rot)
@@ -161,7 +168,10 @@ impl Distribution1D {
             total += w.max(0.0) as f64;
             cdf.push(total as f32);
         }
-        Distribution1D { cdf, total: total as f32 }
+        Distribution1D {
+            cdf,
+            total: total as f32,
+        }
     }
     pub fn total(&self) -> f32 {
         self.total
@@ -176,10 +186,17 @@ impl Distribution1D {
     /// within the chosen item.
     pub fn sample(&self, u: f32) -> (usize, f32, f32) {
         let target = u * self.total;
-        let i = self.cdf.partition_point(|&c| c <= target).min(self.cdf.len() - 1);
+        let i = self
+            .cdf
+            .partition_point(|&c| c <= target)
+            .min(self.cdf.len() - 1);
         let lo = if i == 0 { 0.0 } else { self.cdf[i - 1] };
         let w = self.cdf[i] - lo;
-        let remapped = if w > 0.0 { ((target - lo) / w).clamp(0.0, 0.999_999_94) } else { 0.0 };
+        let remapped = if w > 0.0 {
+            ((target - lo) / w).clamp(0.0, 0.999_999_94)
+        } else {
+            0.0
+        };
         (i, w / self.total, remapped)
     }
     pub fn pmf(&self, i: usize) -> f32 {
@@ -209,7 +226,9 @@ mod tests {
     fn frames_are_orthonormal() {
         for n in [Vec3A::Z, -Vec3A::Z, Vec3A::new(0.3, -0.5, 0.8).normalize()] {
             let f = Frame::new(n);
-            assert!(f.s.dot(f.t).abs() < 1e-5 && f.s.dot(n).abs() < 1e-5 && f.t.dot(n).abs() < 1e-5);
+            assert!(
+                f.s.dot(f.t).abs() < 1e-5 && f.s.dot(n).abs() < 1e-5 && f.t.dot(n).abs() < 1e-5
+            );
             let v = Vec3A::new(0.2, 0.4, -0.3);
             assert!((f.to_world(f.to_local(v)) - v).length() < 1e-5);
         }

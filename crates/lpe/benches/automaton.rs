@@ -6,7 +6,10 @@ use lpe::{Compiler, Event, EventType, Scatter, STANDARD_NAMES};
 
 /// The standard names plus one light-group rule per group (beauty split 16 ways).
 fn production_rules(groups: usize) -> Vec<String> {
-    let mut rules: Vec<String> = STANDARD_NAMES.iter().map(|(n, _)| format!("lpe:{n}")).collect();
+    let mut rules: Vec<String> = STANDARD_NAMES
+        .iter()
+        .map(|(n, _)| format!("lpe:{n}"))
+        .collect();
     rules.extend((0..groups).map(|g| format!("C[DS]*[<L.'group{g}'><O'group{g}'>]")));
     rules
 }
@@ -28,12 +31,28 @@ fn scene_events() -> Vec<Event> {
     let mut v = vec![Event::camera()];
     for o in 0..13 {
         let obj = format!("obj{o}");
-        v.push(Event::new(EventType::Reflect, Some(Scatter::diffuse(2)), [obj.clone()]));
-        v.push(Event::new(EventType::Reflect, Some(Scatter::specular(2)), [obj.clone()]));
-        v.push(Event::new(EventType::Transmit, Some(Scatter::specular(8)), [obj]));
+        v.push(Event::new(
+            EventType::Reflect,
+            Some(Scatter::diffuse(2)),
+            [obj.clone()],
+        ));
+        v.push(Event::new(
+            EventType::Reflect,
+            Some(Scatter::specular(2)),
+            [obj.clone()],
+        ));
+        v.push(Event::new(
+            EventType::Transmit,
+            Some(Scatter::specular(8)),
+            [obj],
+        ));
     }
     for l in 0..16 {
-        v.push(Event::new(EventType::Light, None, [format!("light{}", l % 7), format!("group{l}")]));
+        v.push(Event::new(
+            EventType::Light,
+            None,
+            [format!("light{}", l % 7), format!("group{l}")],
+        ));
         v.push(Event::new(EventType::Emission, None, [format!("group{l}")]));
     }
     v

@@ -1,7 +1,10 @@
 //! Prints how long each stage of compiling a production AOV set takes.
 use std::time::Instant;
 fn main() {
-    let mut rules: Vec<String> = lpe::STANDARD_NAMES.iter().map(|(n, _)| format!("lpe:{n}")).collect();
+    let mut rules: Vec<String> = lpe::STANDARD_NAMES
+        .iter()
+        .map(|(n, _)| format!("lpe:{n}"))
+        .collect();
     rules.extend((0..16).map(|g| format!("C[DS]*[<L.'group{g}'><O'group{g}'>]")));
     let t = Instant::now();
     let mut c = lpe::Compiler::new();
@@ -10,5 +13,10 @@ fn main() {
     }
     let parsed = t.elapsed();
     let a = c.compile().unwrap();
-    println!("parse {:?}, compile {:?}, stats {:?}", parsed, t.elapsed() - parsed, a.stats());
+    println!(
+        "parse {:?}, compile {:?}, stats {:?}",
+        parsed,
+        t.elapsed() - parsed,
+        a.stats()
+    );
 }

@@ -30,7 +30,10 @@ pub struct StateLimit(pub usize);
 /// How subsets of NFA states are stored: bitsets with each state's closure precomputed
 /// (fast, for NFAs up to `DENSE_LIMIT` states), or sorted id lists for larger ones.
 enum Subsets {
-    Dense { words: usize, closures: Vec<Vec<u64>> },
+    Dense {
+        words: usize,
+        closures: Vec<Vec<u64>>,
+    },
     Sparse,
 }
 
@@ -57,7 +60,12 @@ impl Subsets {
     }
 
     /// The epsilon closure of `targets`, as a hashable key.
-    fn closure(&self, nfa: &Nfa, targets: impl Iterator<Item = NfaStateId>, mark: &mut Vec<bool>) -> Vec<u64> {
+    fn closure(
+        &self,
+        nfa: &Nfa,
+        targets: impl Iterator<Item = NfaStateId>,
+        mark: &mut Vec<bool>,
+    ) -> Vec<u64> {
         match self {
             Subsets::Dense { words, closures } => {
                 let mut bits = vec![0u64; *words];
@@ -68,7 +76,11 @@ impl Subsets {
                 }
                 bits
             }
-            Subsets::Sparse => nfa.closure(targets, mark).into_iter().map(u64::from).collect(),
+            Subsets::Sparse => nfa
+                .closure(targets, mark)
+                .into_iter()
+                .map(u64::from)
+                .collect(),
         }
     }
 
@@ -77,7 +89,11 @@ impl Subsets {
             Subsets::Dense { .. } => set
                 .iter()
                 .enumerate()
-                .flat_map(|(w, &bits)| (0..64).filter(move |b| bits & (1 << b) != 0).map(move |b| (w * 64 + b) as NfaStateId))
+                .flat_map(|(w, &bits)| {
+                    (0..64)
+                        .filter(move |b| bits & (1 << b) != 0)
+                        .map(move |b| (w * 64 + b) as NfaStateId)
+                })
                 .collect(),
             Subsets::Sparse => set.iter().map(|&s| s as NfaStateId).collect(),
         }
@@ -127,7 +143,10 @@ pub fn determinize(nfa: &Nfa, class_sigs: &[Vec<u64>], limit: usize) -> Result<D
                 next.push(id);
                 continue;
             }
-            let targets = moves.iter().filter(|(p, _)| key[*p as usize / 64] & (1 << (p % 64)) != 0).map(|(_, n)| *n);
+            let targets = moves
+                .iter()
+                .filter(|(p, _)| key[*p as usize / 64] & (1 << (p % 64)) != 0)
+                .map(|(_, n)| *n);
             let set = subsets.closure(nfa, targets, &mut mark);
             let id = match ids.get(&set) {
                 Some(&id) => id,
@@ -161,7 +180,12 @@ pub fn determinize(nfa: &Nfa, class_sigs: &[Vec<u64>], limit: usize) -> Result<D
             rules
         })
         .collect();
-    Ok(Dfa { classes, next, accept, start })
+    Ok(Dfa {
+        classes,
+        next,
+        accept,
+        start,
+    })
 }
 
 /// Hopcroft's partition refinement: merges states with the same future (same accepted
@@ -177,8 +201,8 @@ pub fn minimize(dfa: &Dfa) -> Dfa {
     let mut blocks: Vec<Vec<u32>> = Vec::new();
     {
         let mut by_accept: HashMap<&[u32], u32> = HashMap::new();
-        for s in 0..n {
-            let b = *by_accept.entry(&dfa.accept[s]).or_insert_with(|| {
+        for (s, accept) in dfa.accept.iter().enumerate() {
+            let b = *by_accept.entry(accept).or_insert_with(|| {
                 blocks.push(Vec::new());
                 (blocks.len() - 1) as u32
             });
@@ -235,8 +259,9 @@ pub fn minimize(dfa: &Dfa) -> Dfa {
                 if count == blocks[b as usize].len() {
                     continue;
                 }
-                let (inside, outside): (Vec<u32>, Vec<u32>) =
-                    blocks[b as usize].iter().partition(|&&s| marked[s as usize]);
+                let (inside, outside): (Vec<u32>, Vec<u32>) = blocks[b as usize]
+                    .iter()
+                    .partition(|&&s| marked[s as usize]);
                 let new_id = blocks.len() as u32;
                 for &s in &inside {
                     block_of[s as usize] = new_id;
@@ -249,7 +274,11 @@ pub fn minimize(dfa: &Dfa) -> Dfa {
                     work.push(new_id);
                 } else {
                     // Only the smaller half needs to split others further.
-                    let smaller = if blocks[new_id as usize].len() <= blocks[b as usize].len() { new_id } else { b };
+                    let smaller = if blocks[new_id as usize].len() <= blocks[b as usize].len() {
+                        new_id
+                    } else {
+                        b
+                    };
                     in_work.push(false);
                     in_work[smaller as usize] = true;
                     work.push(smaller);
@@ -263,7 +292,9 @@ pub fn minimize(dfa: &Dfa) -> Dfa {
             // The new halves were cleared above only if they kept id b; clear the rest.
             for s in splitter.iter().flat_map(|&t| {
                 let base = t as usize * k + c;
-                inv[inv_start[base] as usize..inv_start[base + 1] as usize].iter().copied()
+                inv[inv_start[base] as usize..inv_start[base + 1] as usize]
+                    .iter()
+                    .copied()
             }) {
                 marked[s as usize] = false;
             }
@@ -281,8 +312,8 @@ pub fn minimize(dfa: &Dfa) -> Dfa {
     };
     assign(block_of[0], &mut order);
     assign(block_of[dfa.start as usize], &mut order);
-    for s in 0..n {
-        assign(block_of[s], &mut order);
+    for &b in &block_of {
+        assign(b, &mut order);
     }
     let mut next = Vec::with_capacity(order.len() * k);
     let mut accept = Vec::with_capacity(order.len());
@@ -293,5 +324,10 @@ pub fn minimize(dfa: &Dfa) -> Dfa {
         }
         accept.push(dfa.accept[rep].clone());
     }
-    Dfa { classes: k, next, accept, start: new_id[block_of[dfa.start as usize] as usize] }
+    Dfa {
+        classes: k,
+        next,
+        accept,
+        start: new_id[block_of[dfa.start as usize] as usize],
+    }
 }

@@ -16,7 +16,10 @@ impl Span {
     }
     /// An empty span at one offset (end of input, or an insertion point).
     pub fn at(offset: usize) -> Span {
-        Span { start: offset, end: offset }
+        Span {
+            start: offset,
+            end: offset,
+        }
     }
 }
 
@@ -83,7 +86,12 @@ pub struct Error {
 
 impl Error {
     pub fn new(kind: ErrorKind, span: Span, message: impl Into<String>) -> Error {
-        Error { kind, span, message: message.into(), help: None }
+        Error {
+            kind,
+            span,
+            message: message.into(),
+            help: None,
+        }
     }
 
     pub fn with_help(mut self, help: impl Into<String>) -> Error {
@@ -105,12 +113,17 @@ impl Error {
         // Show the line holding the span start; columns count characters, not bytes.
         let start = self.span.start.min(source.len());
         let line_start = source[..start].rfind('\n').map_or(0, |i| i + 1);
-        let line_end = source[start..].find('\n').map_or(source.len(), |i| start + i);
+        let line_end = source[start..]
+            .find('\n')
+            .map_or(source.len(), |i| start + i);
         let line = &source[line_start..line_end];
         let col = source[line_start..start].chars().count();
         let end = self.span.end.clamp(start, line_end);
         let width = source[start..end].chars().count().max(1);
-        let shown: String = line.chars().map(|c| if c == '\t' { ' ' } else { c }).collect();
+        let shown: String = line
+            .chars()
+            .map(|c| if c == '\t' { ' ' } else { c })
+            .collect();
         out.push_str("  |\n");
         out.push_str(&format!("  | {shown}\n"));
         out.push_str(&format!("  | {}{}\n", " ".repeat(col), "^".repeat(width)));
@@ -144,7 +157,10 @@ mod miette_impl {
             Some(Box::new(format!("lpe::{}", self.error.kind.name())))
         }
         fn help<'a>(&'a self) -> Option<Box<dyn std::fmt::Display + 'a>> {
-            self.error.help.as_ref().map(|h| Box::new(h) as Box<dyn std::fmt::Display>)
+            self.error
+                .help
+                .as_ref()
+                .map(|h| Box::new(h) as Box<dyn std::fmt::Display>)
         }
         fn source_code(&self) -> Option<&dyn miette::SourceCode> {
             Some(&self.text)

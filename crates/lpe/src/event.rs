@@ -181,12 +181,20 @@ impl Event {
         let mut labels: Vec<String> = labels.into_iter().map(Into::into).collect();
         labels.sort();
         labels.dedup();
-        Event { ty, scatter, labels }
+        Event {
+            ty,
+            scatter,
+            labels,
+        }
     }
 
     /// An event with no scatter and no labels (`C`, `L`, `O`).
     pub fn bare(ty: EventType) -> Event {
-        Event { ty, scatter: None, labels: Vec::new() }
+        Event {
+            ty,
+            scatter: None,
+            labels: Vec::new(),
+        }
     }
 
     pub fn camera() -> Event {
@@ -198,7 +206,9 @@ impl Event {
     }
 
     pub fn has_label(&self, label: &str) -> bool {
-        self.labels.binary_search_by(|l| l.as_str().cmp(label)).is_ok()
+        self.labels
+            .binary_search_by(|l| l.as_str().cmp(label))
+            .is_ok()
     }
 }
 
@@ -324,7 +334,11 @@ pub(crate) fn lobe_error(span: Span, class: ScatterClass, digits: &str) -> Error
     } else {
         format!("expected a lobe number from 1 to {}", class.max_lobe())
     };
-    Error::new(ErrorKind::LobeRange, span, format!("lobe out of range: {why}"))
+    Error::new(
+        ErrorKind::LobeRange,
+        span,
+        format!("lobe out of range: {why}"),
+    )
 }
 
 /// Reads a quoted label starting at the quote `q`; returns the label text and the offset

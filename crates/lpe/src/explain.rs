@@ -16,7 +16,11 @@ pub fn explain(rule: &Rule) -> String {
         Ok(Body::Expr(e)) => out.push_str(&describe(&e)),
         _ => out.push_str(&rule.expression),
     }
-    let flags: Vec<String> = rule.flags.iter().map(|p| format!("{} ({})", p.word(), p.describe())).collect();
+    let flags: Vec<String> = rule
+        .flags
+        .iter()
+        .map(|p| format!("{} ({})", p.word(), p.describe()))
+        .collect();
     if !flags.is_empty() {
         out.push_str("; ");
         out.push_str(&flags.join("; "));
@@ -26,7 +30,11 @@ pub fn explain(rule: &Rule) -> String {
 
 fn describe(e: &Expr) -> String {
     match e {
-        Expr::Concat(units) => units.iter().map(describe).collect::<Vec<_>>().join(", then "),
+        Expr::Concat(units) => units
+            .iter()
+            .map(describe)
+            .collect::<Vec<_>>()
+            .join(", then "),
         Expr::Alt(a, b) => format!("either {} or {}", describe(a), describe(b)),
         Expr::Repeat { expr, min, max } => {
             let inner = describe(expr);
@@ -100,8 +108,14 @@ fn describe_event(slots: &[Slot]) -> String {
             Slot::Item(Item::Label(l)) => format!("on '{l}'"),
             Slot::Item(item) if i == 1 => format!("through {}", item_name(item)),
             Slot::Item(item) => item_name(item),
-            Slot::Set { negated: false, items } => format!("being {}", slot_items(items)),
-            Slot::Set { negated: true, items } => format!("not {}", slot_items(items)),
+            Slot::Set {
+                negated: false,
+                items,
+            } => format!("being {}", slot_items(items)),
+            Slot::Set {
+                negated: true,
+                items,
+            } => format!("not {}", slot_items(items)),
         };
         parts.push(text);
     }

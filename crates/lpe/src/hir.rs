@@ -46,7 +46,11 @@ impl Pred {
     fn new(types: u8, scatters: u64, mut labels: Vec<LabelCond>) -> Pred {
         labels.sort();
         labels.dedup();
-        Pred { types, scatters, labels }
+        Pred {
+            types,
+            scatters,
+            labels,
+        }
     }
 
     pub fn matches(&self, e: &Event) -> bool {
@@ -62,7 +66,10 @@ impl Pred {
 
     /// The same predicate with the given types removed.
     pub fn without_types(&self, types: u8) -> Pred {
-        Pred { types: self.types & !types, ..self.clone() }
+        Pred {
+            types: self.types & !types,
+            ..self.clone()
+        }
     }
 
     /// Labels the predicate mentions, for the default alphabet.
@@ -79,7 +86,11 @@ pub enum Hir {
     Event(Pred),
     Concat(Vec<Hir>),
     Alt(Vec<Hir>),
-    Repeat { hir: Box<Hir>, min: u32, max: Option<u32> },
+    Repeat {
+        hir: Box<Hir>,
+        min: u32,
+        max: Option<u32>,
+    },
 }
 
 impl Hir {
@@ -98,9 +109,11 @@ impl Hir {
             Hir::Event(p) => Hir::Event(f(p)),
             Hir::Concat(v) => Hir::Concat(v.iter().map(|h| h.map_preds(f)).collect()),
             Hir::Alt(v) => Hir::Alt(v.iter().map(|h| h.map_preds(f)).collect()),
-            Hir::Repeat { hir, min, max } => {
-                Hir::Repeat { hir: Box::new(hir.map_preds(f)), min: *min, max: *max }
-            }
+            Hir::Repeat { hir, min, max } => Hir::Repeat {
+                hir: Box::new(hir.map_preds(f)),
+                min: *min,
+                max: *max,
+            },
         }
     }
 }
@@ -109,19 +122,25 @@ pub fn lower(e: &Expr) -> Hir {
     match e {
         Expr::Concat(v) => Hir::Concat(v.iter().map(lower).collect()),
         Expr::Alt(a, b) => Hir::Alt(vec![lower(a), lower(b)]),
-        Expr::Repeat { expr, min, max } => {
-            Hir::Repeat { hir: Box::new(lower(expr)), min: *min, max: *max }
-        }
+        Expr::Repeat { expr, min, max } => Hir::Repeat {
+            hir: Box::new(lower(expr)),
+            min: *min,
+            max: *max,
+        },
         Expr::Group(inner) => lower(inner),
         Expr::Set(members) => Hir::Alt(members.iter().map(lower).collect()),
         Expr::NegSet(kind, items) => Hir::Event(match kind {
-            SlotKind::Type => {
-                Pred::new(ALL_TYPES & !type_bits(items.iter()), lighting_scatters(), vec![])
-            }
+            SlotKind::Type => Pred::new(
+                ALL_TYPES & !type_bits(items.iter()),
+                lighting_scatters(),
+                vec![],
+            ),
             // A negated scatter slot admits user lobes (LPE.md §4).
-            SlotKind::Scatter => {
-                Pred::new(ALL_TYPES, ALL_SCATTERS & !scatter_bits(items.iter()), vec![])
-            }
+            SlotKind::Scatter => Pred::new(
+                ALL_TYPES,
+                ALL_SCATTERS & !scatter_bits(items.iter()),
+                vec![],
+            ),
             SlotKind::Label => Pred::new(
                 ALL_TYPES,
                 lighting_scatters(),
@@ -158,7 +177,11 @@ fn lower_event(slots: &[Slot]) -> Pred {
                     Slot::Item(Item::Label(l)) => labels.push(LabelCond::AnyOf(vec![l.clone()])),
                     Slot::Set { negated, items } => {
                         let ls = label_list(items.iter().filter_map(slot_item));
-                        labels.push(if *negated { LabelCond::NoneOf(ls) } else { LabelCond::AnyOf(ls) });
+                        labels.push(if *negated {
+                            LabelCond::NoneOf(ls)
+                        } else {
+                            LabelCond::AnyOf(ls)
+                        });
                     }
                     _ => {}
                 }
@@ -169,7 +192,11 @@ fn lower_event(slots: &[Slot]) -> Pred {
                     Slot::Item(i) => type_bits(std::iter::once(i)),
                     Slot::Set { negated, items } => {
                         let bits = type_bits(items.iter().filter_map(slot_item));
-                        if *negated { ALL_TYPES & !bits } else { bits }
+                        if *negated {
+                            ALL_TYPES & !bits
+                        } else {
+                            bits
+                        }
                     }
                     Slot::NoScatter => ALL_TYPES,
                 }
@@ -184,7 +211,11 @@ fn lower_event(slots: &[Slot]) -> Pred {
                         if items.contains(&SlotItem::NoScatter) {
                             bits |= 1 << scatter_bit(None);
                         }
-                        if *negated { ALL_SCATTERS & !bits } else { bits }
+                        if *negated {
+                            ALL_SCATTERS & !bits
+                        } else {
+                            bits
+                        }
                     }
                 }
             }
@@ -198,7 +229,9 @@ fn lower_event(slots: &[Slot]) -> Pred {
 fn slot_kind(slot: &Slot, index: usize) -> SlotKind {
     let holds_labels = match slot {
         Slot::Item(i) => i.kind() == SlotKind::Label,
-        Slot::Set { items, .. } => items.iter().any(|i| matches!(i, SlotItem::Item(Item::Label(_)))),
+        Slot::Set { items, .. } => items
+            .iter()
+            .any(|i| matches!(i, SlotItem::Item(Item::Label(_)))),
         _ => false,
     };
     match index {

@@ -25,9 +25,9 @@ mod prefix;
 mod runtime;
 pub mod syntax;
 
-pub use error::{Error, ErrorKind, Span};
 #[cfg(feature = "miette")]
 pub use error::Report;
+pub use error::{Error, ErrorKind, Span};
 pub use event::{format_path, parse_path, Event, EventType, Scatter, ScatterClass};
 pub use prefix::{standard_name, Flags, Prefix, BEAUTY_PARTITION, STANDARD_NAMES};
 pub use runtime::{

@@ -40,7 +40,13 @@ pub struct NfaBuilder {
 
 impl NfaBuilder {
     pub fn new(limit: usize) -> NfaBuilder {
-        NfaBuilder { states: Vec::new(), preds: Vec::new(), pred_ids: HashMap::new(), starts: Vec::new(), limit }
+        NfaBuilder {
+            states: Vec::new(),
+            preds: Vec::new(),
+            pred_ids: HashMap::new(),
+            starts: Vec::new(),
+            limit,
+        }
     }
 
     /// Adds one rule; its id is the order of addition.
@@ -56,7 +62,12 @@ impl NfaBuilder {
         let rule_count = self.starts.len();
         let starts = std::mem::take(&mut self.starts);
         let start = self.push(NfaState::Split(starts))?;
-        Ok(Nfa { states: self.states, start, preds: self.preds, rule_count })
+        Ok(Nfa {
+            states: self.states,
+            start,
+            preds: self.preds,
+            rule_count,
+        })
     }
 
     fn push(&mut self, s: NfaState) -> Result<NfaStateId, TooLarge> {
@@ -90,7 +101,10 @@ impl NfaBuilder {
                 Ok(next)
             }
             Hir::Alt(options) => {
-                let entries = options.iter().map(|o| self.compile(o, next)).collect::<Result<_, _>>()?;
+                let entries = options
+                    .iter()
+                    .map(|o| self.compile(o, next))
+                    .collect::<Result<_, _>>()?;
                 self.push(NfaState::Split(entries))
             }
             Hir::Repeat { hir, min, max } => {
@@ -122,7 +136,11 @@ impl NfaBuilder {
 
 impl Nfa {
     /// The epsilon closure of `seeds`, sorted and unique.
-    pub fn closure(&self, seeds: impl IntoIterator<Item = NfaStateId>, mark: &mut Vec<bool>) -> Vec<NfaStateId> {
+    pub fn closure(
+        &self,
+        seeds: impl IntoIterator<Item = NfaStateId>,
+        mark: &mut Vec<bool>,
+    ) -> Vec<NfaStateId> {
         // `mark` is all false between calls: only the visited entries are reset below.
         mark.resize(self.states.len(), false);
         let mut stack: Vec<NfaStateId> = seeds.into_iter().collect();

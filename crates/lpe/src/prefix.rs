@@ -120,7 +120,10 @@ pub fn standard_name(word: &str) -> Option<(&'static str, &'static str)> {
 }
 
 /// The candidate closest to `word` by edit distance, if it is plausibly a typo.
-pub(crate) fn closest<'a>(word: &str, candidates: impl IntoIterator<Item = &'a str>) -> Option<&'a str> {
+pub(crate) fn closest<'a>(
+    word: &str,
+    candidates: impl IntoIterator<Item = &'a str>,
+) -> Option<&'a str> {
     let lower = word.to_lowercase();
     candidates
         .into_iter()

@@ -53,7 +53,12 @@ impl Rule {
         let mut flags: Flags = definition.prefixes.iter().copied().collect();
         let (expr_def, expression) = match &definition.body {
             Body::Expr(_) => {
-                let bare = Definition { name: None, lpe_marker: false, prefixes: vec![], body: definition.body.clone() };
+                let bare = Definition {
+                    name: None,
+                    lpe_marker: false,
+                    prefixes: vec![],
+                    body: definition.body.clone(),
+                };
                 (definition.clone(), print_definition(&bare))
             }
             Body::Standard(name) => {
@@ -62,13 +67,27 @@ impl Rule {
                 for p in &std_def.prefixes {
                     flags.insert(*p);
                 }
-                let bare = Definition { name: None, lpe_marker: false, prefixes: vec![], body: std_def.body.clone() };
+                let bare = Definition {
+                    name: None,
+                    lpe_marker: false,
+                    prefixes: vec![],
+                    body: std_def.body.clone(),
+                };
                 (std_def, print_definition(&bare))
             }
         };
-        let Body::Expr(expr) = &expr_def.body else { unreachable!("standard names expand to expressions") };
+        let Body::Expr(expr) = &expr_def.body else {
+            unreachable!("standard names expand to expressions")
+        };
         let hir = lower(expr);
-        Ok(Rule { name: definition.name.clone(), source: source.to_string(), expression, flags, definition, hir })
+        Ok(Rule {
+            name: definition.name.clone(),
+            source: source.to_string(),
+            expression,
+            flags,
+            definition,
+            hir,
+        })
     }
 
     /// The syntax tree as written.
@@ -121,7 +140,14 @@ pub const DEFAULT_STATE_LIMIT: usize = 10_000;
 
 impl Compiler {
     pub fn new() -> Compiler {
-        Compiler { rules: Vec::new(), vocabulary: Vec::new(), state_limit: DEFAULT_STATE_LIMIT, nfa_limit: 200_000, minimize: true, default_alphabet: true }
+        Compiler {
+            rules: Vec::new(),
+            vocabulary: Vec::new(),
+            state_limit: DEFAULT_STATE_LIMIT,
+            nfa_limit: 200_000,
+            minimize: true,
+            default_alphabet: true,
+        }
     }
 
     /// The most DFA states subset construction may build before giving up with an error.
@@ -176,13 +202,19 @@ impl Compiler {
         let too_large = |what: String| Error::new(ErrorKind::StateLimit, whole(&self.rules), what);
         let mut builder = NfaBuilder::new(self.nfa_limit);
         for rule in &self.rules {
-            builder
-                .add_rule(&rule.hir)
-                .map_err(|_| too_large(format!("expression too large: its NFA exceeds {} states", self.nfa_limit)))?;
+            builder.add_rule(&rule.hir).map_err(|_| {
+                too_large(format!(
+                    "expression too large: its NFA exceeds {} states",
+                    self.nfa_limit
+                ))
+            })?;
         }
-        let nfa = builder
-            .build()
-            .map_err(|_| too_large(format!("expression too large: its NFA exceeds {} states", self.nfa_limit)))?;
+        let nfa = builder.build().map_err(|_| {
+            too_large(format!(
+                "expression too large: its NFA exceeds {} states",
+                self.nfa_limit
+            ))
+        })?;
 
         let alphabet = Alphabet::new(&nfa.preds, &self.vocabulary, self.default_alphabet);
         let dfa = determinize(&nfa, &alphabet.classes, self.state_limit)
@@ -202,7 +234,14 @@ impl Compiler {
             min_dfa_states: min.len(),
         };
         let warnings = self.warnings(&nfa);
-        Ok(Automaton::from_dfa(min, alphabet, nfa, self.rules.clone(), warnings, stats))
+        Ok(Automaton::from_dfa(
+            min,
+            alphabet,
+            nfa,
+            self.rules.clone(),
+            warnings,
+            stats,
+        ))
     }
 
     fn warnings(&self, nfa: &Nfa) -> Vec<Warning> {
@@ -211,7 +250,11 @@ impl Compiler {
             let id = RuleId(i as u32);
             let alone = single_rule_nfa(&rule.hir);
             if !alone.rule_can_match(0) {
-                out.push(Warning { rule: id, message: "this rule can never match: no event satisfies one of its parts".into() });
+                out.push(Warning {
+                    rule: id,
+                    message: "this rule can never match: no event satisfies one of its parts"
+                        .into(),
+                });
             } else if !renderable(&rule.hir, false) {
                 if renderable(&rule.hir, true) {
                     out.push(Warning {
@@ -282,11 +325,19 @@ struct Alphabet {
 impl Alphabet {
     fn new(preds: &[Pred], vocabulary: &[Event], default_events: bool) -> Alphabet {
         let words = preds.len().div_ceil(64).max(1);
-        let mut a = Alphabet { words, classes: Vec::new(), by_signature: HashMap::new() };
+        let mut a = Alphabet {
+            words,
+            classes: Vec::new(),
+            by_signature: HashMap::new(),
+        };
         let mut labels: Vec<&str> = preds.iter().flat_map(|p| p.mentioned_labels()).collect();
         labels.sort_unstable();
         labels.dedup();
-        let types = if default_events { &EventType::ALL[..] } else { &[] };
+        let types = if default_events {
+            &EventType::ALL[..]
+        } else {
+            &[]
+        };
         for &ty in types {
             let scattering = matches!(ty, EventType::Reflect | EventType::Transmit);
             for scatter in all_scatters().filter(|s| s.is_some() == scattering) {
@@ -315,7 +366,8 @@ impl Alphabet {
     fn insert(&mut self, preds: &[Pred], e: &Event) {
         let sig = self.signature(preds, e);
         if !self.by_signature.contains_key(&sig) {
-            self.by_signature.insert(sig.clone(), self.classes.len() as u32);
+            self.by_signature
+                .insert(sig.clone(), self.classes.len() as u32);
             self.classes.push(sig);
         }
     }
@@ -352,7 +404,14 @@ pub struct Automaton {
 }
 
 impl Automaton {
-    fn from_dfa(dfa: crate::dfa::Dfa, alphabet: Alphabet, nfa: Nfa, rules: Vec<Rule>, warnings: Vec<Warning>, stats: Stats) -> Automaton {
+    fn from_dfa(
+        dfa: crate::dfa::Dfa,
+        alphabet: Alphabet,
+        nfa: Nfa,
+        rules: Vec<Rule>,
+        warnings: Vec<Warning>,
+        stats: Stats,
+    ) -> Automaton {
         let n = dfa.len();
         let k = dfa.classes.max(1);
         // Order: dead (0), then non-accepting, then accepting, so one compare answers
@@ -364,13 +423,18 @@ impl Automaton {
         for (r, &s) in order.iter().enumerate() {
             rank[s] = r as u32;
         }
-        let first_accepting = order.iter().position(|&s| !dfa.accept[s].is_empty()).unwrap_or(n) as u32;
+        let first_accepting = order
+            .iter()
+            .position(|&s| !dfa.accept[s].is_empty())
+            .unwrap_or(n) as u32;
         let mut table = Vec::with_capacity(n * k);
         let mut accept_offsets = vec![0u32];
         let mut accept_rules = Vec::new();
         for &s in &order {
             for c in 0..dfa.classes {
-                table.push(StateId(rank[dfa.next[s * dfa.classes + c] as usize] * k as u32));
+                table.push(StateId(
+                    rank[dfa.next[s * dfa.classes + c] as usize] * k as u32,
+                ));
             }
             accept_rules.extend(dfa.accept[s].iter().map(|&r| RuleId(r)));
             accept_offsets.push(accept_rules.len() as u32);

@@ -5,21 +5,62 @@ use lpe::{Compiler, Event, EventType, Scatter};
 use proptest::prelude::*;
 
 const ATOMS: &[&str] = &[
-    "C", "R", "T", "L", "O", "V", "D", "S", "G", "U", "D2", "S8", "U2", "U6", "'a'", "'key'", ".", "<RD>", "<L.'key'>",
-    "<.[^D2 D3]>", "[DS]", "[^'a']", "[^R]", "[^D]", "<[RT]S'a'>", "<L'key''b'>", "<Lx>", "<.x>", "<R(D|S)'b'>",
-    "<..[^'a' 'b']>", "[<L.>O]", "<TS8>", "<'b'>", "<L.('key'|'fill')>",
+    "C",
+    "R",
+    "T",
+    "L",
+    "O",
+    "V",
+    "D",
+    "S",
+    "G",
+    "U",
+    "D2",
+    "S8",
+    "U2",
+    "U6",
+    "'a'",
+    "'key'",
+    ".",
+    "<RD>",
+    "<L.'key'>",
+    "<.[^D2 D3]>",
+    "[DS]",
+    "[^'a']",
+    "[^R]",
+    "[^D]",
+    "<[RT]S'a'>",
+    "<L'key''b'>",
+    "<Lx>",
+    "<.x>",
+    "<R(D|S)'b'>",
+    "<..[^'a' 'b']>",
+    "[<L.>O]",
+    "<TS8>",
+    "<'b'>",
+    "<L.('key'|'fill')>",
 ];
-const QUANTIFIERS: &[&str] = &["", "", "", "*", "+", "?", "{2}", "{1,2}", "{,2}", "{2,}", "{0,3}"];
+const QUANTIFIERS: &[&str] = &[
+    "", "", "", "*", "+", "?", "{2}", "{1,2}", "{,2}", "{2,}", "{0,3}",
+];
 
 fn expr() -> impl Strategy<Value = String> {
-    let unit = (prop::sample::select(ATOMS), prop::sample::select(QUANTIFIERS)).prop_map(|(a, q)| format!("{a}{q}"));
+    let unit = (
+        prop::sample::select(ATOMS),
+        prop::sample::select(QUANTIFIERS),
+    )
+        .prop_map(|(a, q)| format!("{a}{q}"));
     let leaf = prop::collection::vec(unit, 1..4).prop_map(|v| v.concat());
     leaf.prop_recursive(3, 24, 4, |inner| {
         prop_oneof![
             prop::collection::vec(inner.clone(), 1..4).prop_map(|v| v.concat()),
-            (inner.clone(), prop::sample::select(QUANTIFIERS)).prop_map(|(e, q)| format!("({e}){q}")),
+            (inner.clone(), prop::sample::select(QUANTIFIERS))
+                .prop_map(|(e, q)| format!("({e}){q}")),
             (inner.clone(), inner.clone()).prop_map(|(a, b)| format!("({a})|({b})")),
-            prop::collection::vec(inner, 1..3).prop_map(|v| format!("[{}]", v.iter().map(|e| format!("({e})")).collect::<String>())),
+            prop::collection::vec(inner, 1..3).prop_map(|v| format!(
+                "[{}]",
+                v.iter().map(|e| format!("({e})")).collect::<String>()
+            )),
         ]
     })
 }
@@ -32,7 +73,10 @@ fn event() -> impl Strategy<Value = Event> {
         prop::sample::select(vec![0u8, 2, 8]).prop_map(|n| Some(Scatter::specular(n))),
         prop::sample::select(vec![0u8, 2, 6]).prop_map(|n| Some(Scatter::user(n))),
     ];
-    let labels = prop::collection::vec(prop::sample::select(vec!["a", "b", "key", "fill", "floor"]), 0..3);
+    let labels = prop::collection::vec(
+        prop::sample::select(vec!["a", "b", "key", "fill", "floor"]),
+        0..3,
+    );
     (ty, scatter, labels).prop_map(|(t, s, l)| Event::new(t, s, l))
 }
 
@@ -109,8 +153,14 @@ proptest! {
 
 #[test]
 fn huge_repetitions_are_an_error_not_a_hang() {
-    for src in ["((((D{64}){64}){64}){64})", "C(.{1,64}){64}(.{1,64}){64}L", "C(['a' 'b']{1,64}['b' 'c']{1,64}){1,64}"] {
-        let Err(e) = lpe::compile(&[src]) else { panic!("{src} compiled") };
+    for src in [
+        "((((D{64}){64}){64}){64})",
+        "C(.{1,64}){64}(.{1,64}){64}L",
+        "C(['a' 'b']{1,64}['b' 'c']{1,64}){1,64}",
+    ] {
+        let Err(e) = lpe::compile(&[src]) else {
+            panic!("{src} compiled")
+        };
         assert_eq!(e.kind, lpe::ErrorKind::StateLimit, "{src}: {}", e.message);
         assert_eq!((e.span.start, e.span.end), (0, src.len()));
     }
@@ -120,6 +170,8 @@ fn huge_repetitions_are_an_error_not_a_hang() {
 fn state_limit_is_configurable() {
     let mut c = Compiler::new().state_limit(5);
     c.add("C[DS]{10}L").unwrap();
-    let Err(e) = c.compile() else { panic!("compiled within 5 states") };
+    let Err(e) = c.compile() else {
+        panic!("compiled within 5 states")
+    };
     assert_eq!(e.kind, lpe::ErrorKind::StateLimit);
 }

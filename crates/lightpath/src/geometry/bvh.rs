@@ -7,7 +7,7 @@ use obvhs::aabb::Aabb;
 use obvhs::cwbvh::builder::build_cwbvh;
 use obvhs::cwbvh::CwBvh;
 use obvhs::ray::{Ray as BvhRay, RayHit};
-use obvhs::{BvhBuildParams, Boundable};
+use obvhs::{Boundable, BvhBuildParams};
 
 struct Bounded(Aabb);
 
@@ -32,8 +32,18 @@ impl Accel {
     pub fn build(prims: Vec<Prim>, objects: Vec<u32>, normals: Vec<[Vec3A; 3]>) -> Accel {
         if prims.is_empty() {
             let dummy = [Bounded(Aabb::new(Vec3A::ZERO, Vec3A::ZERO))];
-            let bvh = build_cwbvh(&dummy, BvhBuildParams::fast_build(), &mut Default::default());
-            return Accel { bvh, prims, objects, normals, empty: true };
+            let bvh = build_cwbvh(
+                &dummy,
+                BvhBuildParams::fast_build(),
+                &mut Default::default(),
+            );
+            return Accel {
+                bvh,
+                prims,
+                objects,
+                normals,
+                empty: true,
+            };
         }
         let boxes: Vec<Bounded> = prims
             .iter()
@@ -42,13 +52,23 @@ impl Accel {
                 Bounded(Aabb::new(lo, hi))
             })
             .collect();
-        let mut bvh = build_cwbvh(&boxes, BvhBuildParams::medium_build(), &mut Default::default());
+        let mut bvh = build_cwbvh(
+            &boxes,
+            BvhBuildParams::medium_build(),
+            &mut Default::default(),
+        );
         // Lay the primitives out in leaf order so traversal indexes them directly.
         let order = std::mem::take(&mut bvh.primitive_indices);
         let prims: Vec<Prim> = order.iter().map(|&i| prims[i as usize]).collect();
         let objects: Vec<u32> = order.iter().map(|&i| objects[i as usize]).collect();
         bvh.primitive_indices = (0..order.len() as u32).collect();
-        Accel { bvh, prims, objects, normals, empty: false }
+        Accel {
+            bvh,
+            prims,
+            objects,
+            normals,
+            empty: false,
+        }
     }
 
     pub fn prims(&self) -> &[Prim] {
@@ -67,7 +87,9 @@ impl Accel {
         let bray = BvhRay::new(ray.origin, ray.dir, tmin, ray.tmax);
         let mut hit = RayHit::none();
         let prims = &self.prims;
-        let found = self.bvh.ray_traverse(bray, &mut hit, |r, i| prims[i].intersect(r.origin, r.direction, r.tmin, r.tmax));
+        let found = self.bvh.ray_traverse(bray, &mut hit, |r, i| {
+            prims[i].intersect(r.origin, r.direction, r.tmin, r.tmax)
+        });
         if !found {
             return None;
         }
@@ -81,13 +103,20 @@ impl Accel {
         }
         let bray = BvhRay::new(ray.origin, ray.dir, tmin, ray.tmax);
         let prims = &self.prims;
-        !self.bvh.ray_traverse_miss(bray, |r, i| prims[i].intersect(r.origin, r.direction, r.tmin, r.tmax))
+        !self.bvh.ray_traverse_miss(bray, |r, i| {
+            prims[i].intersect(r.origin, r.direction, r.tmin, r.tmax)
+        })
     }
 
     fn surface(&self, ray: &Ray, prim: u32, t: f32) -> Hit {
         let p = ray.origin + ray.dir * t;
         let (ng, ns) = match self.prims[prim as usize] {
-            Prim::Triangle { p0, e1, e2, normals } => {
+            Prim::Triangle {
+                p0,
+                e1,
+                e2,
+                normals,
+            } => {
                 let ng = e1.cross(e2).normalize();
                 let ns = if normals == u32::MAX {
                     ng
@@ -101,7 +130,11 @@ impl Accel {
                     let w = (d00 * d21 - d01 * d20) / denom;
                     let [n0, n1, n2] = self.normals[normals as usize];
                     let n = (n0 * (1.0 - v - w) + n1 * v + n2 * w).normalize_or(ng);
-                    if n.dot(ng) < 0.0 { -n } else { n }
+                    if n.dot(ng) < 0.0 {
+                        -n
+                    } else {
+                        n
+                    }
                 };
                 (ng, ns)
             }
@@ -110,6 +143,13 @@ impl Accel {
                 (n, n)
             }
         };
-        Hit { t, p, ng, ns, prim, object: self.objects[prim as usize] }
+        Hit {
+            t,
+            p,
+            ng,
+            ns,
+            prim,
+            object: self.objects[prim as usize],
+        }
     }
 }

@@ -20,8 +20,16 @@ pub struct Ray {
 #[derive(Clone, Copy, Debug)]
 pub enum Prim {
     /// Vertex `p0` and edges; `normals` indexes per-vertex shading normals, or `u32::MAX`.
-    Triangle { p0: Vec3A, e1: Vec3A, e2: Vec3A, normals: u32 },
-    Sphere { center: Vec3A, radius: f32 },
+    Triangle {
+        p0: Vec3A,
+        e1: Vec3A,
+        e2: Vec3A,
+        normals: u32,
+    },
+    Sphere {
+        center: Vec3A,
+        radius: f32,
+    },
 }
 
 /// A surface hit: where, which object, and the two normals.
@@ -47,7 +55,9 @@ impl Prim {
                 let (p1, p2) = (p0 + e1, p0 + e2);
                 (p0.min(p1).min(p2), p0.max(p1).max(p2))
             }
-            Prim::Sphere { center, radius } => (center - Vec3A::splat(radius), center + Vec3A::splat(radius)),
+            Prim::Sphere { center, radius } => {
+                (center - Vec3A::splat(radius), center + Vec3A::splat(radius))
+            }
         }
     }
 

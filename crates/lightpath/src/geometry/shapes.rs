@@ -14,21 +14,41 @@ pub struct ShapePrims {
 }
 
 fn tri(xf: &Affine3A, a: Vec3A, b: Vec3A, c: Vec3A) -> Prim {
-    let (a, b, c) = (xf.transform_point3a(a), xf.transform_point3a(b), xf.transform_point3a(c));
-    Prim::Triangle { p0: a, e1: b - a, e2: c - a, normals: u32::MAX }
+    let (a, b, c) = (
+        xf.transform_point3a(a),
+        xf.transform_point3a(b),
+        xf.transform_point3a(c),
+    );
+    Prim::Triangle {
+        p0: a,
+        e1: b - a,
+        e2: c - a,
+        normals: u32::MAX,
+    }
 }
 
 /// The square [-1, 1]² in the z = 0 plane, facing +z.
 pub fn rectangle(xf: &Affine3A) -> ShapePrims {
-    let c = [Vec3A::new(-1.0, -1.0, 0.0), Vec3A::new(1.0, -1.0, 0.0), Vec3A::new(1.0, 1.0, 0.0), Vec3A::new(-1.0, 1.0, 0.0)];
-    ShapePrims { prims: vec![tri(xf, c[0], c[1], c[2]), tri(xf, c[0], c[2], c[3])], normals: vec![] }
+    let c = [
+        Vec3A::new(-1.0, -1.0, 0.0),
+        Vec3A::new(1.0, -1.0, 0.0),
+        Vec3A::new(1.0, 1.0, 0.0),
+        Vec3A::new(-1.0, 1.0, 0.0),
+    ];
+    ShapePrims {
+        prims: vec![tri(xf, c[0], c[1], c[2]), tri(xf, c[0], c[2], c[3])],
+        normals: vec![],
+    }
 }
 
 /// A quad from four world-space corners, counter-clockwise seen from its front.
 pub fn quad(corners: [Vec3A; 4]) -> ShapePrims {
     let id = Affine3A::IDENTITY;
     ShapePrims {
-        prims: vec![tri(&id, corners[0], corners[1], corners[2]), tri(&id, corners[0], corners[2], corners[3])],
+        prims: vec![
+            tri(&id, corners[0], corners[1], corners[2]),
+            tri(&id, corners[0], corners[2], corners[3]),
+        ],
         normals: vec![],
     }
 }
@@ -51,7 +71,12 @@ pub fn cube(xf: &Affine3A) -> ShapePrims {
             });
             let v = n.cross(u);
             let corner = |a: f32, b: f32| n + u * a + v * b;
-            let (c0, c1, c2, c3) = (corner(-1.0, -1.0), corner(1.0, -1.0), corner(1.0, 1.0), corner(-1.0, 1.0));
+            let (c0, c1, c2, c3) = (
+                corner(-1.0, -1.0),
+                corner(1.0, -1.0),
+                corner(1.0, 1.0),
+                corner(-1.0, 1.0),
+            );
             out.prims.push(tri(xf, c0, c1, c2));
             out.prims.push(tri(xf, c0, c2, c3));
         }
@@ -76,18 +101,26 @@ pub fn disk(xf: &Affine3A, segments: usize) -> ShapePrims {
 }
 
 pub fn sphere(center: Vec3A, radius: f32) -> ShapePrims {
-    ShapePrims { prims: vec![Prim::Sphere { center, radius }], normals: vec![] }
+    ShapePrims {
+        prims: vec![Prim::Sphere { center, radius }],
+        normals: vec![],
+    }
 }
 
 /// A triangle mesh; `normals` (one per vertex), if given, are interpolated for shading.
-pub fn mesh(xf: &Affine3A, positions: &[Vec3A], indices: &[[u32; 3]], normals: Option<&[Vec3A]>) -> ShapePrims {
+pub fn mesh(
+    xf: &Affine3A,
+    positions: &[Vec3A],
+    indices: &[[u32; 3]],
+    normals: Option<&[Vec3A]>,
+) -> ShapePrims {
     let mut out = ShapePrims::default();
     let normal_xf = xf.matrix3.inverse().transpose();
     for idx in indices {
         let [a, b, c] = idx.map(|i| positions[i as usize]);
         let t = tri(xf, a, b, c);
         if let Some(ns) = normals {
-            let n = idx.map(|i| Vec3A::from(normal_xf * ns[i as usize]).normalize_or(Vec3A::Z));
+            let n = idx.map(|i| (normal_xf * ns[i as usize]).normalize_or(Vec3A::Z));
             out.normals.push((out.prims.len(), n));
         }
         out.prims.push(t);

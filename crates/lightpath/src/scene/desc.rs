@@ -93,7 +93,11 @@ fn default_stddev() -> f32 {
 
 impl Default for FilmDesc {
     fn default() -> Self {
-        FilmDesc { resolution: default_resolution(), filter: None, filter_stddev: default_stddev() }
+        FilmDesc {
+            resolution: default_resolution(),
+            filter: None,
+            filter_stddev: default_stddev(),
+        }
     }
 }
 
@@ -182,7 +186,9 @@ pub fn placement(
         Some(ScaleDesc::PerAxis(v)) => Vec3::from(v),
     };
     let r = rotate.unwrap_or([0.0; 3]);
-    let q = Quat::from_rotation_z(r[2].to_radians()) * Quat::from_rotation_y(r[1].to_radians()) * Quat::from_rotation_x(r[0].to_radians());
+    let q = Quat::from_rotation_z(r[2].to_radians())
+        * Quat::from_rotation_y(r[1].to_radians())
+        * Quat::from_rotation_x(r[0].to_radians());
     Affine3A::from_scale_rotation_translation(s, q, Vec3::from(translate.unwrap_or([0.0; 3])))
 }
 

@@ -32,7 +32,11 @@ pub struct SceneError {
 impl fmt::Display for SceneError {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         if self.line > 0 {
-            write!(f, "{}:{}:{}: {}", self.file, self.line, self.column, self.message)
+            write!(
+                f,
+                "{}:{}:{}: {}",
+                self.file, self.line, self.column, self.message
+            )
         } else {
             write!(f, "{}: {}", self.file, self.message)
         }
@@ -75,7 +79,12 @@ impl Source {
             }
             None => (0, 0),
         };
-        SceneError { file: self.name.clone(), line, column, message: message.into() }
+        SceneError {
+            file: self.name.clone(),
+            line,
+            column,
+            message: message.into(),
+        }
     }
 
     pub fn parse(&self) -> Result<SceneDesc, SceneError> {
@@ -176,9 +185,19 @@ fn v3(a: [f32; 3]) -> Vec3A {
     Vec3A::from(a)
 }
 
-fn material(src: &Source, name: &str, m: &MaterialDesc, span: Range<usize>) -> Result<Material, SceneError> {
+fn material(
+    src: &Source,
+    name: &str,
+    m: &MaterialDesc,
+    span: Range<usize>,
+) -> Result<Material, SceneError> {
     let need = |v: Option<[f32; 3]>, what: &str| -> Result<Vec3A, SceneError> {
-        v.map(v3).ok_or_else(|| src.error(Some(span.clone()), format!("material '{name}': expected '{what}' = [r, g, b]")))
+        v.map(v3).ok_or_else(|| {
+            src.error(
+                Some(span.clone()),
+                format!("material '{name}': expected '{what}' = [r, g, b]"),
+            )
+        })
     };
     let alpha = roughness_to_alpha(m.roughness);
     let bsdf = match m.kind.get_ref().as_str() {
@@ -194,12 +213,24 @@ fn material(src: &Source, name: &str, m: &MaterialDesc, span: Range<usize>) -> R
             ))
         }
     };
-    Ok(Material { bsdf, user_color: m.user_color.map(v3) })
+    Ok(Material {
+        bsdf,
+        user_color: m.user_color.map(v3),
+    })
 }
 
-fn object_shape(src: &Source, o: &ObjectDesc, span: Range<usize>) -> Result<ShapePrims, SceneError> {
+fn object_shape(
+    src: &Source,
+    o: &ObjectDesc,
+    span: Range<usize>,
+) -> Result<ShapePrims, SceneError> {
     let xf = placement(o.translate, o.rotate, o.scale, o.matrix);
-    let missing = |what: &str| src.error(Some(span.clone()), format!("{} shape needs '{what}'", o.shape.get_ref()));
+    let missing = |what: &str| {
+        src.error(
+            Some(span.clone()),
+            format!("{} shape needs '{what}'", o.shape.get_ref()),
+        )
+    };
     Ok(match o.shape.get_ref().as_str() {
         "rectangle" | "rect" => shapes::rectangle(&xf),
         "cube" | "box" => shapes::cube(&xf),
@@ -236,32 +267,69 @@ fn object_shape(src: &Source, o: &ObjectDesc, span: Range<usize>) -> Result<Shap
     })
 }
 
-fn load_obj(src: &Source, path: &Path, xf: &glam::Affine3A, span: Range<usize>) -> Result<ShapePrims, SceneError> {
-    let (models, _) = tobj::load_obj(path, &tobj::GPU_LOAD_OPTIONS)
-        .map_err(|e| src.error(Some(span.clone()), format!("cannot load OBJ file {}: {e}", path.display())))?;
+fn load_obj(
+    src: &Source,
+    path: &Path,
+    xf: &glam::Affine3A,
+    span: Range<usize>,
+) -> Result<ShapePrims, SceneError> {
+    let (models, _) = tobj::load_obj(path, &tobj::GPU_LOAD_OPTIONS).map_err(|e| {
+        src.error(
+            Some(span.clone()),
+            format!("cannot load OBJ file {}: {e}", path.display()),
+        )
+    })?;
     let mut out = ShapePrims::default();
     for m in models {
-        let pos: Vec<Vec3A> = m.mesh.positions.chunks_exact(3).map(|p| Vec3A::new(p[0], p[1], p[2])).collect();
-        let idx: Vec<[u32; 3]> = m.mesh.indices.chunks_exact(3).map(|t| [t[0], t[1], t[2]]).collect();
-        let normals: Option<Vec<Vec3A>> = (m.mesh.normals.len() == m.mesh.positions.len())
-            .then(|| m.mesh.normals.chunks_exact(3).map(|p| Vec3A::new(p[0], p[1], p[2])).collect());
+        let pos: Vec<Vec3A> = m
+            .mesh
+            .positions
+            .chunks_exact(3)
+            .map(|p| Vec3A::new(p[0], p[1], p[2]))
+            .collect();
+        let idx: Vec<[u32; 3]> = m
+            .mesh
+            .indices
+            .chunks_exact(3)
+            .map(|t| [t[0], t[1], t[2]])
+            .collect();
+        let normals: Option<Vec<Vec3A>> =
+            (m.mesh.normals.len() == m.mesh.positions.len()).then(|| {
+                m.mesh
+                    .normals
+                    .chunks_exact(3)
+                    .map(|p| Vec3A::new(p[0], p[1], p[2]))
+                    .collect()
+            });
         let part = shapes::mesh(xf, &pos, &idx, normals.as_deref());
         let base = out.prims.len();
-        out.normals.extend(part.normals.into_iter().map(|(i, n)| (i + base, n)));
+        out.normals
+            .extend(part.normals.into_iter().map(|(i, n)| (i + base, n)));
         out.prims.extend(part.prims);
     }
     if out.prims.is_empty() {
-        return Err(src.error(Some(span), format!("OBJ file {} has no triangles", path.display())));
+        return Err(src.error(
+            Some(span),
+            format!("OBJ file {} has no triangles", path.display()),
+        ));
     }
     Ok(out)
 }
 
 /// A light's shape and, for area lights, the primitives it adds to the scene.
-fn light_shape(src: &Source, l: &LightDesc, span: Range<usize>) -> Result<(LightShape, Option<ShapePrims>, Vec3A), SceneError> {
+fn light_shape(
+    src: &Source,
+    l: &LightDesc,
+    span: Range<usize>,
+) -> Result<(LightShape, Option<ShapePrims>, Vec3A), SceneError> {
     let kind = l.kind.get_ref().as_str();
     let color = |v: Option<[f32; 3]>, what: &str| -> Result<Vec3A, SceneError> {
-        v.map(|c| v3(c) * l.strength)
-            .ok_or_else(|| src.error(Some(span.clone()), format!("{kind} light needs '{what}' = [r, g, b]")))
+        v.map(|c| v3(c) * l.strength).ok_or_else(|| {
+            src.error(
+                Some(span.clone()),
+                format!("{kind} light needs '{what}' = [r, g, b]"),
+            )
+        })
     };
     let xf = placement(l.translate, l.rotate, l.scale, l.matrix);
     let area = |prims: ShapePrims| {
@@ -331,9 +399,16 @@ fn load_env(src: &Source, path: &Path, span: Range<usize>) -> Result<EnvMap, Sce
     let image = read_first_rgba_layer_from_file(
         path,
         |res, _| (res.width(), vec![Vec3A::ZERO; res.width() * res.height()]),
-        |(w, px), pos, (r, g, b, _a): (f32, f32, f32, f32)| px[pos.y() * *w + pos.x()] = Vec3A::new(r, g, b),
+        |(w, px), pos, (r, g, b, _a): (f32, f32, f32, f32)| {
+            px[pos.y() * *w + pos.x()] = Vec3A::new(r, g, b)
+        },
     )
-    .map_err(|e| src.error(Some(span), format!("cannot read environment map {}: {e}", path.display())))?;
+    .map_err(|e| {
+        src.error(
+            Some(span),
+            format!("cannot read environment map {}: {e}", path.display()),
+        )
+    })?;
     let size = image.layer_data.size;
     let (_, texels) = image.layer_data.channel_data.pixels;
     Ok(EnvMap::new(size.width(), size.height(), texels))
@@ -352,10 +427,20 @@ impl Scene {
         let find_material = |m: &Option<toml::Spanned<String>>| -> Result<Option<u32>, SceneError> {
             match m {
                 None => Ok(None),
-                Some(name) => material_ids.get(name.get_ref()).copied().map(Some).ok_or_else(|| {
-                    let known: Vec<&String> = desc.materials.keys().collect();
-                    src.error(Some(name.span()), format!("unknown material '{}': the scene defines {known:?}", name.get_ref()))
-                }),
+                Some(name) => material_ids
+                    .get(name.get_ref())
+                    .copied()
+                    .map(Some)
+                    .ok_or_else(|| {
+                        let known: Vec<&String> = desc.materials.keys().collect();
+                        src.error(
+                            Some(name.span()),
+                            format!(
+                                "unknown material '{}': the scene defines {known:?}",
+                                name.get_ref()
+                            ),
+                        )
+                    }),
             }
         };
 
@@ -364,7 +449,10 @@ impl Scene {
         for o in &desc.objects {
             let span = o.span();
             let o = o.get_ref();
-            let name = o.name.clone().unwrap_or_else(|| format!("object{}", objects.len()));
+            let name = o
+                .name
+                .clone()
+                .unwrap_or_else(|| format!("object{}", objects.len()));
             let shape = object_shape(src, o, span.clone())?;
             let id = objects.len() as u32;
             geometry.add(id, shape);
@@ -391,7 +479,11 @@ impl Scene {
                 geometry.add(id, sp);
                 let name = l.name.clone().unwrap_or_else(|| format!("light{light_id}"));
                 objects.push(Object {
-                    groups: if l.groups.is_empty() { vec![name.clone()] } else { l.groups.clone() },
+                    groups: if l.groups.is_empty() {
+                        vec![name.clone()]
+                    } else {
+                        l.groups.clone()
+                    },
                     name,
                     material: None,
                     emission: Vec3A::ZERO,
@@ -406,7 +498,13 @@ impl Scene {
             if let Some(id) = object {
                 objects[id as usize].material = find_material(&l.material)?;
             }
-            lights.push(Light { shape, color, groups: l.groups.clone(), camera_visible: l.camera_visible, object });
+            lights.push(Light {
+                shape,
+                color,
+                groups: l.groups.clone(),
+                camera_visible: l.camera_visible,
+                object,
+            });
         }
         let accel = geometry.build();
 
@@ -417,16 +515,25 @@ impl Scene {
             lo = lo.min(a);
             hi = hi.max(b);
         }
-        let scene_radius = if lo.x.is_finite() { 0.5 * (hi - lo).length() } else { 1.0 };
+        let scene_radius = if lo.x.is_finite() {
+            0.5 * (hi - lo).length()
+        } else {
+            1.0
+        };
         let epsilon = 1e-4 * scene_radius.max(1.0);
 
         let automaton = compile_aovs(src, desc, aovs, &materials, &objects, &lights)?;
-        let classify = |e: &Event| automaton.classify(e).expect("every scene event is in the vocabulary");
+        let classify = |e: &Event| {
+            automaton
+                .classify(e)
+                .expect("every scene event is in the vocabulary")
+        };
         for o in &mut objects {
             let (lobes, data) = object_events(o, &materials);
             o.lobe_classes = lobes.iter().map(classify).collect();
             o.data_lobes = data.iter().map(|(k, e)| (*k, classify(e))).collect();
-            o.glow_class = (o.emission != Vec3A::ZERO).then(|| classify(&Event::new(EventType::Emission, None, o.groups.iter())));
+            o.glow_class = (o.emission != Vec3A::ZERO)
+                .then(|| classify(&Event::new(EventType::Emission, None, o.groups.iter())));
         }
         let light_classes = lights
             .iter()
@@ -443,9 +550,20 @@ impl Scene {
         let total: f32 = powers.iter().sum();
         let weights: Vec<f32> = powers
             .iter()
-            .map(|p| if total > 0.0 { p / total + 0.1 / lights.len() as f32 } else { 1.0 })
+            .map(|p| {
+                if total > 0.0 {
+                    p / total + 0.1 / lights.len() as f32
+                } else {
+                    1.0
+                }
+            })
             .collect();
-        let escape_lights = lights.iter().enumerate().filter(|(_, l)| matches!(l.shape, LightShape::Dome { .. })).map(|(i, _)| i as u32).collect();
+        let escape_lights = lights
+            .iter()
+            .enumerate()
+            .filter(|(_, l)| matches!(l.shape, LightShape::Dome { .. }))
+            .map(|(i, _)| i as u32)
+            .collect();
 
         let [w, h] = desc.film.resolution;
         if w == 0 || h == 0 {
@@ -458,7 +576,10 @@ impl Scene {
             Some("x") => FovAxis::X,
             Some("y") => FovAxis::Y,
             Some(other) => {
-                return Err(src.error(c.fov_axis.as_ref().map(|s| s.span()), format!("unknown fov_axis '{other}': expected x, y, smaller or larger")))
+                return Err(src.error(
+                    c.fov_axis.as_ref().map(|s| s.span()),
+                    format!("unknown fov_axis '{other}': expected x, y, smaller or larger"),
+                ))
             }
         };
         let position = v3(c.position);
@@ -476,9 +597,14 @@ impl Scene {
         );
         let filter = match desc.film.filter.as_ref().map(|s| s.get_ref().as_str()) {
             None | Some("box") => PixelFilter::Box,
-            Some("gaussian") => PixelFilter::Gaussian { stddev: desc.film.filter_stddev },
+            Some("gaussian") => PixelFilter::Gaussian {
+                stddev: desc.film.filter_stddev,
+            },
             Some(other) => {
-                return Err(src.error(desc.film.filter.as_ref().map(|s| s.span()), format!("unknown filter '{other}': expected box or gaussian")))
+                return Err(src.error(
+                    desc.film.filter.as_ref().map(|s| s.span()),
+                    format!("unknown filter '{other}': expected box or gaussian"),
+                ))
             }
         };
         let r = &desc.render;
@@ -540,7 +666,8 @@ impl GeometryBuilder {
                 self.normals.push(n);
             }
         }
-        self.objects.extend(std::iter::repeat_n(object, shape.prims.len()));
+        self.objects
+            .extend(std::iter::repeat_n(object, shape.prims.len()));
         self.prims.extend(shape.prims);
     }
 
@@ -558,13 +685,31 @@ fn object_events(o: &Object, materials: &[Material]) -> (Vec<Event>, Vec<(DataLo
         .bsdf
         .lobes()
         .iter()
-        .map(|t| Event::new(if t.transmit { EventType::Transmit } else { EventType::Reflect }, Some(t.scatter), o.groups.iter()))
+        .map(|t| {
+            Event::new(
+                if t.transmit {
+                    EventType::Transmit
+                } else {
+                    EventType::Reflect
+                },
+                Some(t.scatter),
+                o.groups.iter(),
+            )
+        })
         .collect();
     let mut kinds = vec![DataLobe::Albedo, DataLobe::Position, DataLobe::Normal];
     if m.user_color.is_some() {
         kinds.push(DataLobe::UserColor);
     }
-    let data = kinds.into_iter().map(|k| (k, Event::new(EventType::Reflect, Some(k.scatter()), o.groups.iter()))).collect();
+    let data = kinds
+        .into_iter()
+        .map(|k| {
+            (
+                k,
+                Event::new(EventType::Reflect, Some(k.scatter()), o.groups.iter()),
+            )
+        })
+        .collect();
     (lobes, data)
 }
 
@@ -581,7 +726,14 @@ fn compile_aovs(
     for spec in aovs {
         compiler.add(&spec.definition).map_err(|e| {
             let span = desc.aovs.get(&spec.name).map(|s| s.span());
-            src.error(span, format!("AOV '{}': {}", spec.name, e.render(&spec.definition).trim_end()))
+            src.error(
+                span,
+                format!(
+                    "AOV '{}': {}",
+                    spec.name,
+                    e.render(&spec.definition).trim_end()
+                ),
+            )
         })?;
     }
     let mut vocabulary = vec![Event::camera(), Event::bare(EventType::Light)];
@@ -598,5 +750,13 @@ fn compile_aovs(
         vocabulary.push(Event::new(EventType::Emission, None, l.groups.iter()));
     }
     compiler.vocabulary(vocabulary);
-    compiler.compile().map_err(|e| src.error(None, format!("the AOV expressions are too complex together: {}", e.message)))
+    compiler.compile().map_err(|e| {
+        src.error(
+            None,
+            format!(
+                "the AOV expressions are too complex together: {}",
+                e.message
+            ),
+        )
+    })
 }

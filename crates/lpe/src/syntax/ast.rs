@@ -25,7 +25,11 @@ pub enum Expr {
     Concat(Vec<Expr>),
     /// `a|b`: the single unit before the bar or the one after it.
     Alt(Box<Expr>, Box<Expr>),
-    Repeat { expr: Box<Expr>, min: u32, max: Option<u32> },
+    Repeat {
+        expr: Box<Expr>,
+        min: u32,
+        max: Option<u32>,
+    },
     Group(Box<Expr>),
     /// `[a b …]`: any of the member atoms.
     Set(Vec<Expr>),
@@ -80,5 +84,8 @@ pub enum Slot {
     NoScatter,
     Item(Item),
     /// `[a b]`, `(a|b)` or, negated, `[^a b]`.
-    Set { negated: bool, items: Vec<SlotItem> },
+    Set {
+        negated: bool,
+        items: Vec<SlotItem>,
+    },
 }

@@ -8,7 +8,9 @@ use crate::prefix::{closest, standard_name, Prefix, STANDARD_NAMES};
 
 /// Parses one AOV definition: `[NAME =] [lpe:] {PREFIX ;} expression`.
 pub fn parse_definition(src: &str) -> Result<Definition, Error> {
-    let mut p = Parser { c: Cursor { src, pos: 0 } };
+    let mut p = Parser {
+        c: Cursor { src, pos: 0 },
+    };
     let name = p.name();
     p.c.skip_ws();
     let lpe_marker = p.c.src[p.c.pos..].starts_with("lpe:");
@@ -20,7 +22,12 @@ pub fn parse_definition(src: &str) -> Result<Definition, Error> {
     let rest = src[p.c.pos..].trim_end();
     if lpe_marker {
         if let Some((canonical, _)) = standard_name(rest) {
-            return Ok(Definition { name, lpe_marker, prefixes, body: Body::Standard(canonical) });
+            return Ok(Definition {
+                name,
+                lpe_marker,
+                prefixes,
+                body: Body::Standard(canonical),
+            });
         }
     }
     if p.c.at_end() {
@@ -30,7 +37,9 @@ pub fn parse_definition(src: &str) -> Result<Definition, Error> {
             "empty expression: expected an expression such as C<RD>[<L.>O]",
         ));
     }
-    let expr = p.sequence().map_err(|e| suggest_standard_name(e, rest, lpe_marker))?;
+    let expr = p
+        .sequence()
+        .map_err(|e| suggest_standard_name(e, rest, lpe_marker))?;
     p.c.skip_ws();
     if let Some((at, _)) = p.c.peek() {
         return Err(suggest_standard_name(
@@ -39,7 +48,12 @@ pub fn parse_definition(src: &str) -> Result<Definition, Error> {
             lpe_marker,
         ));
     }
-    Ok(Definition { name, lpe_marker, prefixes, body: Body::Expr(expr) })
+    Ok(Definition {
+        name,
+        lpe_marker,
+        prefixes,
+        body: Body::Expr(expr),
+    })
 }
 
 /// A word that is almost a standard name gets a hint on top of its syntax error.
@@ -48,7 +62,9 @@ fn suggest_standard_name(err: Error, rest: &str, lpe_marker: bool) -> Error {
         return err;
     }
     if let Some((name, _)) = standard_name(rest) {
-        return err.with_help(format!("standard names need the lpe: marker: write 'lpe:{name}'"));
+        return err.with_help(format!(
+            "standard names need the lpe: marker: write 'lpe:{name}'"
+        ));
     }
     if let Some(name) = closest(rest, STANDARD_NAMES.iter().map(|(n, _)| *n)) {
         let marker = if lpe_marker { "" } else { "lpe:" };
@@ -71,7 +87,24 @@ fn is_ident_char(c: char) -> bool {
 }
 
 fn is_atom_start(c: char) -> bool {
-    matches!(c, '(' | '[' | '<' | '.' | '\'' | 'C' | 'R' | 'T' | 'L' | 'O' | 'V' | 'B' | 'D' | 'S' | 'G' | 'U')
+    matches!(
+        c,
+        '(' | '['
+            | '<'
+            | '.'
+            | '\''
+            | 'C'
+            | 'R'
+            | 'T'
+            | 'L'
+            | 'O'
+            | 'V'
+            | 'B'
+            | 'D'
+            | 'S'
+            | 'G'
+            | 'U'
+    )
 }
 
 fn is_quantifier_start(c: char) -> bool {
@@ -85,13 +118,18 @@ impl<'a> Parser<'a> {
     /// An identifier at the cursor (after whitespace), without consuming it.
     fn ident_at(&self, from: usize) -> Option<(usize, usize)> {
         let src = self.c.src;
-        let start = from + src[from..].len() - src[from..].trim_start_matches([' ', '\t', '\r', '\n']).len();
+        let start = from + src[from..].len()
+            - src[from..]
+                .trim_start_matches([' ', '\t', '\r', '\n'])
+                .len();
         let mut chars = src[start..].char_indices();
         match chars.next() {
             Some((_, c)) if is_ident_start(c) => {}
             _ => return None,
         }
-        let len = src[start..].find(|c: char| !is_ident_char(c)).unwrap_or(src.len() - start);
+        let len = src[start..]
+            .find(|c: char| !is_ident_char(c))
+            .unwrap_or(src.len() - start);
         Some((start, start + len))
     }
 
@@ -118,7 +156,9 @@ impl<'a> Parser<'a> {
     fn prefixes(&mut self) -> Result<Vec<Prefix>, Error> {
         let mut prefixes = Vec::new();
         while let Some((start, end)) = self.ident_at(self.c.pos) {
-            let Some((semi, ';')) = self.next_char(end) else { break };
+            let Some((semi, ';')) = self.next_char(end) else {
+                break;
+            };
             let word = &self.c.src[start..end];
             let span = Span::new(start, end);
             let Some(prefix) = Prefix::from_word(word) else {
@@ -173,7 +213,10 @@ impl<'a> Parser<'a> {
                 ));
             }
             if !is_atom_start(c) {
-                let mut err = self.c.unexpected(at, "an event: C R T L O V B D S U, '.', a 'label', '<', '(' or '['");
+                let mut err = self.c.unexpected(
+                    at,
+                    "an event: C R T L O V B D S U, '.', a 'label', '<', '(' or '['",
+                );
                 if c == 'x' {
                     err = err.with_help("'x' (no scatter) is only allowed in the scatter slot of an event, as in <Lx>");
                 }
@@ -181,7 +224,11 @@ impl<'a> Parser<'a> {
             }
             units.push(self.alternation()?);
         }
-        Ok(if units.len() == 1 { units.pop().unwrap_or(Expr::Concat(Vec::new())) } else { Expr::Concat(units) })
+        Ok(if units.len() == 1 {
+            units.pop().unwrap_or(Expr::Concat(Vec::new()))
+        } else {
+            Expr::Concat(units)
+        })
     }
 
     /// `alt := unit { '|' unit }`.
@@ -223,7 +270,9 @@ impl<'a> Parser<'a> {
     fn unit(&mut self) -> Result<Expr, Error> {
         let atom = self.atom()?;
         self.c.skip_ws();
-        let Some((at, c)) = self.c.peek() else { return Ok(atom) };
+        let Some((at, c)) = self.c.peek() else {
+            return Ok(atom);
+        };
         if !is_quantifier_start(c) {
             return Ok(atom);
         }
@@ -238,7 +287,11 @@ impl<'a> Parser<'a> {
                 ));
             }
         }
-        Ok(Expr::Repeat { expr: Box::new(atom), min, max })
+        Ok(Expr::Repeat {
+            expr: Box::new(atom),
+            min,
+            max,
+        })
     }
 
     fn quantifier(&mut self, start: usize, c: char) -> Result<(u32, Option<u32>), Error> {
@@ -254,7 +307,11 @@ impl<'a> Parser<'a> {
                 Some((at, ch)) => Span::new(at, at + ch.len_utf8()),
                 None => Span::at(c.src.len()),
             };
-            Error::new(ErrorKind::QuantifierSyntax, span, format!("malformed quantifier: expected {what}"))
+            Error::new(
+                ErrorKind::QuantifierSyntax,
+                span,
+                format!("malformed quantifier: expected {what}"),
+            )
         };
         self.c.skip_ws();
         let n = self.number();
@@ -274,21 +331,42 @@ impl<'a> Parser<'a> {
                         return Err(syntax(&self.c, "a number in {n,}, {,m} or {n,m}"))
                     }
                     Some((_, '}')) => (n.unwrap_or(0), m),
-                    _ => return Err(syntax(&self.c, if m.is_some() { "'}'" } else { "a number or '}'" })),
+                    _ => {
+                        return Err(syntax(
+                            &self.c,
+                            if m.is_some() {
+                                "'}'"
+                            } else {
+                                "a number or '}'"
+                            },
+                        ))
+                    }
                 }
             }
             _ => {
-                return Err(syntax(&self.c, if n.is_some() { "',' or '}'" } else { "a number" }));
+                return Err(syntax(
+                    &self.c,
+                    if n.is_some() {
+                        "',' or '}'"
+                    } else {
+                        "a number"
+                    },
+                ));
             }
         };
         self.c.bump(); // '}'
         let span = Span::new(start, self.c.pos);
         let bad = |msg: String| Err(Error::new(ErrorKind::QuantifierValue, span, msg));
         if n > MAX_BOUND || m.is_some_and(|m| m > MAX_BOUND) {
-            return bad(format!("quantifier bound above {MAX_BOUND}: path depths never get that deep"));
+            return bad(format!(
+                "quantifier bound above {MAX_BOUND}: path depths never get that deep"
+            ));
         }
         match m {
-            Some(0) => bad("quantifier allows zero repetitions only: the unit would match nothing; remove it".into()),
+            Some(0) => bad(
+                "quantifier allows zero repetitions only: the unit would match nothing; remove it"
+                    .into(),
+            ),
             Some(m) if n > m => bad(format!("quantifier minimum {n} is above its maximum {m}")),
             _ => Ok((n as u32, m.map(|m| m as u32))),
         }
@@ -299,7 +377,12 @@ impl<'a> Parser<'a> {
         let mut value: Option<u64> = None;
         while let Some((_, d)) = self.c.peek() {
             let Some(digit) = d.to_digit(10) else { break };
-            value = Some(value.unwrap_or(0).saturating_mul(10).saturating_add(digit as u64));
+            value = Some(
+                value
+                    .unwrap_or(0)
+                    .saturating_mul(10)
+                    .saturating_add(digit as u64),
+            );
             self.c.bump();
         }
         value
@@ -307,7 +390,11 @@ impl<'a> Parser<'a> {
 
     fn atom(&mut self) -> Result<Expr, Error> {
         let Some((at, c)) = self.c.peek() else {
-            return Err(Error::new(ErrorKind::Unexpected, Span::at(self.c.src.len()), "expected an event"));
+            return Err(Error::new(
+                ErrorKind::Unexpected,
+                Span::at(self.c.src.len()),
+                "expected an event",
+            ));
         };
         match c {
             '(' => {
@@ -354,7 +441,9 @@ impl<'a> Parser<'a> {
 
     /// A symbol or label at `at`, consumed; `None` (nothing consumed) if there is none.
     fn item(&mut self, at: usize) -> Result<Option<Item>, Error> {
-        let Some((_, c)) = self.c.peek() else { return Ok(None) };
+        let Some((_, c)) = self.c.peek() else {
+            return Ok(None);
+        };
         if c == '\'' {
             let (label, end) = read_label(self.c.src, at)?;
             self.c.pos = end;
@@ -376,7 +465,8 @@ impl<'a> Parser<'a> {
             self.c.bump();
         }
         let digits = &self.c.src[digits_start..self.c.pos];
-        let lobe = lobe_number(class, digits).ok_or_else(|| lobe_error(Span::new(at, self.c.pos), class, digits))?;
+        let lobe = lobe_number(class, digits)
+            .ok_or_else(|| lobe_error(Span::new(at, self.c.pos), class, digits))?;
         Ok(Some(Item::Scatter(class, (lobe > 0).then_some(lobe))))
     }
 
@@ -400,11 +490,17 @@ impl<'a> Parser<'a> {
                 }
                 Some((_, c)) if is_atom_start(c) => members.push(self.atom()?),
                 Some((at, c)) => {
-                    let mut err = self.c.unexpected(at, "a set member (an event, symbol or label) or ']'");
+                    let mut err = self
+                        .c
+                        .unexpected(at, "a set member (an event, symbol or label) or ']'");
                     if c == '|' {
-                        err = err.with_help("members of [...] are alternatives already: write [DS], not [D|S]");
+                        err = err.with_help(
+                            "members of [...] are alternatives already: write [DS], not [D|S]",
+                        );
                     } else if is_quantifier_start(c) {
-                        err = err.with_help("quantifiers are not allowed inside [...]: quantify the whole set");
+                        err = err.with_help(
+                            "quantifiers are not allowed inside [...]: quantify the whole set",
+                        );
                     }
                     return Err(err);
                 }
@@ -431,7 +527,7 @@ impl<'a> Parser<'a> {
                     self.c.bump();
                     return Ok(Expr::NegSet(kind, items));
                 }
-                Some((at, c)) if matches!(c, '.' | '<' | '(' | '[') => {
+                Some((at, '.' | '<' | '(' | '[')) => {
                     let span = self.c.token_span(at);
                     return Err(Error::new(
                         ErrorKind::SetMember,
@@ -491,7 +587,12 @@ impl<'a> Parser<'a> {
                 }
                 'x' => {
                     if index != 1 {
-                        return Err(slot_kind_error(Span::new(at, at + 1), index, "'x' (no scatter)", None));
+                        return Err(slot_kind_error(
+                            Span::new(at, at + 1),
+                            index,
+                            "'x' (no scatter)",
+                            None,
+                        ));
                     }
                     self.c.bump();
                     Slot::NoScatter
@@ -505,11 +606,17 @@ impl<'a> Parser<'a> {
                 '(' => {
                     self.c.bump();
                     let items = self.paren_slot_set(open, &mut index)?;
-                    Slot::Set { negated: false, items }
+                    Slot::Set {
+                        negated: false,
+                        items,
+                    }
                 }
                 _ => {
                     let Some(item) = self.item(at)? else {
-                        return Err(self.c.unexpected(at, "an event slot (a symbol, '.', 'x', a 'label', a set) or '>'"));
+                        return Err(self.c.unexpected(
+                            at,
+                            "an event slot (a symbol, '.', 'x', a 'label', a set) or '>'",
+                        ));
                     };
                     check_slot_kind(&item, Span::new(at, self.c.pos), &mut index)?;
                     Slot::Item(item)
@@ -583,17 +690,34 @@ impl<'a> Parser<'a> {
     }
 
     /// One member of a set in an event slot; all members must be of one slot kind.
-    fn slot_member(&mut self, index: &mut usize, set_kind: &mut Option<SlotKind>) -> Result<SlotItem, Error> {
+    fn slot_member(
+        &mut self,
+        index: &mut usize,
+        set_kind: &mut Option<SlotKind>,
+    ) -> Result<SlotItem, Error> {
         let Some((at, c)) = self.c.peek() else {
-            return Err(Error::new(ErrorKind::Unclosed, Span::at(self.c.src.len()), "expected a set member"));
+            return Err(Error::new(
+                ErrorKind::Unclosed,
+                Span::at(self.c.src.len()),
+                "expected a set member",
+            ));
         };
         if matches!(c, '.' | '<' | '(' | '[' | '|' | ')') {
             return Err(set_member_error(self.c.token_span(at)));
         }
         if c == 'x' {
-            let slot = if *set_kind == Some(SlotKind::Label) { 2 } else { *index };
+            let slot = if *set_kind == Some(SlotKind::Label) {
+                2
+            } else {
+                *index
+            };
             if slot != 1 {
-                return Err(slot_kind_error(Span::new(at, at + 1), slot, "'x' (no scatter)", None));
+                return Err(slot_kind_error(
+                    Span::new(at, at + 1),
+                    slot,
+                    "'x' (no scatter)",
+                    None,
+                ));
             }
             self.c.bump();
             set_kind.get_or_insert(SlotKind::Scatter);
@@ -614,7 +738,12 @@ impl<'a> Parser<'a> {
                     SlotKind::Scatter => 1,
                     SlotKind::Label => 2,
                 };
-                return Err(slot_kind_error(span, slot, &describe_item(&item), Some(&item)));
+                return Err(slot_kind_error(
+                    span,
+                    slot,
+                    &describe_item(&item),
+                    Some(&item),
+                ));
             }
             Some(_) => {}
         }
@@ -622,10 +751,12 @@ impl<'a> Parser<'a> {
     }
 }
 
-
-
 fn set_member_error(span: Span) -> Error {
-    Error::new(ErrorKind::SetMember, span, "expected a set member: a symbol or a 'label'")
+    Error::new(
+        ErrorKind::SetMember,
+        span,
+        "expected a set member: a symbol or a 'label'",
+    )
 }
 
 fn kind_name(kind: SlotKind) -> &'static str {
@@ -658,17 +789,32 @@ fn check_slot_kind(item: &Item, span: Span, index: &mut usize) -> Result<(), Err
     if fits {
         Ok(())
     } else {
-        Err(slot_kind_error(span, *index, &describe_item(item), Some(item)))
+        Err(slot_kind_error(
+            span,
+            *index,
+            &describe_item(item),
+            Some(item),
+        ))
     }
 }
 
 fn slot_kind_error(span: Span, index: usize, what: &str, item: Option<&Item>) -> Error {
     let (slot, expected) = match index {
-        0 => ("type slot", "an event type C R T L O V B, '.', a set of them, or a 'label'"),
-        1 => ("scatter slot", "a scatter D S U (numbered or not), 'x', '.', a set of them, or a 'label'"),
+        0 => (
+            "type slot",
+            "an event type C R T L O V B, '.', a set of them, or a 'label'",
+        ),
+        1 => (
+            "scatter slot",
+            "a scatter D S U (numbered or not), 'x', '.', a set of them, or a 'label'",
+        ),
         _ => ("label slot", "a 'label', a set of labels, or '.'"),
     };
-    let err = Error::new(ErrorKind::SlotKind, span, format!("{what} cannot stand in the {slot}: expected {expected}"));
+    let err = Error::new(
+        ErrorKind::SlotKind,
+        span,
+        format!("{what} cannot stand in the {slot}: expected {expected}"),
+    );
     match (index, item) {
         (0, Some(Item::Scatter(c, n))) => {
             let sym = format!("{}{}", c.letter(), n.map(|n| n.to_string()).unwrap_or_default());

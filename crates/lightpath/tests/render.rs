@@ -1,0 +1,401 @@
+//! Properties of rendered images that users rely on: AOV partitions sum to beauty,
+//! furnaces conserve energy, the guide's example expressions select what they say, and
+//! renders are deterministic.
+
+use glam::Vec3A;
+use lightpath::aov::{self, AovSpec};
+use lightpath::film::Film;
+use lightpath::{render, RenderOptions, Scene, Source};
+
+fn source(name: &str, text: &str) -> Source {
+    Source {
+        name: name.into(),
+        text: text.into(),
+        dir: Default::default(),
+    }
+}
+
+/// Renders `src` at a small size with the given AOVs (beauty first).
+fn render_aovs(
+    src: &Source,
+    res: u32,
+    spp: u32,
+    max_depth: Option<u32>,
+    extra: Vec<AovSpec>,
+) -> (Scene, Film) {
+    let mut desc = src.parse().unwrap();
+    desc.film.resolution = [res, res];
+    desc.render.spp = spp;
+    if let Some(d) = max_depth {
+        desc.render.max_depth = d;
+    }
+    let scene = Scene::build(src, &desc, &aov::assemble(extra)).unwrap();
+    let (film, _) = render(
+        &scene,
+        &RenderOptions {
+            spp,
+            first_sample: 0,
+            progress: false,
+        },
+    );
+    (scene, film)
+}
+
+fn cornell() -> Source {
+    lightpath::load_source("cornell").unwrap()
+}
+
+fn index(scene: &Scene, name: &str) -> usize {
+    scene
+        .aovs
+        .iter()
+        .position(|a| a.name == name)
+        .unwrap_or_else(|| panic!("no AOV {name}"))
+}
+
+/// Max over pixels of |Σ parts − beauty| / max(beauty, floor).
+fn partition_error(scene: &Scene, film: &Film, parts: &[&str]) -> f32 {
+    let beauty = index(scene, "beauty");
+    let ids: Vec<usize> = parts.iter().map(|p| index(scene, p)).collect();
+    let mut worst = 0.0f32;
+    for y in 0..film.height {
+        for x in 0..film.width {
+            let b = film.pixel(beauty, x, y);
+            let sum: Vec3A = ids.iter().map(|&k| film.pixel(k, x, y)).sum();
+            let err = (sum - b).abs() / b.abs().max(Vec3A::splat(1e-3));
+            worst = worst.max(err.max_element());
+        }
+    }
+    worst
+}
+
+#[test]
+fn standard_partition_sums_to_beauty() {
+    let (scene, film) = render_aovs(&cornell(), 40, 4, None, aov::standard());
+    let err = partition_error(&scene, &film, &lpe::BEAUTY_PARTITION);
+    assert!(err <= 1e-5, "standard partition is off by {err}");
+    // And it is not trivially zero: direct diffuse carries light.
+    let dd = index(&scene, "directDiffuse");
+    let total: f32 = film.channel(dd, 0).iter().sum();
+    assert!(total > 1.0);
+}
+
+#[test]
+fn light_groups_and_bounces_sum_to_beauty() {
+    let mut extra = aov::light_group_split(&["fill".into(), "key".into()]);
+    extra.extend([
+        AovSpec::new("b0", "C[<L.>O]"),
+        AovSpec::new("b1", "C[DS]{1}[<L.>O]"),
+        AovSpec::new("b2", "C[DS]{2}[<L.>O]"),
+        AovSpec::new("b3", "C[DS]{3,}[<L.>O]"),
+    ]);
+    let (scene, film) = render_aovs(&cornell(), 32, 4, None, extra);
+    let err = partition_error(
+        &scene,
+        &film,
+        &["beauty_key", "beauty_fill", "beauty__default"],
+    );
+    assert!(err <= 1e-5, "light groups off by {err}");
+    let err = partition_error(&scene, &film, &["b0", "b1", "b2", "b3"]);
+    assert!(err <= 1e-5, "bounces off by {err}");
+    // The glowing ball has no light group: it lands in the default group.
+    let default: f32 = film
+        .channel(index(&scene, "beauty__default"), 0)
+        .iter()
+        .sum();
+    assert!(default > 0.0);
+}
+
+const FURNACE: &str = r#"
+[camera]
+position = [0, 0, 4]
+look_at = [0, 0, 0]
+fov = 30
+[render]
+max_depth = 64
+rr_depth = 5
+[materials.m]
+type = "MATERIAL"
+albedo = [1, 1, 1]
+ior = 1.5
+[[objects]]
+name = "ball"
+shape = "sphere"
+material = "m"
+radius = 1
+[[lights]]
+type = "dome"
+radiance = [1, 1, 1]
+"#;
+
+/// Mean and standard error of the beauty's red channel over pixels where the ball is seen.
+fn furnace(material: &str, spp: u32) -> (f64, f64) {
+    let text = FURNACE.replace("MATERIAL", material).replace(
+        "albedo = [1, 1, 1]\nior = 1.5",
+        if material == "diffuse" {
+            "albedo = [1, 1, 1]"
+        } else {
+            "ior = 1.5"
+        },
+    );
+    let (_, film) = render_aovs(&source("furnace", &text), 24, spp, None, vec![]);
+    let r = film.channel(0, 0);
+    let a = film.alpha();
+    let vals: Vec<f64> = r
+        .iter()
+        .zip(&a)
+        .filter(|(_, a)| **a > 0.999)
+        .map(|(v, _)| *v as f64)
+        .collect();
+    assert!(vals.len() > 100);
+    let n = vals.len() as f64;
+    let mean = vals.iter().sum::<f64>() / n;
+    let var = vals.iter().map(|v| (v - mean).powi(2)).sum::<f64>() / (n - 1.0);
+    (mean, (var / n).sqrt())
+}
+
+#[test]
+fn white_diffuse_sphere_in_a_furnace_returns_the_dome() {
+    let (mean, se) = furnace("diffuse", 16);
+    // Unbiased estimate of exactly 1: allow five standard errors plus float slack.
+    assert!((mean - 1.0).abs() < 5.0 * se + 1e-3, "mean {mean} ± {se}");
+}
+
+#[test]
+fn glass_sphere_in_a_furnace_neither_gains_nor_loses_energy() {
+    let (mean, se) = furnace("dielectric", 16);
+    assert!((mean - 1.0).abs() < 5.0 * se + 2e-3, "mean {mean} ± {se}");
+}
+
+#[test]
+fn guide_examples_select_what_they_say() {
+    let extra = vec![
+        AovSpec::new("cube", "C<[RT][DS]'scatterCube'>.*[<L.>O]"),
+        AovSpec::new("seesCube", "nothruput;overwrite;C<RU2'scatterCube'>L"),
+        AovSpec::new("cubeToWall", "C<..'scatterCube'>+<..'rightWall'>[<L.>O]"),
+    ];
+    let (scene, film) = render_aovs(&cornell(), 48, 8, None, extra);
+    let (cube, sees, wall) = (
+        index(&scene, "cube"),
+        index(&scene, "seesCube"),
+        index(&scene, "cubeToWall"),
+    );
+    let mut lit_on_cube = 0;
+    for y in 0..film.height {
+        for x in 0..film.width {
+            let c = film.pixel(cube, x, y);
+            if film.pixel(sees, x, y) == Vec3A::ZERO {
+                assert_eq!(c, Vec3A::ZERO, "cube AOV is lit off the cube at {x},{y}");
+            } else if c.max_element() > 0.0 {
+                lit_on_cube += 1;
+            }
+        }
+    }
+    assert!(lit_on_cube > 50, "the cube AOV is empty");
+    let sum: Vec3A = (0..3)
+        .map(|c| film.channel(wall, c).iter().sum::<f32>())
+        .collect::<Vec<_>>()
+        .try_into()
+        .map(|a: [f32; 3]| Vec3A::from(a))
+        .unwrap();
+    assert!(
+        sum.y > 2.0 * sum.x && sum.y > 2.0 * sum.z && sum.y > 0.0,
+        "light from the cube via the right wall should be green: {sum}"
+    );
+}
+
+const TWO_ROOMS: &str = r#"
+[camera]
+position = [0, 3, 0.01]
+look_at = [0, 0, 0]
+fov = 80
+[materials.white]
+type = "diffuse"
+albedo = [0.8, 0.8, 0.8]
+[[objects]]
+name = "floor"
+shape = "rectangle"
+material = "white"
+rotate = [-90, 0, 0]
+scale = 2
+[[objects]]
+name = "divider"
+shape = "cube"
+material = "white"
+scale = [0.02, 2.5, 2]
+[[lights]]
+type = "sphere"
+groups = ["key"]
+center = [-1, 0.5, 0]
+radius = 0.1
+radiance = [20, 20, 20]
+camera_visible = false
+[[lights]]
+type = "sphere"
+groups = ["fill"]
+center = [1, 0.5, 0]
+radius = 0.1
+radiance = [10, 10, 10]
+camera_visible = false
+"#;
+
+#[test]
+fn a_light_group_is_zero_where_only_the_other_light_reaches() {
+    let extra = vec![
+        AovSpec::new("key", "C<.>*[<L.'key'>O]"),
+        AovSpec::new("fill", "C<.>*[<L.'fill'>O]"),
+    ];
+    // Depth 2: direct light only, so the divider blocks each light from the other half.
+    let (scene, film) = render_aovs(&source("two rooms", TWO_ROOMS), 32, 4, Some(2), extra);
+    let (key, fill) = (index(&scene, "key"), index(&scene, "fill"));
+    let (mut key_left, mut fill_right) = (0.0, 0.0);
+    for y in 4..film.height - 4 {
+        for x in 0..film.width {
+            // Image x grows with world x: the key light is on the left half.
+            if x < film.width / 2 - 2 {
+                assert_eq!(
+                    film.pixel(fill, x, y),
+                    Vec3A::ZERO,
+                    "fill reaches the key side at {x},{y}"
+                );
+                key_left += film.pixel(key, x, y).x;
+            } else if x > film.width / 2 + 2 {
+                assert_eq!(
+                    film.pixel(key, x, y),
+                    Vec3A::ZERO,
+                    "key reaches the fill side at {x},{y}"
+                );
+                fill_right += film.pixel(fill, x, y).x;
+            }
+        }
+    }
+    assert!(key_left > 0.0 && fill_right > 0.0);
+}
+
+#[test]
+fn renders_are_bit_identical_for_any_thread_count() {
+    let src = cornell();
+    let run = |threads: usize| {
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .unwrap();
+        pool.install(|| render_aovs(&src, 24, 3, None, aov::standard()).1.data)
+    };
+    let one = run(1);
+    let two = run(2);
+    assert!(one
+        .iter()
+        .zip(&two)
+        .all(|(a, b)| a.to_bits() == b.to_bits()));
+}
+
+#[test]
+fn sample_ranges_merge_into_the_whole_render() {
+    let src = cornell();
+    let mut desc = src.parse().unwrap();
+    desc.film.resolution = [16, 16];
+    let scene = Scene::build(&src, &desc, &aov::assemble(vec![])).unwrap();
+    let (whole, _) = render(
+        &scene,
+        &RenderOptions {
+            spp: 4,
+            first_sample: 0,
+            progress: false,
+        },
+    );
+    let (mut a, _) = render(
+        &scene,
+        &RenderOptions {
+            spp: 2,
+            first_sample: 0,
+            progress: false,
+        },
+    );
+    let (b, _) = render(
+        &scene,
+        &RenderOptions {
+            spp: 2,
+            first_sample: 2,
+            progress: false,
+        },
+    );
+    a.merge(&b).unwrap();
+    for (x, y) in whole.data.iter().zip(&a.data) {
+        assert!((x - y).abs() <= 1e-5 * x.abs().max(1.0));
+    }
+}
+
+#[test]
+fn exr_round_trips_channels_values_and_expressions() {
+    let (scene, film) = render_aovs(
+        &cornell(),
+        12,
+        2,
+        None,
+        vec![AovSpec::new("key", "C<.>*[<L.'key'>O]")],
+    );
+    let dir = std::env::temp_dir().join(format!("lightpath-exr-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let path = dir.join("t.exr");
+    lightpath::output::write_exr(&path, &film, &scene.aovs, false, &[]).unwrap();
+    let back = lightpath::output::read_exr(&path).unwrap();
+    let mut names: Vec<&str> = back.channels.iter().map(|(n, _)| n.as_str()).collect();
+    names.sort();
+    assert_eq!(names, ["A", "B", "G", "R", "key.B", "key.G", "key.R"]);
+    assert_eq!(back.channel("R").unwrap(), film.channel(0, 0).as_slice());
+    assert_eq!(
+        back.channel("key.G").unwrap(),
+        film.channel(1, 1).as_slice()
+    );
+    let aovs = back.aovs();
+    assert!(
+        aovs.contains(&("key".to_string(), "C<.>*[<L.'key'>O]".to_string())),
+        "{aovs:?}"
+    );
+    // Nothing but the final file is left behind.
+    let leftovers: Vec<_> = std::fs::read_dir(&dir)
+        .unwrap()
+        .map(|e| e.unwrap().file_name())
+        .collect();
+    assert_eq!(leftovers.len(), 1);
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn scene_errors_name_the_file_line_and_what_was_expected() {
+    let text =
+        "[camera]\nfov = 40\n\n[[objects]]\nshape = \"sphere\"\nmaterial = \"nope\"\nradius = 1\n";
+    let src = source("bad.toml", text);
+    let desc = src.parse().unwrap();
+    let err = Scene::build(&src, &desc, &aov::assemble(vec![]))
+        .err()
+        .unwrap();
+    assert_eq!((err.file.as_str(), err.line), ("bad.toml", 6), "{err}");
+    assert!(err.message.contains("unknown material 'nope'"), "{err}");
+
+    let src = source("typo.toml", "[render]\nspp = \"many\"\n");
+    let err = src.parse().unwrap_err();
+    assert_eq!(err.line, 2, "{err}");
+
+    let src = source("shape.toml", "[[objects]]\nshape = \"cone\"\n");
+    let desc = src.parse().unwrap();
+    let err = Scene::build(&src, &desc, &aov::assemble(vec![]))
+        .err()
+        .unwrap();
+    assert!(
+        err.to_string()
+            .starts_with("shape.toml:2:9: unknown shape 'cone'"),
+        "{err}"
+    );
+
+    let bad_aov = aov::assemble(vec![AovSpec::new("x", "C<RD")]);
+    let src = cornell();
+    let err = Scene::build(&src, &src.parse().unwrap(), &bad_aov)
+        .err()
+        .unwrap();
+    assert!(
+        err.message.contains("AOV 'x'") && err.message.contains('^'),
+        "{err}"
+    );
+}
