@@ -1,0 +1,190 @@
+//! The `lightpath` binary as scripts and conformance suites use it.
+
+use serde_json::Value;
+use std::io::Write;
+use std::process::{Command, Stdio};
+
+fn lightpath() -> Command {
+    Command::new(env!("CARGO_BIN_EXE_lightpath"))
+}
+
+#[test]
+fn every_conformance_vector_passes_through_lpe_match_jsonl() {
+    let vectors = include_str!("../../lpe/tests/vectors/conformance.jsonl");
+    let mut child = lightpath()
+        .args(["lpe", "match", "--jsonl"])
+        .stdin(Stdio::piped())
+        .stdout(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let mut stdin = child.stdin.take().unwrap();
+    let input = vectors.to_string();
+    let writer = std::thread::spawn(move || stdin.write_all(input.as_bytes()));
+    let out = child.wait_with_output().unwrap();
+    writer.join().unwrap().unwrap();
+    assert!(out.status.success());
+    let answers: Vec<Value> = String::from_utf8(out.stdout)
+        .unwrap()
+        .lines()
+        .map(|l| serde_json::from_str(l).unwrap())
+        .collect();
+    let cases: Vec<Value> = vectors
+        .lines()
+        .filter(|l| !l.trim().is_empty())
+        .map(|l| serde_json::from_str(l).unwrap())
+        .collect();
+    assert_eq!(answers.len(), cases.len());
+    let mut failures = Vec::new();
+    for (case, answer) in cases.iter().zip(&answers) {
+        if case.get("error").is_some() {
+            if answer.get("span") != case.get("span") || !answer["error"].is_string() {
+                failures.push(format!("{case} -> {answer}"));
+            }
+        } else if answer.get("match") != case.get("match") {
+            failures.push(format!("{case} -> {answer}"));
+        }
+    }
+    assert!(
+        failures.is_empty(),
+        "{} failures:\n{}",
+        failures.len(),
+        failures.join("\n")
+    );
+}
+
+#[test]
+fn jsonl_reports_bad_paths_and_bad_json_without_stopping() {
+    let mut child = lightpath()
+        .args(["lpe", "match", "--jsonl"])
+        .stdin(Stdio::piped())
+        .stdout(Stdio::piped())
+        .spawn()
+        .unwrap();
+    child
+        .stdin
+        .take()
+        .unwrap()
+        .write_all(b"{\"expr\": \"CL\", \"path\": \"C<RD\"}\nnot json\n{\"expr\": \"C<RD>L\", \"path\": \"C<RD>L\"}\n")
+        .unwrap();
+    let out = child.wait_with_output().unwrap();
+    let lines: Vec<Value> = String::from_utf8(out.stdout)
+        .unwrap()
+        .lines()
+        .map(|l| serde_json::from_str(l).unwrap())
+        .collect();
+    assert!(lines[0]["path_error"].is_string());
+    assert!(lines[1]["input_error"].is_string());
+    assert_eq!(lines[2]["match"], Value::Bool(true));
+}
+
+#[test]
+fn check_exits_nonzero_and_points_at_the_error() {
+    let ok = lightpath()
+        .args([
+            "lpe",
+            "check",
+            "C<RD>[<L.>O]",
+            "lpe:unoccluded;directDiffuse",
+        ])
+        .output()
+        .unwrap();
+    assert!(ok.status.success());
+    let bad = lightpath()
+        .args(["lpe", "check", "unocluded;C<RD>L"])
+        .output()
+        .unwrap();
+    assert_eq!(bad.status.code(), Some(1));
+    let err = String::from_utf8(bad.stderr).unwrap();
+    assert!(err.contains("unocluded;C<RD>L\n  | ^^^^^^^^^\n"), "{err}");
+    assert!(err.contains("did you mean 'unoccluded'?"), "{err}");
+    let warn = lightpath()
+        .args(["lpe", "check", "C<V>L"])
+        .output()
+        .unwrap();
+    assert!(warn.status.success());
+    assert!(String::from_utf8(warn.stderr)
+        .unwrap()
+        .contains("never emits"));
+}
+
+#[test]
+fn match_prints_one_line_per_definition() {
+    let out = lightpath()
+        .args([
+            "lpe",
+            "match",
+            "C<RD>[<L.>O]",
+            "C<RS>L",
+            "--path",
+            "C<RD'floor'><L'key'>",
+        ])
+        .output()
+        .unwrap();
+    assert!(out.status.success());
+    assert_eq!(String::from_utf8(out.stdout).unwrap(), "match\nno match\n");
+    let bad = lightpath()
+        .args(["lpe", "match", "C<RD", "--path", "CL"])
+        .output()
+        .unwrap();
+    assert_eq!(bad.status.code(), Some(1));
+}
+
+#[test]
+fn explain_and_names_describe_the_language() {
+    let out = lightpath()
+        .args(["lpe", "explain", "C<RD>[<L.>O]", "lpe:albedo"])
+        .output()
+        .unwrap();
+    let text = String::from_utf8(out.stdout).unwrap();
+    assert!(
+        text.contains("the camera") && text.contains("DFA states before minimisation"),
+        "{text}"
+    );
+    assert!(text.contains("nothruput"), "{text}");
+    let names =
+        String::from_utf8(lightpath().args(["lpe", "names"]).output().unwrap().stdout).unwrap();
+    assert!(names.contains("directDiffuse") && names.contains("C<RD>[<L.>O]"));
+}
+
+#[test]
+fn render_writes_exr_and_png_and_reports_speed() {
+    let dir = std::env::temp_dir().join(format!("lightpath-cli-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let out = lightpath()
+        .args([
+            "render",
+            "cornell",
+            "--quiet",
+            "--spp",
+            "2",
+            "--resolution",
+            "24x16",
+            "-o",
+        ])
+        .arg(dir.join("shot.exr"))
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let text = String::from_utf8(out.stdout).unwrap();
+    assert!(
+        text.contains("samples/s") && text.contains("rays/s"),
+        "{text}"
+    );
+    let exr = lightpath::output::read_exr(&dir.join("shot.exr")).unwrap();
+    assert_eq!((exr.width, exr.height), (24, 16));
+    assert!(exr.channel("directDiffuse.R").is_some() && exr.channel("A").is_some());
+    assert!(dir.join("shot.png").exists());
+    let bad = lightpath()
+        .args(["render", "no/such/scene.toml", "--quiet"])
+        .output()
+        .unwrap();
+    assert!(!bad.status.success());
+    assert!(String::from_utf8(bad.stderr)
+        .unwrap()
+        .contains("no/such/scene.toml"));
+    std::fs::remove_dir_all(&dir).unwrap();
+}
