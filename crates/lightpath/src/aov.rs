@@ -8,6 +8,8 @@ use lpe::STANDARD_NAMES;
 pub struct AovSpec {
     pub name: String,
     pub definition: String,
+    /// Also split this AOV per light group: `<name>_<group>` and `<name>__default`.
+    pub split_light_groups: bool,
 }
 
 impl AovSpec {
@@ -15,7 +17,14 @@ impl AovSpec {
         AovSpec {
             name: name.into(),
             definition: definition.into(),
+            split_light_groups: false,
         }
+    }
+
+    /// The same AOV, also split per light group.
+    pub fn split(mut self) -> AovSpec {
+        self.split_light_groups = true;
+        self
     }
 
     /// Parses `NAME=DEF` (as `--aov` takes it); a bare standard name is its own name.
@@ -61,9 +70,29 @@ pub fn assemble(extra: impl IntoIterator<Item = AovSpec>) -> Vec<AovSpec> {
     out
 }
 
-/// Beauty split per light group: `beauty_<group>` for each group, and
-/// `beauty__default` for lights without a group (and glowing objects), so that the split
-/// sums to beauty when every light has at most one group.
+/// Bounce AOVs that partition beauty: `bounce0` (emission seen directly), `bounce<i>`
+/// (exactly i scattering events) up to `bounce<k-1>`, and `bounce<k>plus`.
+pub fn bounces(k: u32) -> Vec<AovSpec> {
+    let k = k.clamp(1, 63);
+    let mut out = vec![AovSpec::new("bounce0", "C[<L.>O]")];
+    out.extend((1..k).map(|i| AovSpec::new(format!("bounce{i}"), format!("C[DS]{{{i}}}[<L.>O]"))));
+    out.push(AovSpec::new(format!("bounce{k}plus"), format!("C[DS]{{{k},}}[<L.>O]")));
+    out
+}
+
+/// The name of AOV `aov`'s part for light group `group` (`None`: the default group of
+/// lights without a group, and glowing objects).
+pub fn split_name(aov: &str, group: Option<&str>) -> String {
+    match group {
+        Some(g) => format!("{aov}_{g}"),
+        None => format!("{aov}__default"),
+    }
+}
+
+/// Beauty split per light group as LPEs: `beauty_<group>` for each group, and
+/// `beauty__default` for lights without a group (and glowing objects). The renderer's
+/// own split (`AovSpec::split`) routes by light instead and needs no extra rules; this
+/// form is for other renderers and for checking one against the other.
 pub fn light_group_split(groups: &[String]) -> Vec<AovSpec> {
     let mut out: Vec<AovSpec> = groups
         .iter()

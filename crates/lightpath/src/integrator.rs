@@ -5,8 +5,8 @@
 //! complementary weight, emission through `O`. A dead automaton state ends the path.
 
 use crate::film::{Film, SampleAccumulator};
-use crate::geometry::{Hit, Ray};
-use crate::light::luminance;
+use crate::geometry::{Hit, Prim, Ray, Visibility};
+use crate::light::{luminance, LightShape};
 use crate::material::Shading;
 use crate::sampling::{power_heuristic, Rng};
 use crate::scene::{DataLobe, Scene};
@@ -18,10 +18,19 @@ use std::sync::atomic::{AtomicU64, Ordering};
 /// How a contribution reached the camera: decides what prefixed AOVs receive.
 #[derive(Clone, Copy, Debug)]
 enum Via {
-    /// Emission found by a ray; `light_sampled` if light sampling also covered it.
-    Hit { light_sampled: bool },
+    /// Emission found by a ray. `light_sampled`: light sampling covers it too (so it
+    /// carries an MIS weight); `light_after_scatter`: a light reached after a scatter,
+    /// which `unoccluded` and `shadows` AOVs take from light samples (or, behind a delta
+    /// lobe, from the lights-only test) instead.
+    Hit {
+        light_sampled: bool,
+        light_after_scatter: bool,
+    },
     /// A light sample, with its shadow-ray result.
     LightSample { visible: bool },
+    /// A delta lobe's direction tested against the lights alone (for `unoccluded` and
+    /// `shadows` AOVs only), and whether the real ray was blocked before the light.
+    LightsOnly { occluded: bool },
     /// A user (data) lobe.
     Data,
 }
@@ -36,6 +45,8 @@ struct Route {
     overwrite: bool,
     noclamp: bool,
     noinfinitecheck: bool,
+    /// First part of this AOV's light-group split, or `u32::MAX`.
+    split_base: u32,
 }
 
 #[derive(Clone, Debug, Default)]
@@ -59,12 +70,24 @@ pub struct RenderOptions {
 struct Tracer<'a> {
     scene: &'a Scene,
     routes: Vec<Route>,
+    /// Split part of glowing objects and of lights without a group.
+    default_part: u32,
 }
 
 struct PathCounters {
     rays: u64,
     nonfinite: u64,
     holdout: bool,
+}
+
+/// What one contribution carries besides its value.
+#[derive(Clone, Copy)]
+struct Origin {
+    via: Via,
+    /// Scattering events before the light (for direct/indirect clamping).
+    scatters: u32,
+    /// The light-group part it belongs to in split AOVs.
+    part: u32,
 }
 
 impl<'a> Tracer<'a> {
@@ -80,14 +103,15 @@ impl<'a> Tracer<'a> {
                 overwrite: a.flags.contains(Prefix::Overwrite),
                 noclamp: a.flags.contains(Prefix::NoClamp),
                 noinfinitecheck: a.flags.contains(Prefix::NoInfiniteCheck),
+                split_base: a.split_base.unwrap_or(u32::MAX),
             })
             .collect();
-        Tracer { scene, routes }
+        Tracer { scene, routes, default_part: scene.light_groups.len() as u32 }
     }
 
     /// Adds `throughput × local × weight` to every AOV whose rule accepts `state`.
-    #[allow(clippy::too_many_arguments)]
     #[inline]
+    #[allow(clippy::too_many_arguments)]
     fn contribute(
         &self,
         acc: &mut SampleAccumulator,
@@ -96,19 +120,14 @@ impl<'a> Tracer<'a> {
         throughput: Vec3A,
         local: Vec3A,
         mis: f32,
-        via: Via,
-        scatters: u32,
+        origin: Origin,
     ) {
         let rules = self.scene.automaton.accepting(state);
         if rules.is_empty() {
             return;
         }
         let settings = &self.scene.settings;
-        let clamp = if scatters <= 1 {
-            settings.clamp_direct
-        } else {
-            settings.clamp_indirect
-        };
+        let clamp = if origin.scatters <= 1 { settings.clamp_direct } else { settings.clamp_indirect };
         let mut dropped = false;
         for rule in rules {
             let k = rule.0 as usize;
@@ -116,12 +135,12 @@ impl<'a> Tracer<'a> {
             if r.holdouts != counters.holdout {
                 continue;
             }
-            let weight = match via {
-                Via::Hit { light_sampled } => {
-                    if r.shadows || (r.unoccluded && light_sampled) {
+            let weight = match origin.via {
+                Via::Hit { light_sampled, light_after_scatter } => {
+                    if r.shadows || (r.unoccluded && light_after_scatter) {
                         continue;
                     }
-                    if r.unoccluded {
+                    if r.unoccluded || !light_sampled {
                         1.0
                     } else {
                         mis
@@ -141,13 +160,16 @@ impl<'a> Tracer<'a> {
                         continue;
                     }
                 }
+                Via::LightsOnly { occluded } => {
+                    if r.unoccluded || (r.shadows && occluded) {
+                        1.0
+                    } else {
+                        continue;
+                    }
+                }
                 Via::Data => 1.0,
             };
-            let mut v = if r.nothruput {
-                local
-            } else {
-                throughput * local
-            } * weight;
+            let mut v = if r.nothruput { local } else { throughput * local } * weight;
             if !r.noinfinitecheck && !v.is_finite() {
                 dropped = true;
                 continue;
@@ -159,27 +181,50 @@ impl<'a> Tracer<'a> {
                 }
             }
             acc.add(k, v, r.overwrite);
+            if r.split_base != u32::MAX {
+                acc.add((r.split_base + origin.part) as usize, v, r.overwrite);
+            }
         }
         counters.nonfinite += dropped as u64;
     }
 
     fn spawn(&self, hit: &Hit, dir: Vec3A, tmax: f32) -> Ray {
         let side = if dir.dot(hit.ng) >= 0.0 { 1.0 } else { -1.0 };
-        Ray {
-            origin: hit.p + hit.ng * (self.scene.epsilon * side),
-            dir,
-            tmax,
+        Ray { origin: hit.p + hit.ng * (self.scene.epsilon * side), dir, tmax }
+    }
+
+    /// The nearest light surface along `ray`, ignoring everything else: (light, t,
+    /// normal). For `unoccluded` AOVs behind delta lobes.
+    fn nearest_light(&self, ray: &Ray) -> Option<(usize, f32, Vec3A)> {
+        let mut best: Option<(usize, f32, Vec3A)> = None;
+        for (li, light) in self.scene.lights.iter().enumerate() {
+            let tmax = best.map_or(f32::INFINITY, |b| b.1);
+            match &light.shape {
+                LightShape::Triangles { prims, .. } => {
+                    for p in prims {
+                        let t = p.intersect(ray.origin, ray.dir, 0.0, tmax);
+                        if t < best.map_or(f32::INFINITY, |b| b.1) {
+                            if let Prim::Triangle { e1, e2, .. } = p {
+                                best = Some((li, t, e1.cross(*e2).normalize()));
+                            }
+                        }
+                    }
+                }
+                LightShape::Sphere { center, radius } => {
+                    let sphere = Prim::Sphere { center: *center, radius: *radius };
+                    let t = sphere.intersect(ray.origin, ray.dir, 0.0, tmax);
+                    if t.is_finite() {
+                        best = Some((li, t, (ray.origin + ray.dir * t - *center) / *radius));
+                    }
+                }
+                _ => {}
+            }
         }
+        best
     }
 
     /// Traces one camera path; returns its alpha.
-    fn trace(
-        &self,
-        mut ray: Ray,
-        rng: &mut Rng,
-        acc: &mut SampleAccumulator,
-        counters: &mut PathCounters,
-    ) -> f32 {
+    fn trace(&self, mut ray: Ray, rng: &mut Rng, acc: &mut SampleAccumulator, counters: &mut PathCounters) -> f32 {
         let scene = self.scene;
         let a = &scene.automaton;
         let settings = &scene.settings;
@@ -187,61 +232,42 @@ impl<'a> Tracer<'a> {
         let mut throughput = Vec3A::ONE;
         let mut eta_scale = 1.0f32;
         let (mut prev_p, mut prev_pdf, mut prev_delta) = (ray.origin, 0.0f32, true);
+        let mut prev_object = u32::MAX;
         let (mut diffuse, mut specular) = (0u32, 0u32);
         let mut alpha = 0.0;
         let mut depth = 0u32;
         counters.holdout = false;
-        // Camera rays pass through lights that are invisible to the camera.
-        let mut passes = 0;
+        let lit = |object: u32, light: u32| {
+            object == u32::MAX || !scene.objects[object as usize].unlit_by.contains(&light)
+        };
         loop {
             counters.rays += 1;
-            let Some(hit) = scene.accel.intersect(&ray, 0.0) else {
+            let mask = if depth == 0 { Visibility::CAMERA } else { Visibility::INDIRECT };
+            let Some(hit) = scene.accel.intersect(&ray, 0.0, mask) else {
                 for &li in &scene.escape_lights {
                     let light = &scene.lights[li as usize];
                     let le = light.emitted_escaped(ray.dir);
-                    if le == Vec3A::ZERO {
+                    if le == Vec3A::ZERO || !lit(prev_object, li) {
                         continue;
                     }
                     let (l_class, o_class) = scene.light_classes[li as usize];
+                    let part = scene.light_parts[li as usize];
                     if depth == 0 {
                         if light.camera_visible {
                             let s = a.step(state, o_class);
-                            self.contribute(
-                                acc,
-                                counters,
-                                s,
-                                throughput,
-                                le,
-                                1.0,
-                                Via::Hit {
-                                    light_sampled: false,
-                                },
-                                0,
-                            );
+                            let via = Via::Hit { light_sampled: false, light_after_scatter: false };
+                            self.contribute(acc, counters, s, throughput, le, 1.0, Origin { via, scatters: 0, part });
                         }
                     } else {
                         let s = a.step(state, l_class);
                         let w = if prev_delta {
                             1.0
                         } else {
-                            power_heuristic(
-                                prev_pdf,
-                                scene.light_select.pmf(li as usize)
-                                    * light.pdf_hit(prev_p, ray.dir, f32::INFINITY, Vec3A::ZERO),
-                            )
+                            let light_pdf = light.pdf_hit(prev_p, ray.dir, f32::INFINITY, Vec3A::ZERO);
+                            power_heuristic(prev_pdf, scene.light_select.pmf(li as usize) * light_pdf)
                         };
-                        self.contribute(
-                            acc,
-                            counters,
-                            s,
-                            throughput,
-                            le,
-                            w,
-                            Via::Hit {
-                                light_sampled: !prev_delta,
-                            },
-                            depth,
-                        );
+                        let via = Via::Hit { light_sampled: !prev_delta, light_after_scatter: true };
+                        self.contribute(acc, counters, s, throughput, le, w, Origin { via, scatters: depth, part });
                     }
                 }
                 break;
@@ -255,80 +281,38 @@ impl<'a> Tracer<'a> {
             // Emission arriving along the ray.
             if let Some(li) = obj.light {
                 let light = &scene.lights[li as usize];
-                if depth == 0 && !light.camera_visible {
-                    passes += 1;
-                    if passes > 16 {
-                        break;
-                    }
-                    ray = self.spawn(&hit, ray.dir, f32::INFINITY);
-                    alpha = 0.0;
-                    continue;
-                }
                 let le = light.emitted_at(hit.ng, ray.dir);
-                if le != Vec3A::ZERO {
+                if le != Vec3A::ZERO && lit(prev_object, li) {
                     let (l_class, o_class) = scene.light_classes[li as usize];
+                    let part = scene.light_parts[li as usize];
                     if depth == 0 {
                         let s = a.step(state, o_class);
-                        self.contribute(
-                            acc,
-                            counters,
-                            s,
-                            throughput,
-                            le,
-                            1.0,
-                            Via::Hit {
-                                light_sampled: false,
-                            },
-                            0,
-                        );
+                        let via = Via::Hit { light_sampled: false, light_after_scatter: false };
+                        self.contribute(acc, counters, s, throughput, le, 1.0, Origin { via, scatters: 0, part });
                     } else {
                         let s = a.step(state, l_class);
                         let w = if prev_delta {
                             1.0
                         } else {
-                            power_heuristic(
-                                prev_pdf,
-                                scene.light_select.pmf(li as usize)
-                                    * light.pdf_hit(prev_p, ray.dir, hit.t, hit.ng),
-                            )
+                            let light_pdf = light.pdf_hit(prev_p, ray.dir, hit.t, hit.ng);
+                            power_heuristic(prev_pdf, scene.light_select.pmf(li as usize) * light_pdf)
                         };
-                        self.contribute(
-                            acc,
-                            counters,
-                            s,
-                            throughput,
-                            le,
-                            w,
-                            Via::Hit {
-                                light_sampled: !prev_delta,
-                            },
-                            depth,
-                        );
+                        let via = Via::Hit { light_sampled: !prev_delta, light_after_scatter: true };
+                        self.contribute(acc, counters, s, throughput, le, w, Origin { via, scatters: depth, part });
                     }
                 }
             } else if let Some(glow) = obj.glow_class {
                 let s = a.step(state, glow);
-                self.contribute(
-                    acc,
-                    counters,
-                    s,
-                    throughput,
-                    obj.emission,
-                    1.0,
-                    Via::Hit {
-                        light_sampled: false,
-                    },
-                    depth,
-                );
+                let via = Via::Hit { light_sampled: false, light_after_scatter: false };
+                let origin = Origin { via, scatters: depth, part: self.default_part };
+                self.contribute(acc, counters, s, throughput, obj.emission, 1.0, origin);
             }
 
             // Mitsuba's convention: `max_depth` counts segments; scattering here adds one.
             if depth + 1 >= settings.max_depth {
                 break;
             }
-            let Some(material) = obj.material.map(|m| &scene.materials[m as usize]) else {
-                break;
-            };
+            let Some(material) = obj.material.map(|m| &scene.materials[m as usize]) else { break };
             let bsdf = &material.bsdf;
             let sh = Shading::new(bsdf, hit.ns, hit.ng, -ray.dir);
             if sh.wo.z == 0.0 {
@@ -351,16 +335,8 @@ impl<'a> Tracer<'a> {
                     DataLobe::Normal => sh.frame.n,
                     DataLobe::UserColor => material.user_color.unwrap_or(Vec3A::ZERO),
                 };
-                self.contribute(
-                    acc,
-                    counters,
-                    s2,
-                    throughput,
-                    value,
-                    1.0,
-                    Via::Data,
-                    depth + 1,
-                );
+                let origin = Origin { via: Via::Data, scatters: depth + 1, part: self.default_part };
+                self.contribute(acc, counters, s2, throughput, value, 1.0, origin);
             }
 
             // Light sampling: every non-delta lobe through its own event, then `L`.
@@ -370,9 +346,11 @@ impl<'a> Tracer<'a> {
             if !scene.lights.is_empty() && lobes.iter().any(|l| !l.delta) {
                 let (li, select_pmf, _) = scene.light_select.sample(u_light);
                 let light = &scene.lights[li];
-                if let Some(ls) = light.sample(hit.p, u_point) {
+                let sample = if lit(hit.object, li as u32) { light.sample(hit.p, u_point) } else { None };
+                if let Some(ls) = sample {
                     let wi = sh.frame.to_local(ls.wi);
                     let l_class = scene.light_classes[li].0;
+                    let part = scene.light_parts[li];
                     let light_pdf = select_pmf * ls.pdf;
                     let mut visible: Option<bool> = None;
                     for (k, tag) in lobes.iter().enumerate() {
@@ -391,31 +369,14 @@ impl<'a> Tracer<'a> {
                         if f == Vec3A::ZERO {
                             continue;
                         }
-                        let w = if ls.delta {
-                            1.0
-                        } else {
-                            power_heuristic(light_pdf, lobe_pdf)
-                        };
+                        let w = if ls.delta { 1.0 } else { power_heuristic(light_pdf, lobe_pdf) };
                         let vis = *visible.get_or_insert_with(|| {
                             counters.rays += 1;
-                            let tmax = if ls.dist.is_finite() {
-                                ls.dist - 2.0 * scene.epsilon
-                            } else {
-                                f32::INFINITY
-                            };
-                            tmax <= 0.0
-                                || !scene.accel.occluded(&self.spawn(&hit, ls.wi, tmax), 0.0)
+                            let tmax = if ls.dist.is_finite() { ls.dist - 2.0 * scene.epsilon } else { f32::INFINITY };
+                            tmax <= 0.0 || !scene.accel.occluded(&self.spawn(&hit, ls.wi, tmax), 0.0)
                         });
-                        self.contribute(
-                            acc,
-                            counters,
-                            s_light,
-                            throughput,
-                            f * ls.radiance / light_pdf,
-                            w,
-                            Via::LightSample { visible: vis },
-                            depth + 1,
-                        );
+                        let origin = Origin { via: Via::LightSample { visible: vis }, scatters: depth + 1, part };
+                        self.contribute(acc, counters, s_light, throughput, f * ls.radiance / light_pdf, w, origin);
                     }
                 }
             }
@@ -423,9 +384,7 @@ impl<'a> Tracer<'a> {
             // Continue the path through one sampled lobe.
             let u_lobe = rng.next_f32();
             let u_dir = rng.next_2d();
-            let Some(bs) = bsdf.sample(&sh, u_lobe, u_dir) else {
-                break;
-            };
+            let Some(bs) = bsdf.sample(&sh, u_lobe, u_dir) else { break };
             let tag = lobes[bs.lobe];
             match tag.scatter.class {
                 ScatterClass::Diffuse => {
@@ -450,8 +409,27 @@ impl<'a> Tracer<'a> {
             prev_p = hit.p;
             prev_pdf = bs.pdf;
             prev_delta = bs.delta;
+            prev_object = hit.object;
             ray = self.spawn(&hit, bs.wi, f32::INFINITY);
             depth += 1;
+
+            // Behind a delta lobe, `unoccluded` AOVs see the lights as if nothing else
+            // were there (LPE.md §6).
+            if bs.delta && scene.any_unoccluded {
+                if let Some((li, t, n)) = self.nearest_light(&ray) {
+                    let light = &scene.lights[li];
+                    let le = light.emitted_at(n, ray.dir);
+                    if le != Vec3A::ZERO && lit(hit.object, li as u32) {
+                        counters.rays += 1;
+                        let blocked = Ray { tmax: t - 2.0 * scene.epsilon, ..ray };
+                        let occluded = scene.accel.occluded(&blocked, 0.0);
+                        let s = a.step(state, scene.light_classes[li].0);
+                        let origin = Origin { via: Via::LightsOnly { occluded }, scatters: depth, part: scene.light_parts[li] };
+                        self.contribute(acc, counters, s, throughput, le, 1.0, origin);
+                    }
+                }
+            }
+
             // Russian roulette as Mitsuba does it: from `rr_depth` on, continue with
             // probability max(throughput)·η², at most 0.95.
             let t_max = throughput.max_element();

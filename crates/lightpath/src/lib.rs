@@ -6,6 +6,7 @@
 
 pub mod aov;
 pub mod camera;
+pub mod comp;
 pub mod film;
 pub mod geometry;
 pub mod integrator;

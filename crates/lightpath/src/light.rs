@@ -190,9 +190,11 @@ impl Light {
         )
     }
 
-    /// Rough emitted power, for choosing lights in proportion to it.
-    pub fn power(&self, scene_radius: f32) -> f32 {
-        let l = luminance(self.color).max(0.0);
+    /// How often light sampling picks this light: its power at unit colour. The colour
+    /// is left out on purpose, so that changing a light's intensity changes no sampling
+    /// decision and relighting from AOVs equals re-rendering (see `lightpath comp`).
+    pub fn sampling_weight(&self, scene_radius: f32) -> f32 {
+        let l = 1.0;
         match &self.shape {
             LightShape::Triangles {
                 area, two_sided, ..

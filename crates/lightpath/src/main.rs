@@ -25,6 +25,37 @@ enum Command {
     /// Check, match and explain Light Path Expressions.
     #[command(subcommand)]
     Lpe(LpeCommand),
+    /// List an EXR's AOVs with their expressions and check that its partitions
+    /// (standard set, light groups, bounces) add up; exit 1 if one does not.
+    Aovs {
+        exr: PathBuf,
+        /// Largest acceptable relative error of a partition.
+        #[arg(long, default_value_t = 1e-4)]
+        tolerance: f32,
+    },
+    /// Composite AOVs by addition: relight without re-rendering.
+    Comp(CompArgs),
+}
+
+#[derive(clap::Args)]
+struct CompArgs {
+    /// The EXR holding the AOVs.
+    exr: PathBuf,
+    /// A sum of scaled AOVs, e.g. "beauty + 0.5*beauty_key - caustics + (1,0.4,0.4)*caustics".
+    /// Default: the --base AOV.
+    expression: Option<String>,
+    /// Output EXR (beauty as R, G, B, A); a PNG preview is written beside it.
+    #[arg(short, long)]
+    output: PathBuf,
+    /// Rebalance a light group of the split --base AOV: GROUP=GAIN or GROUP=R,G,B
+    /// (repeatable; `_default` for lights without a group).
+    #[arg(long = "gain")]
+    gains: Vec<String>,
+    /// The light-group-split AOV that --gain applies to.
+    #[arg(long, default_value = "beauty")]
+    base: String,
+    #[arg(long, default_value_t = 0.0)]
+    exposure: f32,
 }
 
 #[derive(clap::Args)]
@@ -49,9 +80,16 @@ struct RenderArgs {
     /// Which standard AOVs to add: standard (the table of LPE.md §7) or none.
     #[arg(long = "aovs", default_value = "standard", value_parser = ["standard", "none"])]
     aov_set: String,
-    /// Split beauty per light group (beauty_<group>).
+    /// Split beauty per light group: beauty_<group>, and beauty__default for lights
+    /// without a group.
     #[arg(long)]
     light_groups: bool,
+    /// Also split these AOVs per light group (comma-separated names).
+    #[arg(long, value_delimiter = ',')]
+    light_group_aovs: Vec<String>,
+    /// Add bounce AOVs bounce0 … bounce<K-1> and bounce<K>plus (they sum to beauty).
+    #[arg(long)]
+    bounces: Option<u32>,
     #[arg(long)]
     threads: Option<usize>,
     #[arg(long)]
@@ -103,6 +141,92 @@ fn main() -> ExitCode {
     match cli.command {
         Command::Render(args) => render(args),
         Command::Lpe(cmd) => lpe_command(cmd),
+        Command::Aovs { exr, tolerance } => aovs_command(&exr, tolerance),
+        Command::Comp(args) => comp_command(args),
+    }
+}
+
+fn aovs_command(path: &std::path::Path, tolerance: f32) -> ExitCode {
+    let exr = match output::read_exr(path) {
+        Ok(e) => e,
+        Err(e) => {
+            eprintln!("error: {e}");
+            return ExitCode::FAILURE;
+        }
+    };
+    let mut aovs = exr.aovs();
+    aovs.sort();
+    println!("{}: {}x{}, {} AOVs", path.display(), exr.width, exr.height, aovs.len());
+    for (name, def) in &aovs {
+        println!("  {name:<24} {def}");
+    }
+    let checks = lightpath::comp::check_partitions(&exr);
+    if checks.is_empty() {
+        println!("no known partitions (standard set, light groups, bounces) to check");
+    }
+    let mut ok = true;
+    for c in &checks {
+        let pass = c.max_relative_error <= tolerance;
+        ok &= pass;
+        println!(
+            "{} {} = {}: max relative error {:.2e}",
+            if pass { "ok  " } else { "FAIL" },
+            c.whole,
+            c.parts.join(" + "),
+            c.max_relative_error
+        );
+    }
+    if ok {
+        ExitCode::SUCCESS
+    } else {
+        ExitCode::FAILURE
+    }
+}
+
+fn parse_gain(arg: &str) -> Result<(String, glam::Vec3A), String> {
+    let (group, value) = arg.split_once('=').ok_or("expected GROUP=GAIN")?;
+    let nums: Result<Vec<f32>, _> = value.split(',').map(|v| v.trim().parse::<f32>()).collect();
+    match nums.map_err(|_| format!("bad gain '{value}'"))?.as_slice() {
+        [g] => Ok((group.trim().to_string(), glam::Vec3A::splat(*g))),
+        [r, g, b] => Ok((group.trim().to_string(), glam::Vec3A::new(*r, *g, *b))),
+        _ => Err("a gain is one number or R,G,B".into()),
+    }
+}
+
+fn comp_command(args: CompArgs) -> ExitCode {
+    let run = || -> Result<(), String> {
+        let exr = output::read_exr(&args.exr)?;
+        let mut terms = match &args.expression {
+            Some(e) => lightpath::comp::parse(e).map_err(|m| format!("in the expression {e:?}: {m}"))?,
+            None => vec![],
+        };
+        let gains: Vec<(String, glam::Vec3A)> = args.gains.iter().map(|g| parse_gain(g)).collect::<Result<_, _>>()?;
+        if terms.is_empty() {
+            terms = lightpath::comp::gain_terms(&args.base, &gains);
+        } else if !gains.is_empty() {
+            terms.extend(lightpath::comp::gain_terms(&args.base, &gains).into_iter().skip(1));
+        }
+        let rgb = lightpath::comp::evaluate(&exr, &terms)?;
+        let mut channels: Vec<(String, Vec<f32>)> = ["R", "G", "B"].iter().map(|c| c.to_string()).zip(rgb.iter().cloned()).collect();
+        if let Some(a) = exr.channel("A") {
+            channels.push(("A".into(), a.to_vec()));
+        }
+        let description = args.expression.clone().unwrap_or_default() + &args.gains.iter().map(|g| format!(" --gain {g}")).collect::<String>();
+        let attributes = vec![
+            (format!("{}beauty", output::AOV_ATTRIBUTE_PREFIX), format!("comp of {}: {}", args.exr.display(), description.trim())),
+        ];
+        output::write_channels(&args.output, exr.width, exr.height, channels, &attributes, false)?;
+        let png = args.output.with_extension("png");
+        output::write_png_rgb(&png, exr.width as u32, exr.height as u32, &rgb, args.exposure)?;
+        println!("wrote {} and {}", args.output.display(), png.display());
+        Ok(())
+    };
+    match run() {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("error: {e}");
+            ExitCode::FAILURE
+        }
     }
 }
 
@@ -159,23 +283,32 @@ fn render(args: RenderArgs) -> ExitCode {
             }
         }
     }
+    if let Some(k) = args.bounces {
+        specs.extend(aov::bounces(k));
+    }
+    let mut specs = aov::assemble(specs);
+    let mut split: Vec<String> = args.light_group_aovs.clone();
     if args.light_groups || desc.light_groups {
-        let mut groups: Vec<String> = desc
-            .lights
-            .iter()
-            .flat_map(|l| l.get_ref().groups.clone())
-            .collect();
+        split.push("beauty".into());
+    }
+    for name in &split {
+        match specs.iter_mut().find(|s| &s.name == name) {
+            Some(s) => s.split_light_groups = true,
+            None => {
+                eprintln!("error: --light-group-aovs names '{name}', which is not an AOV of this render");
+                return ExitCode::FAILURE;
+            }
+        }
+    }
+    if !split.is_empty() {
+        let mut groups: Vec<&String> = desc.lights.iter().flat_map(|l| &l.get_ref().groups).collect();
         groups.sort();
         groups.dedup();
-        if groups.len() + specs.len() > 64 {
-            eprintln!(
-                "warning: the light-group split makes {} AOVs",
-                groups.len() + specs.len() + 1
-            );
+        let total = specs.len() + split.len() * (groups.len() + 1);
+        if total > 64 {
+            eprintln!("warning: the light-group split makes {total} AOVs");
         }
-        specs.extend(aov::light_group_split(&groups));
     }
-    let specs = aov::assemble(specs);
     let scene = match lightpath::Scene::build(&src, &desc, &specs) {
         Ok(s) => s,
         Err(e) => {
@@ -218,7 +351,8 @@ fn render(args: RenderArgs) -> ExitCode {
             scene.settings.seed.to_string(),
         ),
     ];
-    if let Err(e) = output::write_exr(&exr_path, &film, &scene.aovs, args.half, &extra) {
+    let derived = output::derived_aovs(&film, &scene.aovs);
+    if let Err(e) = output::write_exr(&exr_path, &film, &scene.aovs, &derived, args.half, &extra) {
         eprintln!("error: {e}");
         return ExitCode::FAILURE;
     }

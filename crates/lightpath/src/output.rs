@@ -51,43 +51,95 @@ fn atomically(
     }
 }
 
+/// An AOV computed from others after rendering (not an LPE).
+pub struct DerivedAov {
+    pub name: String,
+    pub definition: String,
+    pub rgb: [Vec<f32>; 3],
+}
+
+/// The derived AOVs a render's AOVs allow: `shadow = 1 - occluded/unoccluded` (where
+/// unoccluded > 0, else 0) when both holdout AOVs `occluded` and `unoccluded` are there —
+/// the matte a compositor multiplies a background plate by.
+pub fn derived_aovs(film: &Film, aovs: &[Aov]) -> Vec<DerivedAov> {
+    let find = |n: &str| aovs.iter().position(|a| a.name == n);
+    let (Some(occ), Some(unocc)) = (find("occluded"), find("unoccluded")) else {
+        return Vec::new();
+    };
+    if find("shadow").is_some() {
+        return Vec::new();
+    }
+    let rgb = [0, 1, 2].map(|c| {
+        let (o, u) = (film.channel(occ, c), film.channel(unocc, c));
+        o.iter()
+            .zip(&u)
+            .map(|(o, u)| if *u > 0.0 { (1.0 - o / u).clamp(0.0, 1.0) } else { 0.0 })
+            .collect()
+    });
+    vec![DerivedAov {
+        name: "shadow".into(),
+        definition: "derived: 1 - occluded/unoccluded".into(),
+        rgb,
+    }]
+}
+
 pub fn write_exr(
     path: &Path,
     film: &Film,
     aovs: &[Aov],
+    derived: &[DerivedAov],
     half: bool,
     extra: &[(String, String)],
 ) -> std::result::Result<(), String> {
-    let samples = |v: Vec<f32>| {
-        if half {
-            FlatSamples::F16(v.into_iter().map(f16::from_f32).collect())
-        } else {
-            FlatSamples::F32(v)
-        }
-    };
     let mut channels = Vec::new();
+    let mut attributes = Vec::new();
     for (k, aov) in aovs.iter().enumerate() {
         for (c, name) in channel_names(&aov.name).into_iter().enumerate() {
-            channels.push(AnyChannel::new(name.as_str(), samples(film.channel(k, c))));
+            channels.push((name, film.channel(k, c)));
         }
+        attributes.push((format!("{AOV_ATTRIBUTE_PREFIX}{}", aov.name), aov.definition.clone()));
     }
-    channels.push(AnyChannel::new("A", samples(film.alpha())));
-    let mut attributes = LayerAttributes::default();
-    for aov in aovs {
-        attributes.other.insert(
-            Text::from(format!("{AOV_ATTRIBUTE_PREFIX}{}", aov.name).as_str()),
-            AttributeValue::Text(Text::from(aov.definition.as_str())),
-        );
+    for d in derived {
+        for (name, values) in channel_names(&d.name).into_iter().zip(d.rgb.iter()) {
+            channels.push((name, values.clone()));
+        }
+        attributes.push((format!("{AOV_ATTRIBUTE_PREFIX}{}", d.name), d.definition.clone()));
     }
-    for (k, v) in extra {
-        attributes.other.insert(
+    channels.push(("A".into(), film.alpha()));
+    attributes.extend(extra.iter().cloned());
+    write_channels(path, film.width as usize, film.height as usize, channels, &attributes, half)
+}
+
+/// Writes named float channels and text attributes as one single-part EXR, atomically.
+pub fn write_channels(
+    path: &Path,
+    width: usize,
+    height: usize,
+    channels: Vec<(String, Vec<f32>)>,
+    attributes: &[(String, String)],
+    half: bool,
+) -> std::result::Result<(), String> {
+    let channels: Vec<AnyChannel<FlatSamples>> = channels
+        .into_iter()
+        .map(|(name, v)| {
+            let samples = if half {
+                FlatSamples::F16(v.into_iter().map(f16::from_f32).collect())
+            } else {
+                FlatSamples::F32(v)
+            };
+            AnyChannel::new(name.as_str(), samples)
+        })
+        .collect();
+    let mut layer_attributes = LayerAttributes::default();
+    for (k, v) in attributes {
+        layer_attributes.other.insert(
             Text::from(k.as_str()),
             AttributeValue::Text(Text::from(v.as_str())),
         );
     }
     let layer = Layer::new(
-        (film.width as usize, film.height as usize),
-        attributes,
+        (width, height),
+        layer_attributes,
         Encoding::SMALL_LOSSLESS,
         AnyChannels::sort(SmallVec::from_vec(channels)),
     );
@@ -171,27 +223,26 @@ fn srgb(linear: f32) -> u8 {
 }
 
 /// A PNG of AOV `k` in sRGB, scaled by 2^`exposure`.
-pub fn write_png(
+pub fn write_png(path: &Path, film: &Film, k: usize, exposure: f32) -> std::result::Result<(), String> {
+    let rgb = [film.channel(k, 0), film.channel(k, 1), film.channel(k, 2)];
+    write_png_rgb(path, film.width, film.height, &rgb, exposure)
+}
+
+/// A PNG of three linear planes in sRGB, scaled by 2^`exposure`.
+pub fn write_png_rgb(
     path: &Path,
-    film: &Film,
-    k: usize,
+    width: u32,
+    height: u32,
+    rgb: &[Vec<f32>; 3],
     exposure: f32,
 ) -> std::result::Result<(), String> {
     let scale = 2f32.powf(exposure);
-    let (r, g, b) = (film.channel(k, 0), film.channel(k, 1), film.channel(k, 2));
-    let mut bytes = Vec::with_capacity(r.len() * 3);
-    for i in 0..r.len() {
-        bytes.extend_from_slice(&[srgb(r[i] * scale), srgb(g[i] * scale), srgb(b[i] * scale)]);
+    let mut bytes = Vec::with_capacity(rgb[0].len() * 3);
+    for i in 0..rgb[0].len() {
+        bytes.extend_from_slice(&[srgb(rgb[0][i] * scale), srgb(rgb[1][i] * scale), srgb(rgb[2][i] * scale)]);
     }
     atomically(path, |tmp| {
-        image::save_buffer_with_format(
-            tmp,
-            &bytes,
-            film.width,
-            film.height,
-            image::ColorType::Rgb8,
-            image::ImageFormat::Png,
-        )
-        .map_err(|e| format!("cannot write {}: {e}", path.display()))
+        image::save_buffer_with_format(tmp, &bytes, width, height, image::ColorType::Rgb8, image::ImageFormat::Png)
+            .map_err(|e| format!("cannot write {}: {e}", path.display()))
     })
 }

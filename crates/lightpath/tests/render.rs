@@ -338,7 +338,7 @@ fn exr_round_trips_channels_values_and_expressions() {
     let dir = std::env::temp_dir().join(format!("lightpath-exr-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     let path = dir.join("t.exr");
-    lightpath::output::write_exr(&path, &film, &scene.aovs, false, &[]).unwrap();
+    lightpath::output::write_exr(&path, &film, &scene.aovs, &[], false, &[]).unwrap();
     let back = lightpath::output::read_exr(&path).unwrap();
     let mut names: Vec<&str> = back.channels.iter().map(|(n, _)| n.as_str()).collect();
     names.sort();

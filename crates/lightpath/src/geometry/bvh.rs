@@ -24,12 +24,30 @@ pub struct Accel {
     objects: Vec<u32>,
     /// Per-vertex shading normals of triangles that have them, three per entry.
     normals: Vec<[Vec3A; 3]>,
+    /// Which kinds of ray see each primitive (`Visibility` bits), in the same order.
+    visibility: Vec<u8>,
     empty: bool,
+}
+
+/// Ray kinds, as bits: an object can be hidden from each (trace sets).
+pub struct Visibility;
+
+impl Visibility {
+    pub const CAMERA: u8 = 1;
+    pub const INDIRECT: u8 = 2;
+    pub const SHADOW: u8 = 4;
+    pub const ALL: u8 = 7;
 }
 
 impl Accel {
     /// Builds the BVH. `prims[i]` belongs to object `objects[i]`.
-    pub fn build(prims: Vec<Prim>, objects: Vec<u32>, normals: Vec<[Vec3A; 3]>) -> Accel {
+    /// `visibility[i]` says which ray kinds see it.
+    pub fn build(
+        prims: Vec<Prim>,
+        objects: Vec<u32>,
+        normals: Vec<[Vec3A; 3]>,
+        visibility: Vec<u8>,
+    ) -> Accel {
         if prims.is_empty() {
             let dummy = [Bounded(Aabb::new(Vec3A::ZERO, Vec3A::ZERO))];
             let bvh = build_cwbvh(
@@ -42,6 +60,7 @@ impl Accel {
                 prims,
                 objects,
                 normals,
+                visibility,
                 empty: true,
             };
         }
@@ -61,12 +80,14 @@ impl Accel {
         let order = std::mem::take(&mut bvh.primitive_indices);
         let prims: Vec<Prim> = order.iter().map(|&i| prims[i as usize]).collect();
         let objects: Vec<u32> = order.iter().map(|&i| objects[i as usize]).collect();
+        let visibility: Vec<u8> = order.iter().map(|&i| visibility[i as usize]).collect();
         bvh.primitive_indices = (0..order.len() as u32).collect();
         Accel {
             bvh,
             prims,
             objects,
             normals,
+            visibility,
             empty: false,
         }
     }
@@ -79,15 +100,18 @@ impl Accel {
         self.objects[prim as usize]
     }
 
-    /// The nearest hit along the ray.
-    pub fn intersect(&self, ray: &Ray, tmin: f32) -> Option<Hit> {
+    /// The nearest hit along the ray among primitives visible to rays of kind `mask`.
+    pub fn intersect(&self, ray: &Ray, tmin: f32, mask: u8) -> Option<Hit> {
         if self.empty {
             return None;
         }
         let bray = BvhRay::new(ray.origin, ray.dir, tmin, ray.tmax);
         let mut hit = RayHit::none();
-        let prims = &self.prims;
+        let (prims, vis) = (&self.prims, &self.visibility);
         let found = self.bvh.ray_traverse(bray, &mut hit, |r, i| {
+            if vis[i] & mask == 0 {
+                return f32::INFINITY;
+            }
             prims[i].intersect(r.origin, r.direction, r.tmin, r.tmax)
         });
         if !found {
@@ -96,14 +120,17 @@ impl Accel {
         Some(self.surface(ray, hit.primitive_id, hit.t))
     }
 
-    /// Is anything between the origin and `tmax`?
+    /// Is anything that casts shadows between the origin and `tmax`?
     pub fn occluded(&self, ray: &Ray, tmin: f32) -> bool {
         if self.empty {
             return false;
         }
         let bray = BvhRay::new(ray.origin, ray.dir, tmin, ray.tmax);
-        let prims = &self.prims;
+        let (prims, vis) = (&self.prims, &self.visibility);
         !self.bvh.ray_traverse_miss(bray, |r, i| {
+            if vis[i] & Visibility::SHADOW == 0 {
+                return f32::INFINITY;
+            }
             prims[i].intersect(r.origin, r.direction, r.tmin, r.tmax)
         })
     }

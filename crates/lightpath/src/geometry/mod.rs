@@ -4,7 +4,7 @@
 mod bvh;
 pub mod shapes;
 
-pub use bvh::Accel;
+pub use bvh::{Accel, Visibility};
 
 use glam::Vec3A;
 

@@ -225,6 +225,13 @@ pub struct ObjectDesc {
     pub emission: Option<[f32; 3]>,
     #[serde(default)]
     pub holdout: bool,
+    /// Trace sets: which rays see this object.
+    #[serde(default = "yes")]
+    pub visible_camera: bool,
+    #[serde(default = "yes")]
+    pub visible_indirect: bool,
+    #[serde(default = "yes")]
+    pub casts_shadows: bool,
 }
 
 #[derive(Debug, Deserialize)]
@@ -262,6 +269,11 @@ pub struct LightDesc {
     /// Dome: an equirectangular EXR, relative to the scene file.
     pub map: Option<Spanned<String>>,
     pub segments: Option<u32>,
+    /// Light linking: only objects in these lpegroups are lit (default: all) …
+    pub include: Option<Vec<String>>,
+    /// … except objects in these.
+    #[serde(default)]
+    pub exclude: Vec<String>,
 }
 
 fn one() -> f32 {

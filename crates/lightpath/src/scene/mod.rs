@@ -8,7 +8,7 @@ pub mod desc;
 use crate::aov::AovSpec;
 use crate::camera::{Camera, FovAxis, PixelFilter};
 use crate::geometry::shapes::{self, ShapePrims};
-use crate::geometry::{Accel, Prim};
+use crate::geometry::{Accel, Prim, Visibility};
 use crate::light::{EnvMap, Light, LightShape};
 use crate::material::{roughness_to_alpha, Bsdf};
 use crate::sampling::Distribution1D;
@@ -129,6 +129,8 @@ pub struct Object {
     pub emission: Vec3A,
     pub light: Option<u32>,
     pub holdout: bool,
+    /// Lights that do not illuminate this object (light linking).
+    pub unlit_by: Vec<u32>,
     /// Class of each BSDF lobe's event on this object.
     pub lobe_classes: Vec<ClassId>,
     /// Data lobes with their classes.
@@ -156,6 +158,11 @@ pub struct Aov {
     pub definition: String,
     pub expression: String,
     pub flags: Flags,
+    /// For a rule's AOV split per light group: the index of its first part (one per
+    /// group, then the default group).
+    pub split_base: Option<u32>,
+    /// For a part of a split: the AOV it is a part of.
+    pub part_of: Option<u32>,
 }
 
 pub struct Scene {
@@ -179,6 +186,12 @@ pub struct Scene {
     pub scene_radius: f32,
     /// Ray offset against self-intersection, scaled to the scene.
     pub epsilon: f32,
+    /// Light group names, sorted; split AOV parts follow this order, then the default.
+    pub light_groups: Vec<String>,
+    /// Each light's part in split AOVs (its first group, or the default part).
+    pub light_parts: Vec<u32>,
+    /// True if any rule has the `unoccluded` or `shadows` prefix.
+    pub any_unoccluded: bool,
 }
 
 fn v3(a: [f32; 3]) -> Vec3A {
@@ -455,7 +468,10 @@ impl Scene {
                 .unwrap_or_else(|| format!("object{}", objects.len()));
             let shape = object_shape(src, o, span.clone())?;
             let id = objects.len() as u32;
-            geometry.add(id, shape);
+            let visibility = (o.visible_camera as u8 * Visibility::CAMERA)
+                | (o.visible_indirect as u8 * Visibility::INDIRECT)
+                | (o.casts_shadows as u8 * Visibility::SHADOW);
+            geometry.add(id, shape, visibility);
             objects.push(Object {
                 groups: o.lpegroups.clone().unwrap_or_else(|| vec![name.clone()]),
                 name,
@@ -463,6 +479,7 @@ impl Scene {
                 emission: o.emission.map(v3).unwrap_or(Vec3A::ZERO),
                 light: None,
                 holdout: o.holdout,
+                unlit_by: Vec::new(),
                 lobe_classes: Vec::new(),
                 data_lobes: Vec::new(),
                 glow_class: None,
@@ -476,7 +493,8 @@ impl Scene {
             let light_id = lights.len() as u32;
             let object = surface.map(|sp| {
                 let id = objects.len() as u32;
-                geometry.add(id, sp);
+                let camera = if l.camera_visible { Visibility::CAMERA } else { 0 };
+                geometry.add(id, sp, camera | Visibility::INDIRECT | Visibility::SHADOW);
                 let name = l.name.clone().unwrap_or_else(|| format!("light{light_id}"));
                 objects.push(Object {
                     groups: if l.groups.is_empty() {
@@ -489,6 +507,7 @@ impl Scene {
                     emission: Vec3A::ZERO,
                     light: Some(light_id),
                     holdout: false,
+                    unlit_by: Vec::new(),
                     lobe_classes: Vec::new(),
                     data_lobes: Vec::new(),
                     glow_class: None,
@@ -507,6 +526,20 @@ impl Scene {
             });
         }
         let accel = geometry.build();
+        // Light linking, resolved per object once.
+        for (light_id, l) in desc.lights.iter().enumerate() {
+            let l = l.get_ref();
+            let lit = |o: &Object| {
+                let any = |set: &[String]| o.groups.iter().any(|g| set.contains(g));
+                l.include.as_deref().is_none_or(any) && !any(&l.exclude)
+            };
+            let light_id = light_id as u32;
+            for o in objects.iter_mut().filter(|o| o.light != Some(light_id)) {
+                if !lit(o) {
+                    o.unlit_by.push(light_id);
+                }
+            }
+        }
 
         // Scene size, for ray offsets and the power of infinite lights.
         let (mut lo, mut hi) = (Vec3A::splat(f32::INFINITY), Vec3A::splat(f32::NEG_INFINITY));
@@ -544,9 +577,9 @@ impl Scene {
                 )
             })
             .collect();
-        // Lights are chosen in proportion to power, with a floor so dim lights still get
-        // samples.
-        let powers: Vec<f32> = lights.iter().map(|l| l.power(scene_radius)).collect();
+        // Lights are chosen in proportion to their power at unit colour, with a floor so
+        // small lights still get samples.
+        let powers: Vec<f32> = lights.iter().map(|l| l.sampling_weight(scene_radius)).collect();
         let total: f32 = powers.iter().sum();
         let weights: Vec<f32> = powers
             .iter()
@@ -618,7 +651,20 @@ impl Scene {
             clamp_indirect: r.clamp_indirect,
             seed: r.seed,
         };
-        let aovs = automaton
+        let mut light_groups: Vec<String> = lights.iter().flat_map(|l| l.groups.iter().cloned()).collect();
+        light_groups.sort();
+        light_groups.dedup();
+        let default_part = light_groups.len() as u32;
+        let light_parts = lights
+            .iter()
+            .map(|l| {
+                l.groups
+                    .first()
+                    .and_then(|g| light_groups.iter().position(|x| x == g))
+                    .map_or(default_part, |p| p as u32)
+            })
+            .collect();
+        let mut out: Vec<Aov> = automaton
             .rules()
             .iter()
             .zip(aovs)
@@ -627,8 +673,37 @@ impl Scene {
                 definition: spec.definition.clone(),
                 expression: rule.expression.clone(),
                 flags: rule.flags,
+                split_base: None,
+                part_of: None,
             })
             .collect();
+        for (k, spec) in aovs.iter().enumerate() {
+            if !spec.split_light_groups {
+                continue;
+            }
+            out[k].split_base = Some(out.len() as u32);
+            let parts: Vec<Option<&str>> =
+                light_groups.iter().map(|g| Some(g.as_str())).chain([None]).collect();
+            for g in parts {
+                let base = &out[k];
+                out.push(Aov {
+                    name: crate::aov::split_name(&spec.name, g),
+                    definition: format!(
+                        "{} ({})",
+                        spec.definition,
+                        g.map_or("lights without a group".to_string(), |g| format!("light group '{g}'"))
+                    ),
+                    expression: base.expression.clone(),
+                    flags: base.flags,
+                    split_base: None,
+                    part_of: Some(k as u32),
+                });
+            }
+        }
+        let any_unoccluded = out
+            .iter()
+            .any(|a| a.flags.contains(lpe::Prefix::Unoccluded) || a.flags.contains(lpe::Prefix::Shadows));
+        let aovs = out;
         Ok(Scene {
             accel,
             objects,
@@ -646,6 +721,9 @@ impl Scene {
             aovs,
             scene_radius,
             epsilon,
+            light_groups,
+            light_parts,
+            any_unoccluded,
         })
     }
 }
@@ -656,10 +734,11 @@ struct GeometryBuilder {
     prims: Vec<Prim>,
     objects: Vec<u32>,
     normals: Vec<[Vec3A; 3]>,
+    visibility: Vec<u8>,
 }
 
 impl GeometryBuilder {
-    fn add(&mut self, object: u32, mut shape: ShapePrims) {
+    fn add(&mut self, object: u32, mut shape: ShapePrims, visibility: u8) {
         for (i, n) in shape.normals.drain(..) {
             if let Prim::Triangle { normals, .. } = &mut shape.prims[i] {
                 *normals = self.normals.len() as u32;
@@ -668,11 +747,13 @@ impl GeometryBuilder {
         }
         self.objects
             .extend(std::iter::repeat_n(object, shape.prims.len()));
+        self.visibility
+            .extend(std::iter::repeat_n(visibility, shape.prims.len()));
         self.prims.extend(shape.prims);
     }
 
     fn build(self) -> Accel {
-        Accel::build(self.prims, self.objects, self.normals)
+        Accel::build(self.prims, self.objects, self.normals, self.visibility)
     }
 }
 
