@@ -32,7 +32,8 @@ for i in $(seq 1 "$repeats"); do
   "$lightpath" render cornell-classic --quiet --aovs none --spp "$spp" --threads 2 -o "$out/lightpath.exr" \
     | sed -n "s/^.*s, \([0-9.]*\) M samples\/s.*/RESULT run=$i variant=lightpath Msamples_per_s=\1/p"
   "$lightpath" render cornell-classic --quiet --spp "$spp" --threads 2 --light-groups \
-      --light-group-aovs directDiffuse,indirectDiffuse -o "$out/lightpath_aovs.exr" \
+      --bounces 3 --light-group-aovs emission,diffuse,specular,directDiffuse,indirectDiffuse,directSpecular,indirectSpecular,subsurface,transmissive,albedo \
+      -o "$out/lightpath_aovs.exr" \
     | sed -n "s/^.*s, \([0-9.]*\) M samples\/s.*/RESULT run=$i variant=lightpath_40aovs Msamples_per_s=\1/p"
 done | tee "$out/results.txt"
 

@@ -76,7 +76,10 @@ pub fn bounces(k: u32) -> Vec<AovSpec> {
     let k = k.clamp(1, 63);
     let mut out = vec![AovSpec::new("bounce0", "C[<L.>O]")];
     out.extend((1..k).map(|i| AovSpec::new(format!("bounce{i}"), format!("C[DS]{{{i}}}[<L.>O]"))));
-    out.push(AovSpec::new(format!("bounce{k}plus"), format!("C[DS]{{{k},}}[<L.>O]")));
+    out.push(AovSpec::new(
+        format!("bounce{k}plus"),
+        format!("C[DS]{{{k},}}[<L.>O]"),
+    ));
     out
 }
 

@@ -13,7 +13,10 @@ pub struct Term {
 
 /// Parses `beauty + 0.5*beauty_key - indirectSpecular + (1,0.4,0.4)*caustics`.
 pub fn parse(expr: &str) -> Result<Vec<Term>, String> {
-    let mut p = Cursor { s: expr.as_bytes(), i: 0 };
+    let mut p = Cursor {
+        s: expr.as_bytes(),
+        i: 0,
+    };
     let mut terms = Vec::new();
     let mut sign = 1.0;
     p.ws();
@@ -25,7 +28,9 @@ pub fn parse(expr: &str) -> Result<Vec<Term>, String> {
     loop {
         p.ws();
         let mut scale = Vec3A::ONE;
-        if p.peek().is_some_and(|c| c.is_ascii_digit() || c == b'.' || c == b'(') {
+        if p.peek()
+            .is_some_and(|c| c.is_ascii_digit() || c == b'.' || c == b'(')
+        {
             scale = p.factor()?;
             p.ws();
             if !p.eat(b'*') {
@@ -41,7 +46,10 @@ pub fn parse(expr: &str) -> Result<Vec<Term>, String> {
             scale *= p.factor()?;
             p.ws();
         }
-        terms.push(Term { scale: scale * sign, aov });
+        terms.push(Term {
+            scale: scale * sign,
+            aov,
+        });
         match p.peek() {
             None => break,
             Some(b'+') => sign = 1.0,
@@ -80,10 +88,16 @@ impl Cursor<'_> {
     }
     fn number(&mut self) -> Result<f32, String> {
         let start = self.i;
-        while self.peek().is_some_and(|c| c.is_ascii_digit() || matches!(c, b'.' | b'e' | b'E' | b'-' | b'+')) {
+        while self
+            .peek()
+            .is_some_and(|c| c.is_ascii_digit() || matches!(c, b'.' | b'e' | b'E' | b'-' | b'+'))
+        {
             // A sign is part of the number only right after an exponent or at its start.
             let c = self.s[self.i];
-            if matches!(c, b'-' | b'+') && self.i > start && !matches!(self.s[self.i - 1], b'e' | b'E') {
+            if matches!(c, b'-' | b'+')
+                && self.i > start
+                && !matches!(self.s[self.i - 1], b'e' | b'E')
+            {
                 break;
             }
             self.i += 1;
@@ -114,7 +128,10 @@ impl Cursor<'_> {
     }
     fn name(&mut self) -> Result<String, String> {
         let start = self.i;
-        while self.peek().is_some_and(|c| c.is_ascii_alphanumeric() || c == b'_') {
+        while self
+            .peek()
+            .is_some_and(|c| c.is_ascii_alphanumeric() || c == b'_')
+        {
             self.i += 1;
         }
         if self.i == start || self.s[start].is_ascii_digit() {
@@ -155,10 +172,20 @@ pub fn evaluate(exr: &ExrContents, terms: &[Term]) -> Result<[Vec<f32>; 3], Stri
 
 /// Terms that rebalance light groups of a split AOV: `base + Σ (gain − 1) · base_group`.
 pub fn gain_terms(base: &str, gains: &[(String, Vec3A)]) -> Vec<Term> {
-    let mut terms = vec![Term { scale: Vec3A::ONE, aov: base.to_string() }];
+    let mut terms = vec![Term {
+        scale: Vec3A::ONE,
+        aov: base.to_string(),
+    }];
     for (group, gain) in gains {
-        let part = if group == "_default" { crate::aov::split_name(base, None) } else { crate::aov::split_name(base, Some(group)) };
-        terms.push(Term { scale: *gain - Vec3A::ONE, aov: part });
+        let part = if group == "_default" {
+            crate::aov::split_name(base, None)
+        } else {
+            crate::aov::split_name(base, Some(group))
+        };
+        terms.push(Term {
+            scale: *gain - Vec3A::ONE,
+            aov: part,
+        });
     }
     terms
 }
@@ -179,7 +206,13 @@ pub fn check_partitions(exr: &ExrContents) -> Vec<PartitionCheck> {
     let has = |n: &str| aovs.iter().any(|(a, _)| a == n);
     let mut candidates: Vec<(String, Vec<String>)> = Vec::new();
     if has("beauty") && lpe::BEAUTY_PARTITION.iter().all(|n| has(n)) {
-        candidates.push(("beauty".into(), lpe::BEAUTY_PARTITION.iter().map(|s| s.to_string()).collect()));
+        candidates.push((
+            "beauty".into(),
+            lpe::BEAUTY_PARTITION
+                .iter()
+                .map(|s| s.to_string())
+                .collect(),
+        ));
     }
     for (name, _) in &aovs {
         if let Some(whole) = name.strip_suffix("__default") {
@@ -189,13 +222,19 @@ pub fn check_partitions(exr: &ExrContents) -> Vec<PartitionCheck> {
             let prefix = format!("{whole}_");
             let parts: Vec<String> = aovs
                 .iter()
-                .filter(|(n, d)| n.starts_with(&prefix) && (d.contains("(light group '") || d.contains("(lights without a group)")))
+                .filter(|(n, d)| {
+                    n.starts_with(&prefix)
+                        && (d.contains("(light group '") || d.contains("(lights without a group)"))
+                })
                 .map(|(n, _)| n.clone())
                 .collect();
             candidates.push((whole.to_string(), parts));
         }
     }
-    if let Some((plus, _)) = aovs.iter().find(|(n, _)| n.starts_with("bounce") && n.ends_with("plus")) {
+    if let Some((plus, _)) = aovs
+        .iter()
+        .find(|(n, _)| n.starts_with("bounce") && n.ends_with("plus"))
+    {
         if let Ok(k) = plus["bounce".len()..plus.len() - "plus".len()].parse::<u32>() {
             let mut parts: Vec<String> = (0..k).map(|i| format!("bounce{i}")).collect();
             parts.push(plus.clone());
@@ -208,7 +247,13 @@ pub fn check_partitions(exr: &ExrContents) -> Vec<PartitionCheck> {
         .into_iter()
         .filter_map(|(whole, parts)| {
             let w = aov_planes(exr, &whole).ok()?;
-            let terms: Vec<Term> = parts.iter().map(|p| Term { scale: Vec3A::ONE, aov: p.clone() }).collect();
+            let terms: Vec<Term> = parts
+                .iter()
+                .map(|p| Term {
+                    scale: Vec3A::ONE,
+                    aov: p.clone(),
+                })
+                .collect();
             let sum = evaluate(exr, &terms).ok()?;
             let mut worst = 0.0f32;
             for c in 0..3 {
@@ -216,7 +261,11 @@ pub fn check_partitions(exr: &ExrContents) -> Vec<PartitionCheck> {
                     worst = worst.max((s - v).abs() / v.abs().max(1e-3));
                 }
             }
-            Some(PartitionCheck { whole, parts, max_relative_error: worst })
+            Some(PartitionCheck {
+                whole,
+                parts,
+                max_relative_error: worst,
+            })
         })
         .collect()
 }

@@ -106,7 +106,11 @@ impl<'a> Tracer<'a> {
                 split_base: a.split_base.unwrap_or(u32::MAX),
             })
             .collect();
-        Tracer { scene, routes, default_part: scene.light_groups.len() as u32 }
+        Tracer {
+            scene,
+            routes,
+            default_part: scene.light_groups.len() as u32,
+        }
     }
 
     /// Adds `throughput × local × weight` to every AOV whose rule accepts `state`.
@@ -127,7 +131,11 @@ impl<'a> Tracer<'a> {
             return;
         }
         let settings = &self.scene.settings;
-        let clamp = if origin.scatters <= 1 { settings.clamp_direct } else { settings.clamp_indirect };
+        let clamp = if origin.scatters <= 1 {
+            settings.clamp_direct
+        } else {
+            settings.clamp_indirect
+        };
         let mut dropped = false;
         for rule in rules {
             let k = rule.0 as usize;
@@ -136,7 +144,10 @@ impl<'a> Tracer<'a> {
                 continue;
             }
             let weight = match origin.via {
-                Via::Hit { light_sampled, light_after_scatter } => {
+                Via::Hit {
+                    light_sampled,
+                    light_after_scatter,
+                } => {
                     if r.shadows || (r.unoccluded && light_after_scatter) {
                         continue;
                     }
@@ -169,7 +180,11 @@ impl<'a> Tracer<'a> {
                 }
                 Via::Data => 1.0,
             };
-            let mut v = if r.nothruput { local } else { throughput * local } * weight;
+            let mut v = if r.nothruput {
+                local
+            } else {
+                throughput * local
+            } * weight;
             if !r.noinfinitecheck && !v.is_finite() {
                 dropped = true;
                 continue;
@@ -190,7 +205,11 @@ impl<'a> Tracer<'a> {
 
     fn spawn(&self, hit: &Hit, dir: Vec3A, tmax: f32) -> Ray {
         let side = if dir.dot(hit.ng) >= 0.0 { 1.0 } else { -1.0 };
-        Ray { origin: hit.p + hit.ng * (self.scene.epsilon * side), dir, tmax }
+        Ray {
+            origin: hit.p + hit.ng * (self.scene.epsilon * side),
+            dir,
+            tmax,
+        }
     }
 
     /// The nearest light surface along `ray`, ignoring everything else: (light, t,
@@ -211,7 +230,10 @@ impl<'a> Tracer<'a> {
                     }
                 }
                 LightShape::Sphere { center, radius } => {
-                    let sphere = Prim::Sphere { center: *center, radius: *radius };
+                    let sphere = Prim::Sphere {
+                        center: *center,
+                        radius: *radius,
+                    };
                     let t = sphere.intersect(ray.origin, ray.dir, 0.0, tmax);
                     if t.is_finite() {
                         best = Some((li, t, (ray.origin + ray.dir * t - *center) / *radius));
@@ -224,7 +246,13 @@ impl<'a> Tracer<'a> {
     }
 
     /// Traces one camera path; returns its alpha.
-    fn trace(&self, mut ray: Ray, rng: &mut Rng, acc: &mut SampleAccumulator, counters: &mut PathCounters) -> f32 {
+    fn trace(
+        &self,
+        mut ray: Ray,
+        rng: &mut Rng,
+        acc: &mut SampleAccumulator,
+        counters: &mut PathCounters,
+    ) -> f32 {
         let scene = self.scene;
         let a = &scene.automaton;
         let settings = &scene.settings;
@@ -242,7 +270,11 @@ impl<'a> Tracer<'a> {
         };
         loop {
             counters.rays += 1;
-            let mask = if depth == 0 { Visibility::CAMERA } else { Visibility::INDIRECT };
+            let mask = if depth == 0 {
+                Visibility::CAMERA
+            } else {
+                Visibility::INDIRECT
+            };
             let Some(hit) = scene.accel.intersect(&ray, 0.0, mask) else {
                 for &li in &scene.escape_lights {
                     let light = &scene.lights[li as usize];
@@ -255,19 +287,53 @@ impl<'a> Tracer<'a> {
                     if depth == 0 {
                         if light.camera_visible {
                             let s = a.step(state, o_class);
-                            let via = Via::Hit { light_sampled: false, light_after_scatter: false };
-                            self.contribute(acc, counters, s, throughput, le, 1.0, Origin { via, scatters: 0, part });
+                            let via = Via::Hit {
+                                light_sampled: false,
+                                light_after_scatter: false,
+                            };
+                            self.contribute(
+                                acc,
+                                counters,
+                                s,
+                                throughput,
+                                le,
+                                1.0,
+                                Origin {
+                                    via,
+                                    scatters: 0,
+                                    part,
+                                },
+                            );
                         }
                     } else {
                         let s = a.step(state, l_class);
                         let w = if prev_delta {
                             1.0
                         } else {
-                            let light_pdf = light.pdf_hit(prev_p, ray.dir, f32::INFINITY, Vec3A::ZERO);
-                            power_heuristic(prev_pdf, scene.light_select.pmf(li as usize) * light_pdf)
+                            let light_pdf =
+                                light.pdf_hit(prev_p, ray.dir, f32::INFINITY, Vec3A::ZERO);
+                            power_heuristic(
+                                prev_pdf,
+                                scene.light_select.pmf(li as usize) * light_pdf,
+                            )
                         };
-                        let via = Via::Hit { light_sampled: !prev_delta, light_after_scatter: true };
-                        self.contribute(acc, counters, s, throughput, le, w, Origin { via, scatters: depth, part });
+                        let via = Via::Hit {
+                            light_sampled: !prev_delta,
+                            light_after_scatter: true,
+                        };
+                        self.contribute(
+                            acc,
+                            counters,
+                            s,
+                            throughput,
+                            le,
+                            w,
+                            Origin {
+                                via,
+                                scatters: depth,
+                                part,
+                            },
+                        );
                     }
                 }
                 break;
@@ -287,24 +353,64 @@ impl<'a> Tracer<'a> {
                     let part = scene.light_parts[li as usize];
                     if depth == 0 {
                         let s = a.step(state, o_class);
-                        let via = Via::Hit { light_sampled: false, light_after_scatter: false };
-                        self.contribute(acc, counters, s, throughput, le, 1.0, Origin { via, scatters: 0, part });
+                        let via = Via::Hit {
+                            light_sampled: false,
+                            light_after_scatter: false,
+                        };
+                        self.contribute(
+                            acc,
+                            counters,
+                            s,
+                            throughput,
+                            le,
+                            1.0,
+                            Origin {
+                                via,
+                                scatters: 0,
+                                part,
+                            },
+                        );
                     } else {
                         let s = a.step(state, l_class);
                         let w = if prev_delta {
                             1.0
                         } else {
                             let light_pdf = light.pdf_hit(prev_p, ray.dir, hit.t, hit.ng);
-                            power_heuristic(prev_pdf, scene.light_select.pmf(li as usize) * light_pdf)
+                            power_heuristic(
+                                prev_pdf,
+                                scene.light_select.pmf(li as usize) * light_pdf,
+                            )
                         };
-                        let via = Via::Hit { light_sampled: !prev_delta, light_after_scatter: true };
-                        self.contribute(acc, counters, s, throughput, le, w, Origin { via, scatters: depth, part });
+                        let via = Via::Hit {
+                            light_sampled: !prev_delta,
+                            light_after_scatter: true,
+                        };
+                        self.contribute(
+                            acc,
+                            counters,
+                            s,
+                            throughput,
+                            le,
+                            w,
+                            Origin {
+                                via,
+                                scatters: depth,
+                                part,
+                            },
+                        );
                     }
                 }
             } else if let Some(glow) = obj.glow_class {
                 let s = a.step(state, glow);
-                let via = Via::Hit { light_sampled: false, light_after_scatter: false };
-                let origin = Origin { via, scatters: depth, part: self.default_part };
+                let via = Via::Hit {
+                    light_sampled: false,
+                    light_after_scatter: false,
+                };
+                let origin = Origin {
+                    via,
+                    scatters: depth,
+                    part: self.default_part,
+                };
                 self.contribute(acc, counters, s, throughput, obj.emission, 1.0, origin);
             }
 
@@ -312,7 +418,9 @@ impl<'a> Tracer<'a> {
             if depth + 1 >= settings.max_depth {
                 break;
             }
-            let Some(material) = obj.material.map(|m| &scene.materials[m as usize]) else { break };
+            let Some(material) = obj.material.map(|m| &scene.materials[m as usize]) else {
+                break;
+            };
             let bsdf = &material.bsdf;
             let sh = Shading::new(bsdf, hit.ns, hit.ng, -ray.dir);
             if sh.wo.z == 0.0 {
@@ -335,7 +443,11 @@ impl<'a> Tracer<'a> {
                     DataLobe::Normal => sh.frame.n,
                     DataLobe::UserColor => material.user_color.unwrap_or(Vec3A::ZERO),
                 };
-                let origin = Origin { via: Via::Data, scatters: depth + 1, part: self.default_part };
+                let origin = Origin {
+                    via: Via::Data,
+                    scatters: depth + 1,
+                    part: self.default_part,
+                };
                 self.contribute(acc, counters, s2, throughput, value, 1.0, origin);
             }
 
@@ -346,7 +458,11 @@ impl<'a> Tracer<'a> {
             if !scene.lights.is_empty() && lobes.iter().any(|l| !l.delta) {
                 let (li, select_pmf, _) = scene.light_select.sample(u_light);
                 let light = &scene.lights[li];
-                let sample = if lit(hit.object, li as u32) { light.sample(hit.p, u_point) } else { None };
+                let sample = if lit(hit.object, li as u32) {
+                    light.sample(hit.p, u_point)
+                } else {
+                    None
+                };
                 if let Some(ls) = sample {
                     let wi = sh.frame.to_local(ls.wi);
                     let l_class = scene.light_classes[li].0;
@@ -369,14 +485,40 @@ impl<'a> Tracer<'a> {
                         if f == Vec3A::ZERO {
                             continue;
                         }
-                        let w = if ls.delta { 1.0 } else { power_heuristic(light_pdf, lobe_pdf) };
+                        let w = if ls.delta {
+                            1.0
+                        } else {
+                            power_heuristic(light_pdf, lobe_pdf)
+                        };
                         let vis = *visible.get_or_insert_with(|| {
                             counters.rays += 1;
-                            let tmax = if ls.dist.is_finite() { ls.dist - 2.0 * scene.epsilon } else { f32::INFINITY };
-                            tmax <= 0.0 || !scene.accel.occluded(&self.spawn(&hit, ls.wi, tmax), 0.0)
+                            let tmax = if ls.dist.is_finite() {
+                                ls.dist - 2.0 * scene.epsilon
+                            } else {
+                                f32::INFINITY
+                            };
+                            let ignore = light.object.unwrap_or(u32::MAX);
+                            tmax <= 0.0
+                                || !scene.accel.occluded(
+                                    &self.spawn(&hit, ls.wi, tmax),
+                                    0.0,
+                                    ignore,
+                                )
                         });
-                        let origin = Origin { via: Via::LightSample { visible: vis }, scatters: depth + 1, part };
-                        self.contribute(acc, counters, s_light, throughput, f * ls.radiance / light_pdf, w, origin);
+                        let origin = Origin {
+                            via: Via::LightSample { visible: vis },
+                            scatters: depth + 1,
+                            part,
+                        };
+                        self.contribute(
+                            acc,
+                            counters,
+                            s_light,
+                            throughput,
+                            f * ls.radiance / light_pdf,
+                            w,
+                            origin,
+                        );
                     }
                 }
             }
@@ -384,7 +526,9 @@ impl<'a> Tracer<'a> {
             // Continue the path through one sampled lobe.
             let u_lobe = rng.next_f32();
             let u_dir = rng.next_2d();
-            let Some(bs) = bsdf.sample(&sh, u_lobe, u_dir) else { break };
+            let Some(bs) = bsdf.sample(&sh, u_lobe, u_dir) else {
+                break;
+            };
             let tag = lobes[bs.lobe];
             match tag.scatter.class {
                 ScatterClass::Diffuse => {
@@ -421,10 +565,20 @@ impl<'a> Tracer<'a> {
                     let le = light.emitted_at(n, ray.dir);
                     if le != Vec3A::ZERO && lit(hit.object, li as u32) {
                         counters.rays += 1;
-                        let blocked = Ray { tmax: t - 2.0 * scene.epsilon, ..ray };
-                        let occluded = scene.accel.occluded(&blocked, 0.0);
+                        let blocked = Ray {
+                            tmax: t - 2.0 * scene.epsilon,
+                            ..ray
+                        };
+                        let occluded =
+                            scene
+                                .accel
+                                .occluded(&blocked, 0.0, light.object.unwrap_or(u32::MAX));
                         let s = a.step(state, scene.light_classes[li].0);
-                        let origin = Origin { via: Via::LightsOnly { occluded }, scatters: depth, part: scene.light_parts[li] };
+                        let origin = Origin {
+                            via: Via::LightsOnly { occluded },
+                            scatters: depth,
+                            part: scene.light_parts[li],
+                        };
                         self.contribute(acc, counters, s, throughput, le, 1.0, origin);
                     }
                 }

@@ -260,7 +260,8 @@ impl Light {
                     radius: *radius,
                 }
                 .intersect(p, wi, 0.0, f32::INFINITY)
-                .min(d2.sqrt());
+                // A grazing direction may miss in floating point: use its closest approach.
+                .min(to_c.dot(wi));
                 Some(LightSample {
                     wi,
                     dist,

@@ -156,7 +156,13 @@ fn aovs_command(path: &std::path::Path, tolerance: f32) -> ExitCode {
     };
     let mut aovs = exr.aovs();
     aovs.sort();
-    println!("{}: {}x{}, {} AOVs", path.display(), exr.width, exr.height, aovs.len());
+    println!(
+        "{}: {}x{}, {} AOVs",
+        path.display(),
+        exr.width,
+        exr.height,
+        aovs.len()
+    );
     for (name, def) in &aovs {
         println!("  {name:<24} {def}");
     }
@@ -197,27 +203,60 @@ fn comp_command(args: CompArgs) -> ExitCode {
     let run = || -> Result<(), String> {
         let exr = output::read_exr(&args.exr)?;
         let mut terms = match &args.expression {
-            Some(e) => lightpath::comp::parse(e).map_err(|m| format!("in the expression {e:?}: {m}"))?,
+            Some(e) => {
+                lightpath::comp::parse(e).map_err(|m| format!("in the expression {e:?}: {m}"))?
+            }
             None => vec![],
         };
-        let gains: Vec<(String, glam::Vec3A)> = args.gains.iter().map(|g| parse_gain(g)).collect::<Result<_, _>>()?;
+        let gains: Vec<(String, glam::Vec3A)> = args
+            .gains
+            .iter()
+            .map(|g| parse_gain(g))
+            .collect::<Result<_, _>>()?;
         if terms.is_empty() {
             terms = lightpath::comp::gain_terms(&args.base, &gains);
         } else if !gains.is_empty() {
-            terms.extend(lightpath::comp::gain_terms(&args.base, &gains).into_iter().skip(1));
+            terms.extend(
+                lightpath::comp::gain_terms(&args.base, &gains)
+                    .into_iter()
+                    .skip(1),
+            );
         }
         let rgb = lightpath::comp::evaluate(&exr, &terms)?;
-        let mut channels: Vec<(String, Vec<f32>)> = ["R", "G", "B"].iter().map(|c| c.to_string()).zip(rgb.iter().cloned()).collect();
+        let mut channels: Vec<(String, Vec<f32>)> = ["R", "G", "B"]
+            .iter()
+            .map(|c| c.to_string())
+            .zip(rgb.iter().cloned())
+            .collect();
         if let Some(a) = exr.channel("A") {
             channels.push(("A".into(), a.to_vec()));
         }
-        let description = args.expression.clone().unwrap_or_default() + &args.gains.iter().map(|g| format!(" --gain {g}")).collect::<String>();
-        let attributes = vec![
-            (format!("{}beauty", output::AOV_ATTRIBUTE_PREFIX), format!("comp of {}: {}", args.exr.display(), description.trim())),
-        ];
-        output::write_channels(&args.output, exr.width, exr.height, channels, &attributes, false)?;
+        let description = args.expression.clone().unwrap_or_default()
+            + &args
+                .gains
+                .iter()
+                .map(|g| format!(" --gain {g}"))
+                .collect::<String>();
+        let attributes = vec![(
+            format!("{}beauty", output::AOV_ATTRIBUTE_PREFIX),
+            format!("comp of {}: {}", args.exr.display(), description.trim()),
+        )];
+        output::write_channels(
+            &args.output,
+            exr.width,
+            exr.height,
+            channels,
+            &attributes,
+            false,
+        )?;
         let png = args.output.with_extension("png");
-        output::write_png_rgb(&png, exr.width as u32, exr.height as u32, &rgb, args.exposure)?;
+        output::write_png_rgb(
+            &png,
+            exr.width as u32,
+            exr.height as u32,
+            &rgb,
+            args.exposure,
+        )?;
         println!("wrote {} and {}", args.output.display(), png.display());
         Ok(())
     };
@@ -295,13 +334,19 @@ fn render(args: RenderArgs) -> ExitCode {
         match specs.iter_mut().find(|s| &s.name == name) {
             Some(s) => s.split_light_groups = true,
             None => {
-                eprintln!("error: --light-group-aovs names '{name}', which is not an AOV of this render");
+                eprintln!(
+                    "error: --light-group-aovs names '{name}', which is not an AOV of this render"
+                );
                 return ExitCode::FAILURE;
             }
         }
     }
     if !split.is_empty() {
-        let mut groups: Vec<&String> = desc.lights.iter().flat_map(|l| &l.get_ref().groups).collect();
+        let mut groups: Vec<&String> = desc
+            .lights
+            .iter()
+            .flat_map(|l| &l.get_ref().groups)
+            .collect();
         groups.sort();
         groups.dedup();
         let total = specs.len() + split.len() * (groups.len() + 1);

@@ -73,7 +73,13 @@ pub fn derived_aovs(film: &Film, aovs: &[Aov]) -> Vec<DerivedAov> {
         let (o, u) = (film.channel(occ, c), film.channel(unocc, c));
         o.iter()
             .zip(&u)
-            .map(|(o, u)| if *u > 0.0 { (1.0 - o / u).clamp(0.0, 1.0) } else { 0.0 })
+            .map(|(o, u)| {
+                if *u > 0.0 {
+                    (1.0 - o / u).clamp(0.0, 1.0)
+                } else {
+                    0.0
+                }
+            })
             .collect()
     });
     vec![DerivedAov {
@@ -97,17 +103,30 @@ pub fn write_exr(
         for (c, name) in channel_names(&aov.name).into_iter().enumerate() {
             channels.push((name, film.channel(k, c)));
         }
-        attributes.push((format!("{AOV_ATTRIBUTE_PREFIX}{}", aov.name), aov.definition.clone()));
+        attributes.push((
+            format!("{AOV_ATTRIBUTE_PREFIX}{}", aov.name),
+            aov.definition.clone(),
+        ));
     }
     for d in derived {
         for (name, values) in channel_names(&d.name).into_iter().zip(d.rgb.iter()) {
             channels.push((name, values.clone()));
         }
-        attributes.push((format!("{AOV_ATTRIBUTE_PREFIX}{}", d.name), d.definition.clone()));
+        attributes.push((
+            format!("{AOV_ATTRIBUTE_PREFIX}{}", d.name),
+            d.definition.clone(),
+        ));
     }
     channels.push(("A".into(), film.alpha()));
     attributes.extend(extra.iter().cloned());
-    write_channels(path, film.width as usize, film.height as usize, channels, &attributes, half)
+    write_channels(
+        path,
+        film.width as usize,
+        film.height as usize,
+        channels,
+        &attributes,
+        half,
+    )
 }
 
 /// Writes named float channels and text attributes as one single-part EXR, atomically.
@@ -223,7 +242,12 @@ fn srgb(linear: f32) -> u8 {
 }
 
 /// A PNG of AOV `k` in sRGB, scaled by 2^`exposure`.
-pub fn write_png(path: &Path, film: &Film, k: usize, exposure: f32) -> std::result::Result<(), String> {
+pub fn write_png(
+    path: &Path,
+    film: &Film,
+    k: usize,
+    exposure: f32,
+) -> std::result::Result<(), String> {
     let rgb = [film.channel(k, 0), film.channel(k, 1), film.channel(k, 2)];
     write_png_rgb(path, film.width, film.height, &rgb, exposure)
 }
@@ -238,11 +262,18 @@ pub fn write_png_rgb(
 ) -> std::result::Result<(), String> {
     let scale = 2f32.powf(exposure);
     let mut bytes = Vec::with_capacity(rgb[0].len() * 3);
-    for i in 0..rgb[0].len() {
-        bytes.extend_from_slice(&[srgb(rgb[0][i] * scale), srgb(rgb[1][i] * scale), srgb(rgb[2][i] * scale)]);
+    for ((r, g), b) in rgb[0].iter().zip(&rgb[1]).zip(&rgb[2]) {
+        bytes.extend_from_slice(&[srgb(r * scale), srgb(g * scale), srgb(b * scale)]);
     }
     atomically(path, |tmp| {
-        image::save_buffer_with_format(tmp, &bytes, width, height, image::ColorType::Rgb8, image::ImageFormat::Png)
-            .map_err(|e| format!("cannot write {}: {e}", path.display()))
+        image::save_buffer_with_format(
+            tmp,
+            &bytes,
+            width,
+            height,
+            image::ColorType::Rgb8,
+            image::ImageFormat::Png,
+        )
+        .map_err(|e| format!("cannot write {}: {e}", path.display()))
     })
 }

@@ -9,13 +9,23 @@ fn render_classic(spp: u32, seed: u64) -> [Vec<f32>; 3] {
     let mut desc = src.parse().unwrap();
     desc.render.seed = seed;
     let scene = Scene::build(&src, &desc, &aov::assemble(vec![])).unwrap();
-    let (film, _) = render(&scene, &RenderOptions { spp, first_sample: 0, progress: false });
+    let (film, _) = render(
+        &scene,
+        &RenderOptions {
+            spp,
+            first_sample: 0,
+            progress: false,
+        },
+    );
     [film.channel(0, 0), film.channel(0, 1), film.channel(0, 2)]
 }
 
 #[test]
 fn cornell_classic_agrees_with_the_mitsuba_reference() {
-    let path = concat!(env!("CARGO_MANIFEST_DIR"), "/../../benches/peer/ref/cornell_ref.exr");
+    let path = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../../benches/peer/ref/cornell_ref.exr"
+    );
     let reference = lightpath::output::read_exr(std::path::Path::new(path)).unwrap();
     assert_eq!((reference.width, reference.height), (256, 256));
     let refs = ["R", "G", "B"].map(|c| reference.channel(c).unwrap().to_vec());
@@ -26,7 +36,11 @@ fn cornell_classic_agrees_with_the_mitsuba_reference() {
     let b = render_classic(spp, 2);
     for c in 0..3 {
         let n = refs[c].len() as f64;
-        let ours: Vec<f64> = a[c].iter().zip(&b[c]).map(|(x, y)| 0.5 * (*x as f64 + *y as f64)).collect();
+        let ours: Vec<f64> = a[c]
+            .iter()
+            .zip(&b[c])
+            .map(|(x, y)| 0.5 * (*x as f64 + *y as f64))
+            .collect();
         let mean_ours = ours.iter().sum::<f64>() / n;
         let mean_ref = refs[c].iter().map(|v| *v as f64).sum::<f64>() / n;
         assert!(
@@ -35,8 +49,19 @@ fn cornell_classic_agrees_with_the_mitsuba_reference() {
         );
         // E[(a - b)²] = 2σ²/spp per pixel, so the combined render's expected squared
         // error against an exact image is mean((a - b)²) / 4.
-        let predicted = a[c].iter().zip(&b[c]).map(|(x, y)| ((x - y) as f64).powi(2)).sum::<f64>() / n / 4.0;
-        let mse = ours.iter().zip(&refs[c]).map(|(o, r)| (o - *r as f64).powi(2)).sum::<f64>() / n;
+        let predicted = a[c]
+            .iter()
+            .zip(&b[c])
+            .map(|(x, y)| ((x - y) as f64).powi(2))
+            .sum::<f64>()
+            / n
+            / 4.0;
+        let mse = ours
+            .iter()
+            .zip(&refs[c])
+            .map(|(o, r)| (o - *r as f64).powi(2))
+            .sum::<f64>()
+            / n;
         eprintln!(
             "channel {c}: mean {mean_ours:.5} vs {mean_ref:.5}, RMSE {:.5}, predicted by noise {:.5}",
             mse.sqrt(),

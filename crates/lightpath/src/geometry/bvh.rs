@@ -120,15 +120,16 @@ impl Accel {
         Some(self.surface(ray, hit.primitive_id, hit.t))
     }
 
-    /// Is anything that casts shadows between the origin and `tmax`?
-    pub fn occluded(&self, ray: &Ray, tmin: f32) -> bool {
+    /// Is anything that casts shadows between the origin and `tmax`, other than object
+    /// `ignore` (the light the shadow ray aims at)?
+    pub fn occluded(&self, ray: &Ray, tmin: f32, ignore: u32) -> bool {
         if self.empty {
             return false;
         }
         let bray = BvhRay::new(ray.origin, ray.dir, tmin, ray.tmax);
-        let (prims, vis) = (&self.prims, &self.visibility);
+        let (prims, vis, objects) = (&self.prims, &self.visibility, &self.objects);
         !self.bvh.ray_traverse_miss(bray, |r, i| {
-            if vis[i] & Visibility::SHADOW == 0 {
+            if vis[i] & Visibility::SHADOW == 0 || objects[i] == ignore {
                 return f32::INFINITY;
             }
             prims[i].intersect(r.origin, r.direction, r.tmin, r.tmax)

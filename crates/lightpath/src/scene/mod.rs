@@ -493,7 +493,11 @@ impl Scene {
             let light_id = lights.len() as u32;
             let object = surface.map(|sp| {
                 let id = objects.len() as u32;
-                let camera = if l.camera_visible { Visibility::CAMERA } else { 0 };
+                let camera = if l.camera_visible {
+                    Visibility::CAMERA
+                } else {
+                    0
+                };
                 geometry.add(id, sp, camera | Visibility::INDIRECT | Visibility::SHADOW);
                 let name = l.name.clone().unwrap_or_else(|| format!("light{light_id}"));
                 objects.push(Object {
@@ -579,7 +583,10 @@ impl Scene {
             .collect();
         // Lights are chosen in proportion to their power at unit colour, with a floor so
         // small lights still get samples.
-        let powers: Vec<f32> = lights.iter().map(|l| l.sampling_weight(scene_radius)).collect();
+        let powers: Vec<f32> = lights
+            .iter()
+            .map(|l| l.sampling_weight(scene_radius))
+            .collect();
         let total: f32 = powers.iter().sum();
         let weights: Vec<f32> = powers
             .iter()
@@ -651,7 +658,10 @@ impl Scene {
             clamp_indirect: r.clamp_indirect,
             seed: r.seed,
         };
-        let mut light_groups: Vec<String> = lights.iter().flat_map(|l| l.groups.iter().cloned()).collect();
+        let mut light_groups: Vec<String> = lights
+            .iter()
+            .flat_map(|l| l.groups.iter().cloned())
+            .collect();
         light_groups.sort();
         light_groups.dedup();
         let default_part = light_groups.len() as u32;
@@ -682,8 +692,11 @@ impl Scene {
                 continue;
             }
             out[k].split_base = Some(out.len() as u32);
-            let parts: Vec<Option<&str>> =
-                light_groups.iter().map(|g| Some(g.as_str())).chain([None]).collect();
+            let parts: Vec<Option<&str>> = light_groups
+                .iter()
+                .map(|g| Some(g.as_str()))
+                .chain([None])
+                .collect();
             for g in parts {
                 let base = &out[k];
                 out.push(Aov {
@@ -691,7 +704,9 @@ impl Scene {
                     definition: format!(
                         "{} ({})",
                         spec.definition,
-                        g.map_or("lights without a group".to_string(), |g| format!("light group '{g}'"))
+                        g.map_or("lights without a group".to_string(), |g| format!(
+                            "light group '{g}'"
+                        ))
                     ),
                     expression: base.expression.clone(),
                     flags: base.flags,
@@ -700,9 +715,9 @@ impl Scene {
                 });
             }
         }
-        let any_unoccluded = out
-            .iter()
-            .any(|a| a.flags.contains(lpe::Prefix::Unoccluded) || a.flags.contains(lpe::Prefix::Shadows));
+        let any_unoccluded = out.iter().any(|a| {
+            a.flags.contains(lpe::Prefix::Unoccluded) || a.flags.contains(lpe::Prefix::Shadows)
+        });
         let aovs = out;
         Ok(Scene {
             accel,
