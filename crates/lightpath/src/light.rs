@@ -124,6 +124,8 @@ pub enum LightShape {
     /// their normal unless two-sided.
     Triangles {
         prims: Vec<Prim>,
+        /// Unit normal of each triangle, precomputed for sampling.
+        normals: Vec<Vec3A>,
         by_area: Distribution1D,
         area: f32,
         two_sided: bool,
@@ -219,6 +221,7 @@ impl Light {
         match &self.shape {
             LightShape::Triangles {
                 prims,
+                normals,
                 by_area,
                 area,
                 two_sided,
@@ -229,7 +232,7 @@ impl Light {
                 };
                 let (b1, b2) = uniform_triangle(Vec2::new(ux, u.y));
                 let q = p0 + e1 * b1 + e2 * b2;
-                let n = e1.cross(e2).normalize();
+                let n = normals[i];
                 let d = q - p;
                 let dist2 = d.length_squared();
                 let dist = dist2.sqrt();

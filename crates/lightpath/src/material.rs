@@ -360,7 +360,24 @@ impl Bsdf {
             })
         };
         match self {
-            Bsdf::Diffuse { .. } => sample(0, cosine_hemisphere(u), None, 1.0),
+            // Cosine sampling: f·cos/pdf is the albedo itself.
+            Bsdf::Diffuse { albedo } => {
+                if wo.z <= 0.0 {
+                    return None;
+                }
+                let wi = cosine_hemisphere(u);
+                if wi.z <= 0.0 {
+                    return None;
+                }
+                Some(BsdfSample {
+                    lobe: 0,
+                    wi: sh.frame.to_world(wi),
+                    weight: *albedo,
+                    pdf: cosine_hemisphere_pdf(wi.z),
+                    delta: false,
+                    eta: 1.0,
+                })
+            }
             Bsdf::Translucent { .. } => {
                 let mut wi = cosine_hemisphere(u);
                 if lobe == 1 {

@@ -185,6 +185,9 @@ impl Distribution1D {
     /// Samples an index; returns it with its probability and `u` remapped to [0, 1)
     /// within the chosen item.
     pub fn sample(&self, u: f32) -> (usize, f32, f32) {
+        if self.cdf.len() == 1 {
+            return (0, 1.0, u);
+        }
         let target = u * self.total;
         let i = self
             .cdf

@@ -2,11 +2,11 @@
 //! reordered so that leaf indices address the primitive array directly.
 
 use super::{Hit, Prim, Ray};
-use glam::Vec3A;
+use glam::{UVec2, Vec3A};
 use obvhs::aabb::Aabb;
 use obvhs::cwbvh::builder::build_cwbvh;
 use obvhs::cwbvh::CwBvh;
-use obvhs::ray::{Ray as BvhRay, RayHit};
+use obvhs::ray::Ray as BvhRay;
 use obvhs::{Boundable, BvhBuildParams};
 
 struct Bounded(Aabb);
@@ -101,39 +101,72 @@ impl Accel {
     }
 
     /// The nearest hit along the ray among primitives visible to rays of kind `mask`.
+    #[inline]
     pub fn intersect(&self, ray: &Ray, tmin: f32, mask: u8) -> Option<Hit> {
         if self.empty {
             return None;
         }
-        let bray = BvhRay::new(ray.origin, ray.dir, tmin, ray.tmax);
-        let mut hit = RayHit::none();
-        let (prims, vis) = (&self.prims, &self.visibility);
-        let found = self.bvh.ray_traverse(bray, &mut hit, |r, i| {
-            if vis[i] & mask == 0 {
-                return f32::INFINITY;
+        // obvhs's traversal macro, so the primitive test inlines into the loop.
+        let mut traverse_ray = BvhRay::new(ray.origin, ray.dir, tmin, ray.tmax);
+        let mut state = self.bvh.new_traversal(ray.dir);
+        let mut node;
+        let mut best = u32::MAX;
+        let bvh = &self.bvh;
+        obvhs::traverse!(
+            bvh,
+            node,
+            state,
+            node.intersect_ray(&traverse_ray, state.oct_inv4),
+            {
+                let i = state.primitive_id as usize;
+                if self.visibility[i] & mask != 0 {
+                    let t = self.prims[i].intersect(
+                        traverse_ray.origin,
+                        traverse_ray.direction,
+                        traverse_ray.tmin,
+                        traverse_ray.tmax,
+                    );
+                    if t < traverse_ray.tmax {
+                        best = i as u32;
+                        traverse_ray.tmax = t;
+                    }
+                }
             }
-            prims[i].intersect(r.origin, r.direction, r.tmin, r.tmax)
-        });
-        if !found {
-            return None;
-        }
-        Some(self.surface(ray, hit.primitive_id, hit.t))
+        );
+        (best != u32::MAX).then(|| self.surface(ray, best, traverse_ray.tmax))
     }
 
     /// Is anything that casts shadows between the origin and `tmax`, other than object
     /// `ignore` (the light the shadow ray aims at)?
+    #[inline]
     pub fn occluded(&self, ray: &Ray, tmin: f32, ignore: u32) -> bool {
         if self.empty {
             return false;
         }
         let bray = BvhRay::new(ray.origin, ray.dir, tmin, ray.tmax);
-        let (prims, vis, objects) = (&self.prims, &self.visibility, &self.objects);
-        !self.bvh.ray_traverse_miss(bray, |r, i| {
-            if vis[i] & Visibility::SHADOW == 0 || objects[i] == ignore {
-                return f32::INFINITY;
+        let mut state = self.bvh.new_traversal(ray.dir);
+        let mut node;
+        let mut hit = false;
+        let bvh = &self.bvh;
+        obvhs::traverse!(
+            bvh,
+            node,
+            state,
+            node.intersect_ray(&bray, state.oct_inv4),
+            {
+                let i = state.primitive_id as usize;
+                if self.visibility[i] & Visibility::SHADOW != 0
+                    && self.objects[i] != ignore
+                    && self.prims[i]
+                        .intersect(bray.origin, bray.direction, bray.tmin, bray.tmax)
+                        .is_finite()
+                {
+                    hit = true;
+                    break;
+                }
             }
-            prims[i].intersect(r.origin, r.direction, r.tmin, r.tmax)
-        })
+        );
+        hit
     }
 
     fn surface(&self, ray: &Ray, prim: u32, t: f32) -> Hit {

@@ -347,8 +347,17 @@ fn light_shape(
     let xf = placement(l.translate, l.rotate, l.scale, l.matrix);
     let area = |prims: ShapePrims| {
         let areas: Vec<f32> = prims.prims.iter().map(Prim::area).collect();
+        let normals = prims
+            .prims
+            .iter()
+            .map(|p| match p {
+                Prim::Triangle { e1, e2, .. } => e1.cross(*e2).normalize_or(Vec3A::Z),
+                Prim::Sphere { .. } => Vec3A::Z,
+            })
+            .collect();
         let shape = LightShape::Triangles {
             prims: prims.prims.clone(),
+            normals,
             by_area: Distribution1D::new(&areas),
             area: areas.iter().sum(),
             two_sided: l.two_sided,
