@@ -20,17 +20,42 @@ fn rays(c: &mut Criterion) {
     let mut rng = Rng::for_sample(1, 2, 3);
     let rays: Vec<Ray> = (0..4096)
         .map(|_| {
-            let o = Vec3A::new(rng.next_f32() * 1.6 - 0.8, rng.next_f32() * 1.6 - 0.8, rng.next_f32() * 1.6 - 0.8);
-            Ray { origin: o, dir: uniform_sphere(rng.next_2d()), tmax: f32::INFINITY }
+            let o = Vec3A::new(
+                rng.next_f32() * 1.6 - 0.8,
+                rng.next_f32() * 1.6 - 0.8,
+                rng.next_f32() * 1.6 - 0.8,
+            );
+            Ray {
+                origin: o,
+                dir: uniform_sphere(rng.next_2d()),
+                tmax: f32::INFINITY,
+            }
         })
         .collect();
     let mut g = c.benchmark_group("rays");
     g.throughput(Throughput::Elements(rays.len() as u64));
     g.bench_function("closest hit", |b| {
-        b.iter(|| rays.iter().filter(|r| scene.accel.intersect(r, 0.0, Visibility::INDIRECT).is_some()).count())
+        b.iter(|| {
+            rays.iter()
+                .filter(|r| {
+                    scene
+                        .accel
+                        .intersect(r, 0.0, Visibility::INDIRECT)
+                        .is_some()
+                })
+                .count()
+        })
     });
     g.bench_function("shadow", |b| {
-        b.iter(|| rays.iter().filter(|r| scene.accel.occluded(&Ray { tmax: 1.0, ..**r }, 0.0, u32::MAX)).count())
+        b.iter(|| {
+            rays.iter()
+                .filter(|r| {
+                    scene
+                        .accel
+                        .occluded(&Ray { tmax: 1.0, ..**r }, 0.0, u32::MAX)
+                })
+                .count()
+        })
     });
     g.finish();
 }
@@ -43,9 +68,17 @@ fn samples(c: &mut Criterion) {
     let mut many: Vec<AovSpec> = aov::standard().into_iter().map(AovSpec::split).collect();
     many.extend(aov::bounces(3));
     let forty = classic(many, 64);
-    let options = RenderOptions { spp: 4, first_sample: 0, progress: false };
-    g.bench_function(format!("{} AOV", beauty.aovs.len()), |b| b.iter(|| black_box(render(&beauty, &options))));
-    g.bench_function(format!("{} AOVs", forty.aovs.len()), |b| b.iter(|| black_box(render(&forty, &options))));
+    let options = RenderOptions {
+        spp: 4,
+        first_sample: 0,
+        progress: false,
+    };
+    g.bench_function(format!("{} AOV", beauty.aovs.len()), |b| {
+        b.iter(|| black_box(render(&beauty, &options)))
+    });
+    g.bench_function(format!("{} AOVs", forty.aovs.len()), |b| {
+        b.iter(|| black_box(render(&forty, &options)))
+    });
     g.finish();
 }
 

@@ -1,5 +1,7 @@
-//! The film: one RGB accumulator per AOV per pixel, plus alpha, stored pixel by pixel so
-//! a sample writes one contiguous run.
+//! The film: one RGB accumulator per AOV per pixel, plus alpha. Rendering fills rows
+//! stored pixel by pixel (a sample writes one contiguous run); the finished film keeps
+//! one plane per channel, so output hands the planes to the EXR writer without copying
+//! and the peak memory stays about one film.
 
 use glam::Vec3A;
 
@@ -10,48 +12,70 @@ pub struct Film {
     pub aovs: usize,
     /// Samples accumulated per pixel.
     pub spp: u32,
-    /// `width × height` runs of `3 × aovs + 1` sums (RGB per AOV, then alpha).
-    pub data: Vec<f32>,
+    /// `3 × aovs + 1` planes of `width × height` sums: R, G, B of each AOV, then alpha.
+    pub planes: Vec<Vec<f32>>,
 }
 
 impl Film {
-    pub fn new(width: u32, height: u32, aovs: usize, spp: u32) -> Film {
-        let stride = 3 * aovs + 1;
+    /// Values per pixel in a row buffer: RGB per AOV, then alpha.
+    pub fn stride_for(aovs: usize) -> usize {
+        3 * aovs + 1
+    }
+
+    /// Builds the film from rendered rows (each `width × stride` interleaved sums), in
+    /// order, releasing each row as soon as it is copied.
+    pub fn from_rows(width: u32, height: u32, aovs: usize, spp: u32, rows: Vec<Vec<f32>>) -> Film {
+        let stride = Film::stride_for(aovs);
+        let n = width as usize * height as usize;
+        let mut planes: Vec<Vec<f32>> = (0..stride).map(|_| vec![0.0; n]).collect();
+        for (y, row) in rows.into_iter().enumerate() {
+            let base = y * width as usize;
+            // Plane by plane, so each plane is written sequentially.
+            for (c, plane) in planes.iter_mut().enumerate() {
+                let dst = &mut plane[base..base + width as usize];
+                for (d, px) in dst.iter_mut().zip(row.chunks_exact(stride)) {
+                    *d = px[c];
+                }
+            }
+        }
         Film {
             width,
             height,
             aovs,
             spp,
-            data: vec![0.0; width as usize * height as usize * stride],
+            planes,
         }
-    }
-
-    pub fn stride(&self) -> usize {
-        3 * self.aovs + 1
     }
 
     /// The mean value of AOV `k` at pixel (x, y).
     pub fn pixel(&self, k: usize, x: u32, y: u32) -> Vec3A {
-        let i = (y as usize * self.width as usize + x as usize) * self.stride() + 3 * k;
-        Vec3A::new(self.data[i], self.data[i + 1], self.data[i + 2]) / self.spp as f32
+        let i = y as usize * self.width as usize + x as usize;
+        Vec3A::new(
+            self.planes[3 * k][i],
+            self.planes[3 * k + 1][i],
+            self.planes[3 * k + 2][i],
+        ) / self.spp as f32
     }
 
-    /// AOV `k` as RGB planes of means, row by row.
+    /// Channel `c` of AOV `k` as a plane of means, row by row.
     pub fn channel(&self, k: usize, c: usize) -> Vec<f32> {
         let inv = 1.0 / self.spp as f32;
-        self.data
-            .chunks_exact(self.stride())
-            .map(|px| px[3 * k + c] * inv)
-            .collect()
+        self.planes[3 * k + c].iter().map(|v| v * inv).collect()
     }
 
     pub fn alpha(&self) -> Vec<f32> {
         let inv = 1.0 / self.spp as f32;
-        let a = 3 * self.aovs;
-        self.data
-            .chunks_exact(self.stride())
-            .map(|px| px[a] * inv)
-            .collect()
+        self.planes[3 * self.aovs].iter().map(|v| v * inv).collect()
+    }
+
+    /// All planes as means, consuming the film (no copy): R, G, B per AOV, then alpha.
+    pub fn into_means(self) -> Vec<Vec<f32>> {
+        let inv = 1.0 / self.spp as f32;
+        let mut planes = self.planes;
+        for p in &mut planes {
+            p.iter_mut().for_each(|v| *v *= inv);
+        }
+        planes
     }
 
     /// Merges a film of the same frame rendered with other samples (a farm's sample
@@ -60,8 +84,10 @@ impl Film {
         if (self.width, self.height, self.aovs) != (other.width, other.height, other.aovs) {
             return Err("films differ in size or AOV count".into());
         }
-        for (a, b) in self.data.iter_mut().zip(&other.data) {
-            *a += b;
+        for (a, b) in self.planes.iter_mut().zip(&other.planes) {
+            for (x, y) in a.iter_mut().zip(b) {
+                *x += y;
+            }
         }
         self.spp += other.spp;
         Ok(())

@@ -607,8 +607,7 @@ pub fn render(scene: &Scene, options: &RenderOptions) -> (Film, RenderStats) {
     let start = std::time::Instant::now();
     let cam = &scene.camera;
     let (w, h) = (cam.width, cam.height);
-    let mut film = Film::new(w, h, scene.aovs.len(), options.spp);
-    let stride = film.stride();
+    let stride = Film::stride_for(scene.aovs.len());
     let tracer = Tracer::new(scene);
     let rays = AtomicU64::new(0);
     let nonfinite = AtomicU64::new(0);
@@ -625,33 +624,38 @@ pub fn render(scene: &Scene, options: &RenderOptions) -> (Film, RenderStats) {
     } else {
         indicatif::ProgressBar::hidden()
     };
-    let row_len = stride * w as usize;
-    film.data.par_chunks_mut(row_len).enumerate().for_each_init(
-        || SampleAccumulator::new(scene.aovs.len()),
-        |acc, (y, row)| {
-            let mut counters = PathCounters {
-                rays: 0,
-                nonfinite: 0,
-                holdout: false,
-            };
-            for x in 0..w {
-                let pixel = &mut row[x as usize * stride..(x as usize + 1) * stride];
-                let index = y as u64 * w as u64 + x as u64;
-                for s in options.first_sample..options.first_sample + options.spp {
-                    let mut rng = Rng::for_sample(scene.settings.seed, index, s as u64);
-                    let offset = scene.filter.offset(rng.next_2d());
-                    let film_pos = Vec2::new(x as f32 + 0.5, y as f32 + 0.5) + offset;
-                    let ray = cam.ray(film_pos, rng.next_2d());
-                    let alpha = tracer.trace(ray, &mut rng, acc, &mut counters);
-                    acc.flush(pixel);
-                    pixel[stride - 1] += alpha;
+    let rows: Vec<Vec<f32>> = (0..h)
+        .into_par_iter()
+        .map_init(
+            || SampleAccumulator::new(scene.aovs.len()),
+            |acc, y| {
+                let mut row = vec![0.0f32; stride * w as usize];
+                let mut counters = PathCounters {
+                    rays: 0,
+                    nonfinite: 0,
+                    holdout: false,
+                };
+                for x in 0..w {
+                    let pixel = &mut row[x as usize * stride..(x as usize + 1) * stride];
+                    let index = y as u64 * w as u64 + x as u64;
+                    for s in options.first_sample..options.first_sample + options.spp {
+                        let mut rng = Rng::for_sample(scene.settings.seed, index, s as u64);
+                        let offset = scene.filter.offset(rng.next_2d());
+                        let film_pos = Vec2::new(x as f32 + 0.5, y as f32 + 0.5) + offset;
+                        let ray = cam.ray(film_pos, rng.next_2d());
+                        let alpha = tracer.trace(ray, &mut rng, acc, &mut counters);
+                        acc.flush(pixel);
+                        pixel[stride - 1] += alpha;
+                    }
                 }
-            }
-            rays.fetch_add(counters.rays, Ordering::Relaxed);
-            nonfinite.fetch_add(counters.nonfinite, Ordering::Relaxed);
-            bar.inc(1);
-        },
-    );
+                rays.fetch_add(counters.rays, Ordering::Relaxed);
+                nonfinite.fetch_add(counters.nonfinite, Ordering::Relaxed);
+                bar.inc(1);
+                row
+            },
+        )
+        .collect();
+    let film = Film::from_rows(w, h, scene.aovs.len(), options.spp, rows);
     bar.finish_and_clear();
     let stats = RenderStats {
         samples: w as u64 * h as u64 * options.spp as u64,

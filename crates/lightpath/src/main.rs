@@ -397,19 +397,20 @@ fn render(args: RenderArgs) -> ExitCode {
         ),
     ];
     let derived = output::derived_aovs(&film, &scene.aovs);
-    if let Err(e) = output::write_exr(&exr_path, &film, &scene.aovs, &derived, args.half, &extra) {
+    if let Err(e) = output::write_png(&png_path, &film, 0, args.exposure) {
         eprintln!("error: {e}");
         return ExitCode::FAILURE;
     }
-    if let Err(e) = output::write_png(&png_path, &film, 0, args.exposure) {
+    let (width, height, spp) = (film.width, film.height, film.spp);
+    if let Err(e) = output::write_exr(&exr_path, film, &scene.aovs, derived, args.half, &extra) {
         eprintln!("error: {e}");
         return ExitCode::FAILURE;
     }
     println!(
         "{}x{} at {} spp, {} AOVs: {:.2} s, {:.2} M samples/s, {:.2} M rays/s{}",
-        film.width,
-        film.height,
-        film.spp,
+        width,
+        height,
+        spp,
         scene.aovs.len(),
         stats.seconds,
         stats.samples as f64 / stats.seconds / 1e6,

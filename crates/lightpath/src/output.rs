@@ -89,44 +89,37 @@ pub fn derived_aovs(film: &Film, aovs: &[Aov]) -> Vec<DerivedAov> {
     }]
 }
 
+/// Writes the film (consumed: its planes become the EXR's channels without a copy).
 pub fn write_exr(
     path: &Path,
-    film: &Film,
+    film: Film,
     aovs: &[Aov],
-    derived: &[DerivedAov],
+    derived: Vec<DerivedAov>,
     half: bool,
     extra: &[(String, String)],
 ) -> std::result::Result<(), String> {
+    let (width, height) = (film.width as usize, film.height as usize);
+    let mut planes = film.into_means().into_iter();
     let mut channels = Vec::new();
     let mut attributes = Vec::new();
-    for (k, aov) in aovs.iter().enumerate() {
-        for (c, name) in channel_names(&aov.name).into_iter().enumerate() {
-            channels.push((name, film.channel(k, c)));
+    for aov in aovs {
+        for name in channel_names(&aov.name) {
+            channels.push((name, planes.next().unwrap_or_default()));
         }
         attributes.push((
             format!("{AOV_ATTRIBUTE_PREFIX}{}", aov.name),
             aov.definition.clone(),
         ));
     }
+    channels.push(("A".into(), planes.next().unwrap_or_default()));
     for d in derived {
-        for (name, values) in channel_names(&d.name).into_iter().zip(d.rgb.iter()) {
-            channels.push((name, values.clone()));
+        for (name, values) in channel_names(&d.name).into_iter().zip(d.rgb) {
+            channels.push((name, values));
         }
-        attributes.push((
-            format!("{AOV_ATTRIBUTE_PREFIX}{}", d.name),
-            d.definition.clone(),
-        ));
+        attributes.push((format!("{AOV_ATTRIBUTE_PREFIX}{}", d.name), d.definition));
     }
-    channels.push(("A".into(), film.alpha()));
     attributes.extend(extra.iter().cloned());
-    write_channels(
-        path,
-        film.width as usize,
-        film.height as usize,
-        channels,
-        &attributes,
-        half,
-    )
+    write_channels(path, width, height, channels, &attributes, half)
 }
 
 /// Writes named float channels and text attributes as one single-part EXR, atomically.
@@ -159,6 +152,7 @@ pub fn write_channels(
     let layer = Layer::new(
         (width, height),
         layer_attributes,
+        // ZIP per 16 lines: lossless, compact, and compressed in parallel by `exr`.
         Encoding::SMALL_LOSSLESS,
         AnyChannels::sort(SmallVec::from_vec(channels)),
     );
