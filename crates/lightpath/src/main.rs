@@ -7,6 +7,27 @@ use std::io::{BufRead, Write};
 use std::path::PathBuf;
 use std::process::ExitCode;
 
+/// `println!` that ignores a closed stdout (`lightpath … | head` must not panic).
+macro_rules! say {
+    ($($t:tt)*) => {{
+        let _ = writeln!(std::io::stdout(), $($t)*);
+    }};
+}
+
+/// `eprintln!` that ignores a closed stderr.
+macro_rules! tell {
+    ($($t:tt)*) => {{
+        let _ = writeln!(std::io::stderr(), $($t)*);
+    }};
+}
+
+/// `eprint!` that ignores a closed stderr.
+macro_rules! tell_raw {
+    ($($t:tt)*) => {{
+        let _ = write!(std::io::stderr(), $($t)*);
+    }};
+}
+
 #[derive(Parser)]
 #[command(
     name = "lightpath",
@@ -150,13 +171,13 @@ fn aovs_command(path: &std::path::Path, tolerance: f32) -> ExitCode {
     let exr = match output::read_exr(path) {
         Ok(e) => e,
         Err(e) => {
-            eprintln!("error: {e}");
+            tell!("error: {e}");
             return ExitCode::FAILURE;
         }
     };
     let mut aovs = exr.aovs();
     aovs.sort();
-    println!(
+    say!(
         "{}: {}x{}, {} AOVs",
         path.display(),
         exr.width,
@@ -164,17 +185,17 @@ fn aovs_command(path: &std::path::Path, tolerance: f32) -> ExitCode {
         aovs.len()
     );
     for (name, def) in &aovs {
-        println!("  {name:<24} {def}");
+        say!("  {name:<24} {def}");
     }
     let checks = lightpath::comp::check_partitions(&exr);
     if checks.is_empty() {
-        println!("no known partitions (standard set, light groups, bounces) to check");
+        say!("no known partitions (standard set, light groups, bounces) to check");
     }
     let mut ok = true;
     for c in &checks {
         let pass = c.max_relative_error <= tolerance;
         ok &= pass;
-        println!(
+        say!(
             "{} {} = {}: max relative error {:.2e}",
             if pass { "ok  " } else { "FAIL" },
             c.whole,
@@ -257,13 +278,13 @@ fn comp_command(args: CompArgs) -> ExitCode {
             &rgb,
             args.exposure,
         )?;
-        println!("wrote {} and {}", args.output.display(), png.display());
+        say!("wrote {} and {}", args.output.display(), png.display());
         Ok(())
     };
     match run() {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
-            eprintln!("error: {e}");
+            tell!("error: {e}");
             ExitCode::FAILURE
         }
     }
@@ -275,20 +296,20 @@ fn render(args: RenderArgs) -> ExitCode {
             .num_threads(n.max(1))
             .build_global()
         {
-            eprintln!("warning: cannot set the thread count: {e}");
+            tell!("warning: cannot set the thread count: {e}");
         }
     }
     let src = match lightpath::load_source(&args.scene) {
         Ok(s) => s,
         Err(e) => {
-            eprintln!("error: {e}");
+            tell!("error: {e}");
             return ExitCode::FAILURE;
         }
     };
     let mut desc = match src.parse() {
         Ok(d) => d,
         Err(e) => {
-            eprintln!("error: {e}");
+            tell!("error: {e}");
             return ExitCode::FAILURE;
         }
     };
@@ -317,7 +338,7 @@ fn render(args: RenderArgs) -> ExitCode {
         match AovSpec::parse(a) {
             Ok(s) => specs.push(s),
             Err(e) => {
-                eprintln!("error: --aov {a}: {e}");
+                tell!("error: --aov {a}: {e}");
                 return ExitCode::FAILURE;
             }
         }
@@ -334,7 +355,7 @@ fn render(args: RenderArgs) -> ExitCode {
         match specs.iter_mut().find(|s| &s.name == name) {
             Some(s) => s.split_light_groups = true,
             None => {
-                eprintln!(
+                tell!(
                     "error: --light-group-aovs names '{name}', which is not an AOV of this render"
                 );
                 return ExitCode::FAILURE;
@@ -351,21 +372,23 @@ fn render(args: RenderArgs) -> ExitCode {
         groups.dedup();
         let total = specs.len() + split.len() * (groups.len() + 1);
         if total > 64 {
-            eprintln!("warning: the light-group split makes {total} AOVs");
+            tell!("warning: the light-group split makes {total} AOVs");
         }
     }
     let scene = match lightpath::Scene::build(&src, &desc, &specs) {
         Ok(s) => s,
         Err(e) => {
-            eprintln!("error: {e}");
+            tell!("error: {e}");
             return ExitCode::FAILURE;
         }
     };
     for w in scene.automaton.warnings() {
         let aov = &scene.aovs[w.rule.0 as usize];
-        eprintln!(
+        tell!(
             "warning: AOV '{}' ({}): {}",
-            aov.name, aov.definition, w.message
+            aov.name,
+            aov.definition,
+            w.message
         );
     }
     let stem = match args.output.as_ref() {
@@ -398,15 +421,15 @@ fn render(args: RenderArgs) -> ExitCode {
     ];
     let derived = output::derived_aovs(&film, &scene.aovs);
     if let Err(e) = output::write_png(&png_path, &film, 0, args.exposure) {
-        eprintln!("error: {e}");
+        tell!("error: {e}");
         return ExitCode::FAILURE;
     }
     let (width, height, spp) = (film.width, film.height, film.spp);
     if let Err(e) = output::write_exr(&exr_path, film, &scene.aovs, derived, args.half, &extra) {
-        eprintln!("error: {e}");
+        tell!("error: {e}");
         return ExitCode::FAILURE;
     }
-    println!(
+    say!(
         "{}x{} at {} spp, {} AOVs: {:.2} s, {:.2} M samples/s, {:.2} M rays/s{}",
         width,
         height,
@@ -421,7 +444,7 @@ fn render(args: RenderArgs) -> ExitCode {
             String::new()
         }
     );
-    println!("wrote {} and {}", exr_path.display(), png_path.display());
+    say!("wrote {} and {}", exr_path.display(), png_path.display());
     ExitCode::SUCCESS
 }
 
@@ -435,7 +458,7 @@ fn lpe_command(cmd: LpeCommand) -> ExitCode {
                     Ok(_) => {}
                     Err(e) => {
                         ok = false;
-                        eprint!("{}", e.render(d));
+                        tell_raw!("{}", e.render(d));
                     }
                 }
             }
@@ -445,9 +468,9 @@ fn lpe_command(cmd: LpeCommand) -> ExitCode {
             match compiler.compile() {
                 Ok(a) => {
                     for w in a.warnings() {
-                        eprintln!("warning: {}: {}", definitions[w.rule.0 as usize], w.message);
+                        tell!("warning: {}: {}", definitions[w.rule.0 as usize], w.message);
                     }
-                    println!(
+                    say!(
                         "{} definition{} valid",
                         definitions.len(),
                         if definitions.len() == 1 { "" } else { "s" }
@@ -455,7 +478,7 @@ fn lpe_command(cmd: LpeCommand) -> ExitCode {
                     ExitCode::SUCCESS
                 }
                 Err(e) => {
-                    eprintln!("error[{}]: {}", e.kind.name(), e.message);
+                    tell!("error[{}]: {}", e.kind.name(), e.message);
                     ExitCode::FAILURE
                 }
             }
@@ -469,23 +492,23 @@ fn lpe_command(cmd: LpeCommand) -> ExitCode {
                 return match_jsonl();
             }
             let Some(path_text) = path else {
-                eprintln!("error: give --path PATH, or --jsonl to read cases on stdin");
+                tell!("error: give --path PATH, or --jsonl to read cases on stdin");
                 return ExitCode::FAILURE;
             };
             let path = match lpe::parse_path(&path_text) {
                 Ok(p) => p,
                 Err(e) => {
-                    eprint!("{}", e.render(&path_text));
+                    tell_raw!("{}", e.render(&path_text));
                     return ExitCode::FAILURE;
                 }
             };
             let mut status = ExitCode::SUCCESS;
             for d in &definitions {
                 match lpe::matches(d, &path) {
-                    Ok(true) => println!("match"),
-                    Ok(false) => println!("no match"),
+                    Ok(true) => say!("match"),
+                    Ok(false) => say!("no match"),
                     Err(e) => {
-                        eprint!("{}", e.render(d));
+                        tell_raw!("{}", e.render(d));
                         status = ExitCode::FAILURE;
                     }
                 }
@@ -503,10 +526,10 @@ fn lpe_command(cmd: LpeCommand) -> ExitCode {
                             .clone()
                             .map(|n| format!("{n}: "))
                             .unwrap_or_default();
-                        println!("{name}{d}\n  {}", lpe::explain::explain(&rule));
+                        say!("{name}{d}\n  {}", lpe::explain::explain(&rule));
                         if let Ok(alone) = lpe::compile(&[d]) {
                             let s = alone.stats();
-                            println!(
+                            say!(
                                 "  automaton: {} NFA states, {} DFA states before minimisation, {} after, {} event classes",
                                 s.nfa_states, s.dfa_states, s.min_dfa_states, s.classes
                             );
@@ -515,7 +538,7 @@ fn lpe_command(cmd: LpeCommand) -> ExitCode {
                     }
                     Err(e) => {
                         ok = false;
-                        eprint!("{}", e.render(d));
+                        tell_raw!("{}", e.render(d));
                     }
                 }
             }
@@ -523,7 +546,7 @@ fn lpe_command(cmd: LpeCommand) -> ExitCode {
                 match compiler.compile() {
                     Ok(a) => {
                         let s = a.stats();
-                        println!(
+                        say!(
                             "all {} rules together: {} NFA states, {} DFA states before minimisation, {} after, {} event classes",
                             definitions.len(),
                             s.nfa_states,
@@ -532,7 +555,7 @@ fn lpe_command(cmd: LpeCommand) -> ExitCode {
                             s.classes
                         );
                     }
-                    Err(e) => eprintln!("error[{}]: {}", e.kind.name(), e.message),
+                    Err(e) => tell!("error[{}]: {}", e.kind.name(), e.message),
                 }
             }
             if ok {
@@ -543,7 +566,7 @@ fn lpe_command(cmd: LpeCommand) -> ExitCode {
         }
         LpeCommand::Names => {
             for (name, expr) in lpe::STANDARD_NAMES {
-                println!("{name:<18} {expr}");
+                say!("{name:<18} {expr}");
             }
             ExitCode::SUCCESS
         }
