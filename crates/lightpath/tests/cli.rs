@@ -188,3 +188,103 @@ fn render_writes_exr_and_png_and_reports_speed() {
         .contains("no/such/scene.toml"));
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+#[test]
+fn aovs_checks_partitions_and_comp_relights() {
+    let dir = std::env::temp_dir().join(format!("lightpath-comp-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let exr = dir.join("c.exr");
+    let out = lightpath()
+        .args([
+            "render",
+            "cornell",
+            "--quiet",
+            "--spp",
+            "2",
+            "--resolution",
+            "16x16",
+            "--light-groups",
+            "--bounces",
+            "2",
+            "-o",
+        ])
+        .arg(&exr)
+        .output()
+        .unwrap();
+    assert!(out.status.success());
+    let report = lightpath().arg("aovs").arg(&exr).output().unwrap();
+    let text = String::from_utf8(report.stdout).unwrap();
+    assert!(report.status.success(), "{text}");
+    assert!(
+        text.contains("directDiffuse") && text.contains("lpe:directDiffuse"),
+        "{text}"
+    );
+    assert_eq!(
+        text.matches("ok   beauty =").count(),
+        3,
+        "standard set, light groups, bounces:\n{text}"
+    );
+
+    // comp: gains over the light-group split equal the explicit sum.
+    let by_gain = dir.join("g.exr");
+    let by_sum = dir.join("s.exr");
+    assert!(lightpath()
+        .arg("comp")
+        .arg(&exr)
+        .args(["--gain", "key=2", "-o"])
+        .arg(&by_gain)
+        .status()
+        .unwrap()
+        .success());
+    assert!(lightpath()
+        .arg("comp")
+        .arg(&exr)
+        .args(["beauty + beauty_key", "-o"])
+        .arg(&by_sum)
+        .status()
+        .unwrap()
+        .success());
+    let (g, s) = (
+        lightpath::output::read_exr(&by_gain).unwrap(),
+        lightpath::output::read_exr(&by_sum).unwrap(),
+    );
+    assert_eq!(g.channel("R").unwrap(), s.channel("R").unwrap());
+    assert!(dir.join("g.png").exists());
+
+    // A file whose parts do not add up fails the check.
+    let src = lightpath::output::read_exr(&exr).unwrap();
+    let mut channels = src.channels.clone();
+    for (name, values) in &mut channels {
+        if name == "directDiffuse.R" {
+            values.iter_mut().for_each(|v| *v *= 2.0);
+        }
+    }
+    let bad = dir.join("bad.exr");
+    lightpath::output::write_channels(
+        &bad,
+        src.width,
+        src.height,
+        channels,
+        &src.attributes,
+        false,
+    )
+    .unwrap();
+    let report = lightpath().arg("aovs").arg(&bad).output().unwrap();
+    assert_eq!(report.status.code(), Some(1));
+    assert!(String::from_utf8(report.stdout)
+        .unwrap()
+        .contains("FAIL beauty = emission + directDiffuse"));
+
+    let missing = lightpath()
+        .arg("comp")
+        .arg(&exr)
+        .args(["beauty + nothere", "-o"])
+        .arg(dir.join("x.exr"))
+        .output()
+        .unwrap();
+    assert!(!missing.status.success());
+    assert!(String::from_utf8(missing.stderr)
+        .unwrap()
+        .contains("no AOV 'nothere'"));
+    std::fs::remove_dir_all(&dir).unwrap();
+}

@@ -404,3 +404,159 @@ fn scene_errors_name_the_file_line_and_what_was_expected() {
         "{err}"
     );
 }
+
+/// Mean beauty over the pixels where the plane is seen head-on (the image centre).
+fn centre_mean(text: &str, spp: u32) -> Vec3A {
+    let (_, film) = render_aovs(&source("lights", text), 16, spp, Some(2), vec![]);
+    let mut sum = Vec3A::ZERO;
+    let mut n = 0.0;
+    for y in 6..10 {
+        for x in 6..10 {
+            sum += film.pixel(0, x, y);
+            n += 1.0;
+        }
+    }
+    sum / n
+}
+
+const PLANE: &str = r#"
+[camera]
+position = [0, 0, 5]
+look_at = [0, 0, 0]
+fov = 2
+[materials.grey]
+type = "diffuse"
+albedo = [0.5, 0.5, 0.5]
+[[objects]]
+name = "plane"
+shape = "rectangle"
+material = "grey"
+scale = 10
+"#;
+
+#[test]
+fn delta_lights_match_their_analytic_radiance() {
+    // A Lambertian plane of albedo ρ under irradiance E reflects ρE/π.
+    let rho_over_pi = 0.5 / std::f32::consts::PI;
+    // Point light of intensity 4 at distance 2 along the normal: E = I / d² = 1.
+    let point = format!(
+        "{PLANE}\n[[lights]]\ntype = \"point\"\nposition = [0, 0, 2]\nintensity = [4, 4, 4]\n"
+    );
+    let l = centre_mean(&point, 4);
+    assert!((l.x - rho_over_pi).abs() < 1e-3 * rho_over_pi, "point: {l}");
+    // Distant light of irradiance 2 at 60° from the normal: E = 2 cos 60° = 1.
+    let distant = format!(
+        "{PLANE}\n[[lights]]\ntype = \"distant\"\ndirection = [0, {}, -0.5]\nirradiance = [2, 2, 2]\n",
+        -(0.75f32.sqrt())
+    );
+    let l = centre_mean(&distant, 4);
+    assert!(
+        (l.x - rho_over_pi).abs() < 1e-3 * rho_over_pi,
+        "distant: {l}"
+    );
+    // A spot light is a point light inside its cone and dark outside it.
+    let spot = format!("{PLANE}\n[[lights]]\ntype = \"spot\"\nposition = [0, 0, 2]\ndirection = [0, 0, -1]\ncone_angle = 40\nintensity = [4, 4, 4]\n");
+    let l = centre_mean(&spot, 4);
+    assert!((l.x - rho_over_pi).abs() < 1e-3 * rho_over_pi, "spot: {l}");
+    let away = format!("{PLANE}\n[[lights]]\ntype = \"spot\"\nposition = [0, 0, 2]\ndirection = [0, 0, 1]\nintensity = [4, 4, 4]\n");
+    assert_eq!(centre_mean(&away, 2), Vec3A::ZERO);
+}
+
+#[test]
+fn area_lights_match_their_analytic_irradiance() {
+    // A disk of radiance L and radius r at height h over a point: E = π L r² / (h² + r²).
+    let (radiance, r, h) = (3.0f32, 1.0f32, 2.0f32);
+    let expected =
+        0.5 / std::f32::consts::PI * std::f32::consts::PI * radiance * r * r / (h * h + r * r);
+    let disk = format!(
+        "{PLANE}\n[[lights]]\ntype = \"disk\"\nradiance = [{radiance}, {radiance}, {radiance}]\nrotate = [180, 0, 0]\ntranslate = [0, 0, {h}]\nsegments = 256\ncamera_visible = false\n"
+    );
+    let l = centre_mean(&disk, 256);
+    // 256 spp × 16 pixels of MIS-weighted samples: a 2 % band is over five standard errors.
+    assert!(
+        (l.x - expected).abs() < 0.02 * expected,
+        "disk: {l} vs {expected}"
+    );
+    // A sphere light of radius r at distance d subtends sin²θ = r²/d²: E = π L r² / d².
+    let sphere = format!(
+        "{PLANE}\n[[lights]]\ntype = \"sphere\"\nradiance = [{radiance}, {radiance}, {radiance}]\ncenter = [0, 0, 3]\nradius = 0.5\ncamera_visible = false\n"
+    );
+    let expected = 0.5 * radiance * 0.25 / 9.0;
+    let l = centre_mean(&sphere, 256);
+    assert!(
+        (l.x - expected).abs() < 0.02 * expected,
+        "sphere: {l} vs {expected}"
+    );
+}
+
+#[test]
+fn an_environment_map_dome_lights_a_furnace() {
+    // A constant EXR dome of radiance 1 around a white sphere: the furnace again, through
+    // the importance-sampled map.
+    let dir = std::env::temp_dir().join(format!("lightpath-env-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let (w, h) = (32usize, 16usize);
+    let planes = ["R", "G", "B", "A"].map(|c| (c.to_string(), vec![1.0f32; w * h]));
+    lightpath::output::write_channels(&dir.join("sky.exr"), w, h, planes.to_vec(), &[], false)
+        .unwrap();
+    let text = FURNACE
+        .replace("MATERIAL", "diffuse")
+        .replace("albedo = [1, 1, 1]\nior = 1.5", "albedo = [1, 1, 1]")
+        .replace("radiance = [1, 1, 1]", "map = \"sky.exr\"");
+    let src = Source {
+        name: "env".into(),
+        text,
+        dir: dir.clone(),
+    };
+    let (_, film) = render_aovs(&src, 16, 16, None, vec![]);
+    let r = film.channel(0, 0);
+    let a = film.alpha();
+    let seen: Vec<f32> = r
+        .iter()
+        .zip(&a)
+        .filter(|(_, a)| **a > 0.999)
+        .map(|(v, _)| *v)
+        .collect();
+    let mean = seen.iter().sum::<f32>() / seen.len() as f32;
+    assert!((mean - 1.0).abs() < 0.02, "{mean}");
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn obj_meshes_load_relative_to_the_scene_file() {
+    let dir = std::env::temp_dir().join(format!("lightpath-obj-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    std::fs::write(
+        dir.join("quad.obj"),
+        "v -1 -1 0\nv 1 -1 0\nv 1 1 0\nv -1 1 0\nvn 0 0 1\nf 1//1 2//1 3//1\nf 1//1 3//1 4//1\n",
+    )
+    .unwrap();
+    let scene = format!(
+        "{}\n[[lights]]\ntype = \"point\"\nposition = [0, 0, 2]\nintensity = [4, 4, 4]\n",
+        PLANE.replace(
+            "shape = \"rectangle\"",
+            "shape = \"obj\"\nfile = \"quad.obj\""
+        )
+    );
+    std::fs::write(dir.join("scene.toml"), &scene).unwrap();
+    let src = Source::from_file(&dir.join("scene.toml")).unwrap();
+    let (_, film) = render_aovs(&src, 16, 2, Some(2), vec![]);
+    let l = film.pixel(0, 8, 8);
+    let expected = 0.5 / std::f32::consts::PI;
+    assert!((l.x - expected).abs() < 1e-3 * expected, "{l}");
+    // A missing file is an error that names it.
+    std::fs::write(
+        dir.join("bad.toml"),
+        scene.replace("quad.obj", "missing.obj"),
+    )
+    .unwrap();
+    let src = Source::from_file(&dir.join("bad.toml")).unwrap();
+    let err = Scene::build(&src, &src.parse().unwrap(), &aov::assemble(vec![]))
+        .err()
+        .unwrap();
+    assert!(
+        err.to_string().contains("missing.obj") && err.line > 0,
+        "{err}"
+    );
+    std::fs::remove_dir_all(&dir).unwrap();
+}

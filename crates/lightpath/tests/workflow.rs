@@ -408,3 +408,25 @@ emission = [inf, 1, 1]
     assert!(film.channel(0, 0).iter().all(|v| v.is_finite()));
     assert!(film.channel(1, 0).iter().any(|v| v.is_infinite()));
 }
+
+#[test]
+fn user_colour_lobes_report_the_material_colour() {
+    let text = TWO_ROOMS.replace(
+        "albedo = [0.8, 0.8, 0.8]",
+        "albedo = [0.8, 0.8, 0.8]\nuser_color = [0.1, 0.2, 0.3]",
+    );
+    let aovs = vec![AovSpec::new("user", "nothruput;overwrite;unoccluded;CU4L")];
+    let (scene, film, _) = run(&source(&text), small(16, 2), aovs);
+    let v = film.pixel(idx(&scene, "user"), film.width / 4, film.height / 2);
+    assert!(
+        (v - Vec3A::new(0.1, 0.2, 0.3)).abs().max_element() < 1e-6,
+        "{v}"
+    );
+    // Materials without a user colour emit no U4 event at all.
+    let (scene, film, _) = run(
+        &source(TWO_ROOMS),
+        small(16, 2),
+        vec![AovSpec::new("user", "nothruput;CU4L")],
+    );
+    assert_eq!(sum(&film, idx(&scene, "user")), Vec3A::ZERO);
+}

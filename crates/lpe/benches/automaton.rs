@@ -98,15 +98,18 @@ fn step_bench(c: &mut Criterion) {
             .collect();
         let camera = classes[0];
         // The bare chain of dependent table loads.
-        group.bench_function(format!("{n} rules ({} states), raw chain", a.state_count()), |b| {
-            b.iter(|| {
-                let mut s = a.step(a.start(), camera);
-                for &class in &walk {
-                    s = a.step(s, class);
-                }
-                black_box(s)
-            })
-        });
+        group.bench_function(
+            format!("{n} rules ({} states), raw chain", a.state_count()),
+            |b| {
+                b.iter(|| {
+                    let mut s = a.step(a.start(), camera);
+                    for &class in &walk {
+                        s = a.step(s, class);
+                    }
+                    black_box(s)
+                })
+            },
+        );
         group.bench_function(format!("{n} rules ({} states)", a.state_count()), |b| {
             b.iter(|| {
                 // A dead state ends the path and the next one starts at the camera, as in
