@@ -80,6 +80,15 @@ struct PathCounters {
     holdout: bool,
 }
 
+/// Where a path is when a ray finds a light.
+struct Seen {
+    state: StateId,
+    throughput: Vec3A,
+    depth: u32,
+    prev_pdf: f32,
+    prev_delta: bool,
+}
+
 /// What one contribution carries besides its value.
 #[derive(Clone, Copy)]
 struct Origin {
@@ -203,6 +212,66 @@ impl<'a> Tracer<'a> {
         counters.nonfinite += dropped as u64;
     }
 
+    /// Light `li` found by a ray with radiance `le`: an `O` event seen from the camera,
+    /// else an `L` event weighted against light sampling (`light_pdf`: the solid-angle pdf
+    /// light sampling would have had for this direction).
+    fn light_seen(
+        &self,
+        acc: &mut SampleAccumulator,
+        counters: &mut PathCounters,
+        seen: &Seen,
+        li: u32,
+        le: Vec3A,
+        light_pdf: impl FnOnce(&crate::light::Light) -> f32,
+    ) {
+        let scene = self.scene;
+        let light = &scene.lights[li as usize];
+        let (l_class, o_class) = scene.light_classes[li as usize];
+        let part = scene.light_parts[li as usize];
+        let (class, weight, origin) = if seen.depth == 0 {
+            if !light.camera_visible {
+                return;
+            }
+            let via = Via::Hit {
+                light_sampled: false,
+                light_after_scatter: false,
+            };
+            (
+                o_class,
+                1.0,
+                Origin {
+                    via,
+                    scatters: 0,
+                    part,
+                },
+            )
+        } else {
+            let w = if seen.prev_delta {
+                1.0
+            } else {
+                power_heuristic(
+                    seen.prev_pdf,
+                    scene.light_select.pmf(li as usize) * light_pdf(light),
+                )
+            };
+            let via = Via::Hit {
+                light_sampled: !seen.prev_delta,
+                light_after_scatter: true,
+            };
+            (
+                l_class,
+                w,
+                Origin {
+                    via,
+                    scatters: seen.depth,
+                    part,
+                },
+            )
+        };
+        let s = scene.automaton.step(seen.state, class);
+        self.contribute(acc, counters, s, seen.throughput, le, weight, origin);
+    }
+
     fn spawn(&self, hit: &Hit, dir: Vec3A, tmax: f32) -> Ray {
         let side = if dir.dot(hit.ng) >= 0.0 { 1.0 } else { -1.0 };
         Ray {
@@ -277,63 +346,18 @@ impl<'a> Tracer<'a> {
             };
             let Some(hit) = scene.accel.intersect(&ray, 0.0, mask) else {
                 for &li in &scene.escape_lights {
-                    let light = &scene.lights[li as usize];
-                    let le = light.emitted_escaped(ray.dir);
-                    if le == Vec3A::ZERO || !lit(prev_object, li) {
-                        continue;
-                    }
-                    let (l_class, o_class) = scene.light_classes[li as usize];
-                    let part = scene.light_parts[li as usize];
-                    if depth == 0 {
-                        if light.camera_visible {
-                            let s = a.step(state, o_class);
-                            let via = Via::Hit {
-                                light_sampled: false,
-                                light_after_scatter: false,
-                            };
-                            self.contribute(
-                                acc,
-                                counters,
-                                s,
-                                throughput,
-                                le,
-                                1.0,
-                                Origin {
-                                    via,
-                                    scatters: 0,
-                                    part,
-                                },
-                            );
-                        }
-                    } else {
-                        let s = a.step(state, l_class);
-                        let w = if prev_delta {
-                            1.0
-                        } else {
-                            let light_pdf =
-                                light.pdf_hit(prev_p, ray.dir, f32::INFINITY, Vec3A::ZERO);
-                            power_heuristic(
-                                prev_pdf,
-                                scene.light_select.pmf(li as usize) * light_pdf,
-                            )
-                        };
-                        let via = Via::Hit {
-                            light_sampled: !prev_delta,
-                            light_after_scatter: true,
-                        };
-                        self.contribute(
-                            acc,
-                            counters,
-                            s,
+                    let le = scene.lights[li as usize].emitted_escaped(ray.dir);
+                    if le != Vec3A::ZERO && lit(prev_object, li) {
+                        let seen = Seen {
+                            state,
                             throughput,
-                            le,
-                            w,
-                            Origin {
-                                via,
-                                scatters: depth,
-                                part,
-                            },
-                        );
+                            depth,
+                            prev_pdf,
+                            prev_delta,
+                        };
+                        self.light_seen(acc, counters, &seen, li, le, |light| {
+                            light.pdf_hit(prev_p, ray.dir, f32::INFINITY, Vec3A::ZERO)
+                        });
                     }
                 }
                 break;
@@ -349,56 +373,16 @@ impl<'a> Tracer<'a> {
                 let light = &scene.lights[li as usize];
                 let le = light.emitted_at(hit.ng, ray.dir);
                 if le != Vec3A::ZERO && lit(prev_object, li) {
-                    let (l_class, o_class) = scene.light_classes[li as usize];
-                    let part = scene.light_parts[li as usize];
-                    if depth == 0 {
-                        let s = a.step(state, o_class);
-                        let via = Via::Hit {
-                            light_sampled: false,
-                            light_after_scatter: false,
-                        };
-                        self.contribute(
-                            acc,
-                            counters,
-                            s,
-                            throughput,
-                            le,
-                            1.0,
-                            Origin {
-                                via,
-                                scatters: 0,
-                                part,
-                            },
-                        );
-                    } else {
-                        let s = a.step(state, l_class);
-                        let w = if prev_delta {
-                            1.0
-                        } else {
-                            let light_pdf = light.pdf_hit(prev_p, ray.dir, hit.t, hit.ng);
-                            power_heuristic(
-                                prev_pdf,
-                                scene.light_select.pmf(li as usize) * light_pdf,
-                            )
-                        };
-                        let via = Via::Hit {
-                            light_sampled: !prev_delta,
-                            light_after_scatter: true,
-                        };
-                        self.contribute(
-                            acc,
-                            counters,
-                            s,
-                            throughput,
-                            le,
-                            w,
-                            Origin {
-                                via,
-                                scatters: depth,
-                                part,
-                            },
-                        );
-                    }
+                    let seen = Seen {
+                        state,
+                        throughput,
+                        depth,
+                        prev_pdf,
+                        prev_delta,
+                    };
+                    self.light_seen(acc, counters, &seen, li, le, |light| {
+                        light.pdf_hit(prev_p, ray.dir, hit.t, hit.ng)
+                    });
                 }
             } else if let Some(glow) = obj.glow_class {
                 let s = a.step(state, glow);

@@ -204,40 +204,7 @@ fn guide_examples_select_what_they_say() {
     );
 }
 
-const TWO_ROOMS: &str = r#"
-[camera]
-position = [0, 3, 0.01]
-look_at = [0, 0, 0]
-fov = 80
-[materials.white]
-type = "diffuse"
-albedo = [0.8, 0.8, 0.8]
-[[objects]]
-name = "floor"
-shape = "rectangle"
-material = "white"
-rotate = [-90, 0, 0]
-scale = 2
-[[objects]]
-name = "divider"
-shape = "cube"
-material = "white"
-scale = [0.02, 2.5, 2]
-[[lights]]
-type = "sphere"
-groups = ["key"]
-center = [-1, 0.5, 0]
-radius = 0.1
-radiance = [20, 20, 20]
-camera_visible = false
-[[lights]]
-type = "sphere"
-groups = ["fill"]
-center = [1, 0.5, 0]
-radius = 0.1
-radiance = [10, 10, 10]
-camera_visible = false
-"#;
+const TWO_ROOMS: &str = include_str!("../../../scenes/two-rooms.toml");
 
 #[test]
 fn a_light_group_is_zero_where_only_the_other_light_reaches() {
