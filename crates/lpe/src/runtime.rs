@@ -523,6 +523,11 @@ impl Automaton {
         self.stride as usize
     }
 
+    /// Every state of the automaton (for precomputing per-state facts at scene build).
+    pub fn states(&self) -> impl Iterator<Item = StateId> + '_ {
+        (0..self.state_count() as u32).map(move |i| StateId(i * self.stride))
+    }
+
     pub fn state_count(&self) -> usize {
         self.table.len() / self.stride as usize
     }

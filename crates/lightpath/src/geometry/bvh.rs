@@ -26,6 +26,8 @@ pub struct Accel {
     normals: Vec<[Vec3A; 3]>,
     /// Which kinds of ray see each primitive (`Visibility` bits), in the same order.
     visibility: Vec<u8>,
+    /// Unit geometric normal of each triangle (unused for spheres), in the same order.
+    face_normals: Vec<Vec3A>,
     empty: bool,
 }
 
@@ -61,6 +63,7 @@ impl Accel {
                 objects,
                 normals,
                 visibility,
+                face_normals: Vec::new(),
                 empty: true,
             };
         }
@@ -82,12 +85,20 @@ impl Accel {
         let objects: Vec<u32> = order.iter().map(|&i| objects[i as usize]).collect();
         let visibility: Vec<u8> = order.iter().map(|&i| visibility[i as usize]).collect();
         bvh.primitive_indices = (0..order.len() as u32).collect();
+        let face_normals = prims
+            .iter()
+            .map(|p| match p {
+                Prim::Triangle { e1, e2, .. } => e1.cross(*e2).normalize_or(Vec3A::Z),
+                Prim::Sphere { .. } => Vec3A::Z,
+            })
+            .collect();
         Accel {
             bvh,
             prims,
             objects,
             normals,
             visibility,
+            face_normals,
             empty: false,
         }
     }
@@ -178,7 +189,7 @@ impl Accel {
                 e2,
                 normals,
             } => {
-                let ng = e1.cross(e2).normalize();
+                let ng = self.face_normals[prim as usize];
                 let ns = if normals == u32::MAX {
                     ng
                 } else {

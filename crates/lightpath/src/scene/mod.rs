@@ -577,7 +577,21 @@ impl Scene {
         for o in &mut objects {
             let (lobes, data) = object_events(o, &materials);
             o.lobe_classes = lobes.iter().map(classify).collect();
-            o.data_lobes = data.iter().map(|(k, e)| (*k, classify(e))).collect();
+            // Keep only data lobes some rule can accept: the others would cost two steps
+            // per vertex for nothing.
+            let data_light = classify(&Event::bare(EventType::Light));
+            o.data_lobes = data
+                .iter()
+                .map(|(k, e)| (*k, classify(e)))
+                .filter(|(_, class)| {
+                    automaton.states().any(|s| {
+                        let after = automaton.step(s, *class);
+                        !automaton
+                            .accepting(automaton.step(after, data_light))
+                            .is_empty()
+                    })
+                })
+                .collect();
             o.glow_class = (o.emission != Vec3A::ZERO)
                 .then(|| classify(&Event::new(EventType::Emission, None, o.groups.iter())));
         }
