@@ -126,6 +126,9 @@ pub enum LightShape {
         prims: Vec<Prim>,
         /// Unit normal of each triangle, precomputed for sampling.
         normals: Vec<Vec3A>,
+        /// Corner and edges when the triangles form one parallelogram (rectangle and
+        /// most quad lights): sampled directly, uniformly in area.
+        parallelogram: Option<[Vec3A; 3]>,
         by_area: Distribution1D,
         area: f32,
         two_sided: bool,
@@ -222,17 +225,22 @@ impl Light {
             LightShape::Triangles {
                 prims,
                 normals,
+                parallelogram,
                 by_area,
                 area,
                 two_sided,
             } => {
-                let (i, _, ux) = by_area.sample(u.x);
-                let Prim::Triangle { p0, e1, e2, .. } = prims[i] else {
-                    return None;
+                let (q, n) = match parallelogram {
+                    Some([p0, e1, e2]) => (*p0 + *e1 * u.x + *e2 * u.y, normals[0]),
+                    None => {
+                        let (i, _, ux) = by_area.sample(u.x);
+                        let Prim::Triangle { p0, e1, e2, .. } = prims[i] else {
+                            return None;
+                        };
+                        let (b1, b2) = uniform_triangle(Vec2::new(ux, u.y));
+                        (p0 + e1 * b1 + e2 * b2, normals[i])
+                    }
                 };
-                let (b1, b2) = uniform_triangle(Vec2::new(ux, u.y));
-                let q = p0 + e1 * b1 + e2 * b2;
-                let n = normals[i];
                 let d = q - p;
                 let dist2 = d.length_squared();
                 let dist = dist2.sqrt();

@@ -356,6 +356,7 @@ fn light_shape(
             })
             .collect();
         let shape = LightShape::Triangles {
+            parallelogram: parallelogram(&prims.prims),
             prims: prims.prims.clone(),
             normals,
             by_area: Distribution1D::new(&areas),
@@ -414,6 +415,27 @@ fn light_shape(
             ))
         }
     })
+}
+
+/// Two triangles `(c0, c1, c2)`, `(c0, c2, c3)` that form a parallelogram, as corner and
+/// edges.
+fn parallelogram(prims: &[Prim]) -> Option<[Vec3A; 3]> {
+    let [Prim::Triangle {
+        p0, e1: a1, e2: a2, ..
+    }, Prim::Triangle {
+        p0: q0,
+        e1: b1,
+        e2: b2,
+        ..
+    }] = prims
+    else {
+        return None;
+    };
+    let same_start = (*p0 - *q0).length() <= 1e-6 * (1.0 + p0.length());
+    let diagonal_shared = (*a2 - *b1).length() <= 1e-6 * (1.0 + a2.length());
+    // c1 + c3 = c0 + c2  ⇔  a1 + b2 = a2.
+    let closes = (*a1 + *b2 - *a2).length() <= 1e-5 * (1.0 + a2.length());
+    (same_start && diagonal_shared && closes).then_some([*p0, *a1, *b2])
 }
 
 fn load_env(src: &Source, path: &Path, span: Range<usize>) -> Result<EnvMap, SceneError> {
