@@ -412,7 +412,12 @@ impl<'a> Tracer<'a> {
             }
 
             // Data lobes, each as if lit by a unit light (LPE.md §1).
-            for &(kind, class) in &obj.data_lobes {
+            let data_lobes = if scene.data_live[a.state_index(state)] {
+                &obj.data_lobes[..]
+            } else {
+                &[]
+            };
+            for &(kind, class) in data_lobes {
                 let s1 = a.step(state, class);
                 if a.is_dead(s1) {
                     continue;

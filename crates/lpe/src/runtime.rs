@@ -473,6 +473,12 @@ impl Automaton {
         self.table[(state.0 + class.0) as usize]
     }
 
+    /// A dense index of the state, `0..state_count()`, for per-state tables.
+    #[inline(always)]
+    pub fn state_index(&self, state: StateId) -> usize {
+        (state.0 / self.stride) as usize
+    }
+
     /// True if no rule can match any continuation: the path can stop.
     #[inline(always)]
     pub fn is_dead(&self, state: StateId) -> bool {

@@ -192,6 +192,9 @@ pub struct Scene {
     pub light_parts: Vec<u32>,
     /// True if any rule has the `unoccluded` or `shadows` prefix.
     pub any_unoccluded: bool,
+    /// Per automaton state: can some object's data lobe be accepted from here? Most
+    /// states cannot, and the integrator skips the data lobes there.
+    pub data_live: Vec<bool>,
 }
 
 fn v3(a: [f32; 3]) -> Vec3A {
@@ -760,6 +763,23 @@ impl Scene {
                 });
             }
         }
+        let data_classes: Vec<ClassId> = objects
+            .iter()
+            .flat_map(|o| o.data_lobes.iter().map(|d| d.1))
+            .collect();
+        let data_light = automaton.classify(&Event::bare(EventType::Light));
+        let data_live = automaton
+            .states()
+            .map(|s| {
+                data_light.is_some_and(|l| {
+                    data_classes.iter().any(|c| {
+                        !automaton
+                            .accepting(automaton.step(automaton.step(s, *c), l))
+                            .is_empty()
+                    })
+                })
+            })
+            .collect();
         let any_unoccluded = out.iter().any(|a| {
             a.flags.contains(lpe::Prefix::Unoccluded) || a.flags.contains(lpe::Prefix::Shadows)
         });
@@ -784,6 +804,7 @@ impl Scene {
             light_groups,
             light_parts,
             any_unoccluded,
+            data_live,
         })
     }
 }
