@@ -22,22 +22,10 @@ impl Film {
         3 * aovs + 1
     }
 
-    /// Builds the film from rendered rows (each `width × stride` interleaved sums), in
-    /// order, releasing each row as soon as it is copied.
-    pub fn from_rows(width: u32, height: u32, aovs: usize, spp: u32, rows: Vec<Vec<f32>>) -> Film {
-        let stride = Film::stride_for(aovs);
+    /// An empty film (planes are allocated zeroed, so untouched pages cost nothing).
+    pub fn new(width: u32, height: u32, aovs: usize, spp: u32) -> Film {
         let n = width as usize * height as usize;
-        let mut planes: Vec<Vec<f32>> = (0..stride).map(|_| vec![0.0; n]).collect();
-        for (y, row) in rows.into_iter().enumerate() {
-            let base = y * width as usize;
-            // Plane by plane, so each plane is written sequentially.
-            for (c, plane) in planes.iter_mut().enumerate() {
-                let dst = &mut plane[base..base + width as usize];
-                for (d, px) in dst.iter_mut().zip(row.chunks_exact(stride)) {
-                    *d = px[c];
-                }
-            }
-        }
+        let planes = (0..Film::stride_for(aovs)).map(|_| vec![0.0; n]).collect();
         Film {
             width,
             height,
@@ -45,6 +33,26 @@ impl Film {
             spp,
             planes,
         }
+    }
+
+    /// Moves rendered rows (each `width × stride` interleaved sums) starting at row
+    /// `first_row` into the planes, one plane per thread.
+    pub fn store_rows(&mut self, first_row: usize, rows: &[f32]) {
+        use rayon::prelude::*;
+        let stride = Film::stride_for(self.aovs);
+        let start = first_row * self.width as usize;
+        let pixels = rows.len() / stride;
+        self.planes
+            .par_iter_mut()
+            .enumerate()
+            .for_each(|(c, plane)| {
+                for (d, px) in plane[start..start + pixels]
+                    .iter_mut()
+                    .zip(rows.chunks_exact(stride))
+                {
+                    *d = px[c];
+                }
+            });
     }
 
     /// The mean value of AOV `k` at pixel (x, y).

@@ -591,6 +591,9 @@ impl<'a> Tracer<'a> {
     }
 }
 
+/// Rows rendered between two moves into the film's planes.
+const BAND_ROWS: usize = 32;
+
 /// Renders the scene into a film holding every AOV.
 pub fn render(scene: &Scene, options: &RenderOptions) -> (Film, RenderStats) {
     let start = std::time::Instant::now();
@@ -613,12 +616,21 @@ pub fn render(scene: &Scene, options: &RenderOptions) -> (Film, RenderStats) {
     } else {
         indicatif::ProgressBar::hidden()
     };
-    let rows: Vec<Vec<f32>> = (0..h)
-        .into_par_iter()
-        .map_init(
+    // Rows are rendered a band at a time into one reused interleaved buffer (a sample
+    // writes one contiguous run), and each band is moved into the film's planes: the
+    // peak memory is the film plus one band, with no allocation churn.
+    let band_rows = BAND_ROWS.min(h as usize).max(1);
+    let row_len = stride * w as usize;
+    let mut band = vec![0.0f32; band_rows * row_len];
+    let mut film = Film::new(w, h, scene.aovs.len(), options.spp);
+    for first_row in (0..h as usize).step_by(band_rows) {
+        let rows_here = band_rows.min(h as usize - first_row);
+        let band = &mut band[..rows_here * row_len];
+        band.fill(0.0);
+        band.par_chunks_mut(row_len).enumerate().for_each_init(
             || SampleAccumulator::new(scene.aovs.len()),
-            |acc, y| {
-                let mut row = vec![0.0f32; stride * w as usize];
+            |acc, (i, row)| {
+                let y = (first_row + i) as u32;
                 let mut counters = PathCounters {
                     rays: 0,
                     nonfinite: 0,
@@ -640,11 +652,10 @@ pub fn render(scene: &Scene, options: &RenderOptions) -> (Film, RenderStats) {
                 rays.fetch_add(counters.rays, Ordering::Relaxed);
                 nonfinite.fetch_add(counters.nonfinite, Ordering::Relaxed);
                 bar.inc(1);
-                row
             },
-        )
-        .collect();
-    let film = Film::from_rows(w, h, scene.aovs.len(), options.spp, rows);
+        );
+        film.store_rows(first_row, band);
+    }
     bar.finish_and_clear();
     let stats = RenderStats {
         samples: w as u64 * h as u64 * options.spp as u64,
