@@ -1,7 +1,7 @@
-//! The film: one RGB accumulator per AOV per pixel, plus alpha. Rendering fills rows
-//! stored pixel by pixel (a sample writes one contiguous run); the finished film keeps
-//! one plane per channel, so output hands the planes to the EXR writer without copying
-//! and the peak memory stays about one film.
+//! The film: one RGB accumulator per AOV per pixel, plus alpha. Rendering fills a band
+//! of rows stored pixel by pixel (a sample writes one contiguous run); the film keeps one
+//! plane per channel, so output hands the planes to the EXR writer without copying and
+//! the peak memory stays about one film.
 
 use glam::Vec3A;
 
