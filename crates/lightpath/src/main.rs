@@ -118,6 +118,9 @@ struct RenderArgs {
     /// Write half-float channels instead of float32.
     #[arg(long)]
     half: bool,
+    /// EXR compression: none, rle, zip (default) or piz.
+    #[arg(long, default_value = "zip", value_parser = output::ExrCompression::parse)]
+    compression: output::ExrCompression,
     /// Exposure of the PNG preview, in stops.
     #[arg(long, default_value_t = 0.0)]
     exposure: f32,
@@ -268,7 +271,7 @@ fn comp_command(args: CompArgs) -> ExitCode {
             exr.height,
             channels,
             &attributes,
-            false,
+            Default::default(),
         )?;
         let png = args.output.with_extension("png");
         output::write_png_rgb(
@@ -425,7 +428,17 @@ fn render(args: RenderArgs) -> ExitCode {
         return ExitCode::FAILURE;
     }
     let (width, height, spp) = (film.width, film.height, film.spp);
-    if let Err(e) = output::write_exr(&exr_path, film, &scene.aovs, derived, args.half, &extra) {
+    if let Err(e) = output::write_exr(
+        &exr_path,
+        film,
+        &scene.aovs,
+        derived,
+        output::ExrOptions {
+            half: args.half,
+            compression: args.compression,
+        },
+        &extra,
+    ) {
         tell!("error: {e}");
         return ExitCode::FAILURE;
     }

@@ -8,6 +8,55 @@ use crate::scene::Aov;
 use exr::prelude::*;
 use std::path::{Path, PathBuf};
 
+/// How EXR channels are stored.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub struct ExrOptions {
+    /// Half floats instead of float32.
+    pub half: bool,
+    pub compression: ExrCompression,
+}
+
+/// EXR compression (all lossless).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub enum ExrCompression {
+    None,
+    Rle,
+    /// ZIP over 16 scan lines: compact, the default.
+    #[default]
+    Zip,
+    /// Wavelet: the usual choice for noisy float renders in VFX pipelines.
+    Piz,
+}
+
+impl ExrCompression {
+    pub fn parse(s: &str) -> std::result::Result<ExrCompression, String> {
+        Ok(match s {
+            "none" => ExrCompression::None,
+            "rle" => ExrCompression::Rle,
+            "zip" => ExrCompression::Zip,
+            "piz" => ExrCompression::Piz,
+            other => {
+                return Err(format!(
+                    "unknown compression '{other}': expected none, rle, zip or piz"
+                ))
+            }
+        })
+    }
+
+    fn encoding(self) -> Encoding {
+        let compression = match self {
+            ExrCompression::None => Compression::Uncompressed,
+            ExrCompression::Rle => Compression::RLE,
+            ExrCompression::Zip => Compression::ZIP16,
+            ExrCompression::Piz => Compression::PIZ,
+        };
+        Encoding {
+            compression,
+            ..Encoding::SMALL_LOSSLESS
+        }
+    }
+}
+
 /// Header attribute holding an AOV's definition: `lightpath/aov/<name>`.
 pub const AOV_ATTRIBUTE_PREFIX: &str = "lightpath/aov/";
 
@@ -95,7 +144,7 @@ pub fn write_exr(
     film: Film,
     aovs: &[Aov],
     derived: Vec<DerivedAov>,
-    half: bool,
+    options: ExrOptions,
     extra: &[(String, String)],
 ) -> std::result::Result<(), String> {
     let (width, height) = (film.width as usize, film.height as usize);
@@ -119,7 +168,7 @@ pub fn write_exr(
         attributes.push((format!("{AOV_ATTRIBUTE_PREFIX}{}", d.name), d.definition));
     }
     attributes.extend(extra.iter().cloned());
-    write_channels(path, width, height, channels, &attributes, half)
+    write_channels(path, width, height, channels, &attributes, options)
 }
 
 /// Writes named float channels and text attributes as one single-part EXR, atomically.
@@ -129,12 +178,12 @@ pub fn write_channels(
     height: usize,
     channels: Vec<(String, Vec<f32>)>,
     attributes: &[(String, String)],
-    half: bool,
+    options: ExrOptions,
 ) -> std::result::Result<(), String> {
     let channels: Vec<AnyChannel<FlatSamples>> = channels
         .into_iter()
         .map(|(name, v)| {
-            let samples = if half {
+            let samples = if options.half {
                 FlatSamples::F16(v.into_iter().map(f16::from_f32).collect())
             } else {
                 FlatSamples::F32(v)
@@ -152,8 +201,7 @@ pub fn write_channels(
     let layer = Layer::new(
         (width, height),
         layer_attributes,
-        // ZIP per 16 lines: lossless, compact, and compressed in parallel by `exr`.
-        Encoding::SMALL_LOSSLESS,
+        options.compression.encoding(),
         AnyChannels::sort(SmallVec::from_vec(channels)),
     );
     let image = Image::from_layer(layer);

@@ -266,7 +266,10 @@ fn aovs_checks_partitions_and_comp_relights() {
         src.height,
         channels,
         &src.attributes,
-        false,
+        lightpath::output::ExrOptions {
+            half: false,
+            compression: lightpath::output::ExrCompression::Piz,
+        },
     )
     .unwrap();
     let report = lightpath().arg("aovs").arg(&bad).output().unwrap();

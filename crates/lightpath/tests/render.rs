@@ -310,7 +310,15 @@ fn exr_round_trips_channels_values_and_expressions() {
     let dir = std::env::temp_dir().join(format!("lightpath-exr-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     let path = dir.join("t.exr");
-    lightpath::output::write_exr(&path, film.clone(), &scene.aovs, vec![], false, &[]).unwrap();
+    lightpath::output::write_exr(
+        &path,
+        film.clone(),
+        &scene.aovs,
+        vec![],
+        Default::default(),
+        &[],
+    )
+    .unwrap();
     let back = lightpath::output::read_exr(&path).unwrap();
     let mut names: Vec<&str> = back.channels.iter().map(|(n, _)| n.as_str()).collect();
     names.sort();
@@ -464,8 +472,15 @@ fn an_environment_map_dome_lights_a_furnace() {
     std::fs::create_dir_all(&dir).unwrap();
     let (w, h) = (32usize, 16usize);
     let planes = ["R", "G", "B", "A"].map(|c| (c.to_string(), vec![1.0f32; w * h]));
-    lightpath::output::write_channels(&dir.join("sky.exr"), w, h, planes.to_vec(), &[], false)
-        .unwrap();
+    lightpath::output::write_channels(
+        &dir.join("sky.exr"),
+        w,
+        h,
+        planes.to_vec(),
+        &[],
+        Default::default(),
+    )
+    .unwrap();
     let text = FURNACE
         .replace("MATERIAL", "diffuse")
         .replace("albedo = [1, 1, 1]\nior = 1.5", "albedo = [1, 1, 1]")
