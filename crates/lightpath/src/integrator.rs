@@ -591,8 +591,9 @@ impl<'a> Tracer<'a> {
     }
 }
 
-/// Rows rendered between two moves into the film's planes.
-const BAND_ROWS: usize = 32;
+/// Size of the band of rows rendered between two moves into the film's planes: large
+/// enough that threads rarely wait for each other at a band's end, small next to a film.
+const BAND_BYTES: usize = 16 << 20;
 
 /// Renders the scene into a film holding every AOV.
 pub fn render(scene: &Scene, options: &RenderOptions) -> (Film, RenderStats) {
@@ -619,8 +620,8 @@ pub fn render(scene: &Scene, options: &RenderOptions) -> (Film, RenderStats) {
     // Rows are rendered a band at a time into one reused interleaved buffer (a sample
     // writes one contiguous run), and each band is moved into the film's planes: the
     // peak memory is the film plus one band, with no allocation churn.
-    let band_rows = BAND_ROWS.min(h as usize).max(1);
     let row_len = stride * w as usize;
+    let band_rows = (BAND_BYTES / (4 * row_len)).clamp(8, h.max(1) as usize);
     let mut band = vec![0.0f32; band_rows * row_len];
     let mut film = Film::new(w, h, scene.aovs.len(), options.spp);
     for first_row in (0..h as usize).step_by(band_rows) {
