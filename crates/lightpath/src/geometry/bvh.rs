@@ -76,7 +76,14 @@ impl Accel {
             .collect();
         let mut bvh = build_cwbvh(
             &boxes,
-            BvhBuildParams::medium_build(),
+            // Spatial pre-splits and more optimisation make a better tree (4.5 % fewer
+            // instructions on cornell-classic); past a few hundred thousand primitives the
+            // build time is not worth it.
+            if boxes.len() < 200_000 {
+                BvhBuildParams::slow_build()
+            } else {
+                BvhBuildParams::medium_build()
+            },
             &mut Default::default(),
         );
         // Lay the primitives out in leaf order so traversal indexes them directly.
