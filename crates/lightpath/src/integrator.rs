@@ -344,17 +344,18 @@ impl<'a> Tracer<'a> {
             } else {
                 Visibility::INDIRECT
             };
+            // Where the path is, should the ray find a light.
+            let seen = Seen {
+                state,
+                throughput,
+                depth,
+                prev_pdf,
+                prev_delta,
+            };
             let Some(hit) = scene.accel.intersect(&ray, 0.0, mask) else {
                 for &li in &scene.escape_lights {
                     let le = scene.lights[li as usize].emitted_escaped(ray.dir);
                     if le != Vec3A::ZERO && lit(prev_object, li) {
-                        let seen = Seen {
-                            state,
-                            throughput,
-                            depth,
-                            prev_pdf,
-                            prev_delta,
-                        };
                         self.light_seen(acc, counters, &seen, li, le, |light| {
                             light.pdf_hit(prev_p, ray.dir, f32::INFINITY, Vec3A::ZERO)
                         });
@@ -373,13 +374,6 @@ impl<'a> Tracer<'a> {
                 let light = &scene.lights[li as usize];
                 let le = light.emitted_at(hit.ng, ray.dir);
                 if le != Vec3A::ZERO && lit(prev_object, li) {
-                    let seen = Seen {
-                        state,
-                        throughput,
-                        depth,
-                        prev_pdf,
-                        prev_delta,
-                    };
                     self.light_seen(acc, counters, &seen, li, le, |light| {
                         light.pdf_hit(prev_p, ray.dir, hit.t, hit.ng)
                     });
