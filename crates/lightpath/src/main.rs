@@ -56,6 +56,13 @@ enum Command {
     },
     /// Composite AOVs by addition: relight without re-rendering.
     Comp(CompArgs),
+    /// Join EXRs of one frame rendered as different sample ranges (--first-sample) into
+    /// the EXR of all their samples.
+    Merge {
+        inputs: Vec<PathBuf>,
+        #[arg(short, long)]
+        output: PathBuf,
+    },
 }
 
 #[derive(clap::Args)]
@@ -118,6 +125,10 @@ struct RenderArgs {
     /// Write half-float channels instead of float32.
     #[arg(long)]
     half: bool,
+    /// Index of the first sample: a farm splits a frame into sample ranges (`--first-sample
+    /// 0 --spp 64`, `--first-sample 64 --spp 64`, …) and `lightpath merge` joins them.
+    #[arg(long, default_value_t = 0)]
+    first_sample: u32,
     /// EXR compression: none, rle, zip (default) or piz.
     #[arg(long, default_value = "zip", value_parser = output::ExrCompression::parse)]
     compression: output::ExrCompression,
@@ -167,6 +178,16 @@ fn main() -> ExitCode {
         Command::Lpe(cmd) => lpe_command(cmd),
         Command::Aovs { exr, tolerance } => aovs_command(&exr, tolerance),
         Command::Comp(args) => comp_command(args),
+        Command::Merge { inputs, output } => match lightpath::comp::merge(&inputs, &output) {
+            Ok(spp) => {
+                say!("wrote {} ({} samples per pixel)", output.display(), spp);
+                ExitCode::SUCCESS
+            }
+            Err(e) => {
+                tell!("error: {e}");
+                ExitCode::FAILURE
+            }
+        },
     }
 }
 
@@ -410,13 +431,17 @@ fn render(args: RenderArgs) -> ExitCode {
     let png_path = stem.with_extension("png");
     let options = lightpath::RenderOptions {
         spp: scene.settings.spp,
-        first_sample: 0,
+        first_sample: args.first_sample,
         progress: !args.quiet,
     };
     let (film, stats) = lightpath::render(&scene, &options);
     let extra = vec![
         ("lightpath/scene".to_string(), src.name.clone()),
         ("lightpath/spp".to_string(), scene.settings.spp.to_string()),
+        (
+            "lightpath/first_sample".to_string(),
+            args.first_sample.to_string(),
+        ),
         (
             "lightpath/seed".to_string(),
             scene.settings.seed.to_string(),

@@ -291,3 +291,76 @@ fn aovs_checks_partitions_and_comp_relights() {
         .contains("no AOV 'nothere'"));
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+#[test]
+fn sample_ranges_rendered_apart_merge_into_the_whole_frame() {
+    let dir = std::env::temp_dir().join(format!("lightpath-merge-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let render = |first: u32, spp: u32, name: &str| {
+        let out = lightpath()
+            .args([
+                "render",
+                "cornell",
+                "--quiet",
+                "--resolution",
+                "12x10",
+                "--spp",
+                &spp.to_string(),
+                "--first-sample",
+                &first.to_string(),
+                "-o",
+            ])
+            .arg(dir.join(name))
+            .output()
+            .unwrap();
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+    };
+    render(0, 4, "whole.exr");
+    render(0, 1, "a.exr");
+    render(1, 3, "b.exr");
+    let merged = dir.join("merged.exr");
+    let out = lightpath()
+        .arg("merge")
+        .arg(dir.join("a.exr"))
+        .arg(dir.join("b.exr"))
+        .arg("-o")
+        .arg(&merged)
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let (whole, merged) = (
+        lightpath::output::read_exr(&dir.join("whole.exr")).unwrap(),
+        lightpath::output::read_exr(&merged).unwrap(),
+    );
+    for (name, values) in &whole.channels {
+        let m = merged.channel(name).unwrap();
+        for (a, b) in values.iter().zip(m) {
+            assert!(
+                (a - b).abs() <= 1e-5 * a.abs().max(1.0),
+                "{name}: {a} vs {b}"
+            );
+        }
+    }
+    assert!(merged
+        .attributes
+        .contains(&("lightpath/spp".to_string(), "4".to_string())));
+    // The same range twice would count its samples twice.
+    let twice = lightpath()
+        .arg("merge")
+        .arg(dir.join("a.exr"))
+        .arg(dir.join("a.exr"))
+        .arg("-o")
+        .arg(dir.join("x.exr"))
+        .output()
+        .unwrap();
+    assert!(!twice.status.success());
+    std::fs::remove_dir_all(&dir).unwrap();
+}
