@@ -369,6 +369,33 @@ fn scene_errors_name_the_file_line_and_what_was_expected() {
         "{err}"
     );
 
+    for (text, line, what) in [
+        (
+            "[camera]\nposition = [0, 0, 1]\nlook_at = [0, 0, 1]\n",
+            1,
+            "look_at must differ",
+        ),
+        ("\n[camera]\nfov = 0\n", 2, "fov must be between"),
+        (
+            "[[objects]]\nshape = \"sphere\"\nradius = -1\n",
+            1,
+            "radius must be positive",
+        ),
+        (
+            "[materials.g]\ntype = \"dielectric\"\nior = 0\n",
+            1,
+            "ior must be positive",
+        ),
+    ] {
+        let src = source("v.toml", text);
+        let desc = src.parse().unwrap();
+        let err = Scene::build(&src, &desc, &aov::assemble(vec![]))
+            .err()
+            .unwrap();
+        assert!(err.message.contains(what), "{err}");
+        assert_eq!(err.line, line, "{err}");
+    }
+
     let bad_aov = aov::assemble(vec![AovSpec::new("x", "C<RD")]);
     let src = cornell();
     let err = Scene::build(&src, &src.parse().unwrap(), &bad_aov)

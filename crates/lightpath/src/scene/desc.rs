@@ -9,7 +9,7 @@ use toml::Spanned;
 #[serde(deny_unknown_fields)]
 pub struct SceneDesc {
     #[serde(default)]
-    pub camera: CameraDesc,
+    pub camera: Option<Spanned<CameraDesc>>,
     #[serde(default)]
     pub film: FilmDesc,
     #[serde(default)]

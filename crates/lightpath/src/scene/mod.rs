@@ -216,12 +216,19 @@ fn material(
         })
     };
     let alpha = roughness_to_alpha(m.roughness);
+    let ior = || match m.ior.unwrap_or(1.5) {
+        eta if eta > 0.0 && eta.is_finite() => Ok(eta),
+        eta => Err(src.error(
+            Some(span.clone()),
+            format!("material '{name}': ior must be positive, got {eta}"),
+        )),
+    };
     let bsdf = match m.kind.get_ref().as_str() {
         "diffuse" => Bsdf::Diffuse { albedo: need(m.albedo, "albedo")? },
         "translucent" => Bsdf::Translucent { reflect: need(m.reflect, "reflect")?, transmit: need(m.transmit, "transmit")? },
         "conductor" => Bsdf::Conductor { f0: need(m.f0, "f0")?, alpha },
-        "dielectric" => Bsdf::Dielectric { eta: m.ior.unwrap_or(1.5), alpha, tint: m.tint.map(v3).unwrap_or(Vec3A::ONE) },
-        "plastic" => Bsdf::Plastic { albedo: need(m.albedo, "albedo")?, eta: m.ior.unwrap_or(1.5), alpha },
+        "dielectric" => Bsdf::Dielectric { eta: ior()?, alpha, tint: m.tint.map(v3).unwrap_or(Vec3A::ONE) },
+        "plastic" => Bsdf::Plastic { albedo: need(m.albedo, "albedo")?, eta: ior()?, alpha },
         other => {
             return Err(src.error(
                 Some(m.kind.span()),
@@ -254,7 +261,10 @@ fn object_shape(
         "quad" => shapes::quad(o.corners.ok_or_else(|| missing("corners"))?.map(v3)),
         "sphere" => {
             let c = xf.transform_point3a(v3(o.center.unwrap_or([0.0; 3])));
-            shapes::sphere(c, o.radius.ok_or_else(|| missing("radius"))?)
+            match o.radius.ok_or_else(|| missing("radius"))? {
+                r if r > 0.0 && r.is_finite() => shapes::sphere(c, r),
+                r => return Err(src.error(Some(span), format!("sphere radius must be positive, got {r}"))),
+            }
         }
         "mesh" => {
             let pos: Vec<Vec3A> = o.positions.as_ref().ok_or_else(|| missing("positions"))?.iter().map(|p| v3(*p)).collect();
@@ -385,6 +395,9 @@ fn light_shape(
         "sphere" => {
             let center = xf.transform_point3a(v3(l.center.unwrap_or([0.0; 3])));
             let radius = l.radius.ok_or_else(|| src.error(Some(span.clone()), "sphere light needs 'radius'"))?;
+            if !(radius > 0.0 && radius.is_finite()) {
+                return Err(src.error(Some(span), format!("sphere light radius must be positive, got {radius}")));
+            }
             (LightShape::Sphere { center, radius }, Some(shapes::sphere(center, radius)), color(l.radiance, "radiance")?)
         }
         "point" => {
@@ -657,7 +670,11 @@ impl Scene {
         if w == 0 || h == 0 {
             return Err(src.error(None, "film resolution must be at least 1x1"));
         }
-        let c = &desc.camera;
+        let default_camera = desc::CameraDesc::default();
+        let (c, camera_span) = match &desc.camera {
+            Some(c) => (c.get_ref(), Some(c.span())),
+            None => (&default_camera, None),
+        };
         let fov_axis = match c.fov_axis.as_ref().map(|s| s.get_ref().as_str()) {
             None | Some("smaller") => FovAxis::Smaller,
             Some("larger") => FovAxis::Larger,
@@ -672,6 +689,28 @@ impl Scene {
         };
         let position = v3(c.position);
         let look_at = v3(c.look_at);
+        let forward = look_at - position;
+        if !forward.is_finite() || forward.length() < 1e-9 {
+            return Err(src.error(
+                camera_span.clone(),
+                "[camera]: look_at must differ from position",
+            ));
+        }
+        if v3(c.up).cross(forward).length() < 1e-9 * forward.length() {
+            return Err(src.error(
+                camera_span.clone(),
+                "[camera]: up must not point along the view direction",
+            ));
+        }
+        if !(c.fov > 0.0 && c.fov < 180.0) {
+            return Err(src.error(
+                camera_span.clone(),
+                format!(
+                    "[camera]: fov must be between 0 and 180 degrees, got {}",
+                    c.fov
+                ),
+            ));
+        }
         let camera = Camera::new(
             position,
             look_at,
