@@ -325,6 +325,29 @@ fn trace_sets_and_light_linking_change_what_rays_see() {
     );
     assert_eq!(sum(&unlinked, 1), Vec3A::ZERO);
 
+    // Hidden from indirect rays, the divider no longer bounces light onto the floor.
+    let bounce = || {
+        vec![AovSpec::new(
+            "viaDivider",
+            "C<RD'floor'><RD'divider'>[<L.>O]",
+        )]
+    };
+    let depth3 = |d: &mut SceneDesc| {
+        small(24, 4)(d);
+        d.render.max_depth = 3;
+    };
+    let (_, seen, _) = run(&src, depth3, bounce());
+    assert!(sum(&seen, 1).x > 0.0);
+    let (_, unseen, _) = run(
+        &src,
+        |d| {
+            depth3(d);
+            d.objects[1].get_mut().visible_indirect = false;
+        },
+        bounce(),
+    );
+    assert_eq!(sum(&unseen, 1), Vec3A::ZERO);
+
     // Hidden from the camera, the floor leaves the image empty (alpha 0).
     let (_, hidden, _) = run(
         &src,
