@@ -372,9 +372,17 @@ fn render(args: RenderArgs) -> ExitCode {
     }
     let mut specs = aov::assemble(specs);
     let mut split: Vec<String> = args.light_group_aovs.clone();
+    split.extend(
+        desc.light_group_aovs
+            .iter()
+            .filter(|n| !args.light_group_aovs.contains(n))
+            .cloned(),
+    );
     if args.light_groups || desc.light_groups {
         split.push("beauty".into());
     }
+    split.sort();
+    split.dedup();
     for name in &split {
         match specs.iter_mut().find(|s| &s.name == name) {
             Some(s) => s.split_light_groups = true,

@@ -364,3 +364,37 @@ fn sample_ranges_rendered_apart_merge_into_the_whole_frame() {
     assert!(!twice.status.success());
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+#[test]
+fn a_scene_can_ask_for_light_group_splits() {
+    let dir = std::env::temp_dir().join(format!("lightpath-lg-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let scene = format!(
+        "light_groups = true\nlight_group_aovs = [\"directDiffuse\"]\n{}",
+        include_str!("../../../scenes/cornell.toml")
+    );
+    std::fs::write(dir.join("s.toml"), scene).unwrap();
+    let out = lightpath()
+        .arg("render")
+        .arg(dir.join("s.toml"))
+        .args(["--quiet", "--spp", "1", "--resolution", "8x8", "-o"])
+        .arg(dir.join("s.exr"))
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let exr = lightpath::output::read_exr(&dir.join("s.exr")).unwrap();
+    for name in [
+        "beauty_key.R",
+        "beauty_fill.R",
+        "beauty__default.R",
+        "directDiffuse_key.R",
+        "directDiffuse__default.R",
+    ] {
+        assert!(exr.channel(name).is_some(), "missing {name}");
+    }
+    std::fs::remove_dir_all(&dir).unwrap();
+}

@@ -26,6 +26,9 @@ pub struct SceneDesc {
     /// Split beauty per light group (`beauty_<group>`).
     #[serde(default)]
     pub light_groups: bool,
+    /// Also split these AOVs per light group.
+    #[serde(default)]
+    pub light_group_aovs: Vec<String>,
 }
 
 #[derive(Debug, Deserialize)]
