@@ -388,9 +388,13 @@ impl Alphabet {
 /// ```
 #[derive(Clone, Debug)]
 pub struct Automaton {
-    /// `table[state + class]`, states pre-multiplied by `stride`.
+    /// `table[state + class]`, states pre-multiplied by `stride`, a power of two (rows
+    /// padded with the dead state) so that a state's row is a shift away.
     table: Vec<StateId>,
     stride: u32,
+    /// log2(stride).
+    shift: u32,
+    classes: u32,
     start: StateId,
     /// States at or above this row accept at least one rule.
     first_accepting: u32,
@@ -413,7 +417,7 @@ impl Automaton {
         stats: Stats,
     ) -> Automaton {
         let n = dfa.len();
-        let k = dfa.classes.max(1);
+        let k = dfa.classes.max(1).next_power_of_two();
         // Order: dead (0), then non-accepting, then accepting, so one compare answers
         // "accepting?" and another "dead?".
         let mut order: Vec<usize> = (1..n).collect();
@@ -436,12 +440,15 @@ impl Automaton {
                     rank[dfa.next[s * dfa.classes + c] as usize] * k as u32,
                 ));
             }
+            table.extend(std::iter::repeat_n(StateId(0), k - dfa.classes));
             accept_rules.extend(dfa.accept[s].iter().map(|&r| RuleId(r)));
             accept_offsets.push(accept_rules.len() as u32);
         }
         Automaton {
             table,
             stride: k as u32,
+            shift: k.trailing_zeros(),
+            classes: dfa.classes as u32,
             start: StateId(rank[dfa.start as usize] * k as u32),
             first_accepting: first_accepting * k as u32,
             accept_offsets,
@@ -476,7 +483,7 @@ impl Automaton {
     /// A dense index of the state, `0..state_count()`, for per-state tables.
     #[inline(always)]
     pub fn state_index(&self, state: StateId) -> usize {
-        (state.0 / self.stride) as usize
+        (state.0 >> self.shift) as usize
     }
 
     /// True if no rule can match any continuation: the path can stop.
@@ -491,7 +498,7 @@ impl Automaton {
         if state.0 < self.first_accepting {
             return &[];
         }
-        let row = (state.0 / self.stride) as usize;
+        let row = (state.0 >> self.shift) as usize;
         &self.accept_rules[self.accept_offsets[row] as usize..self.accept_offsets[row + 1] as usize]
     }
 
@@ -526,7 +533,7 @@ impl Automaton {
     }
 
     pub fn class_count(&self) -> usize {
-        self.stride as usize
+        self.classes as usize
     }
 
     /// Every state of the automaton (for precomputing per-state facts at scene build).
