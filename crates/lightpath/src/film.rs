@@ -120,7 +120,7 @@ impl SampleAccumulator {
         }
     }
 
-    #[inline]
+    #[inline(always)]
     pub fn add(&mut self, aov: usize, value: Vec3A, overwrite: bool) {
         if !self.is_touched[aov] {
             self.is_touched[aov] = true;
