@@ -8,6 +8,37 @@ fn lightpath() -> Command {
     Command::new(env!("CARGO_BIN_EXE_lightpath"))
 }
 
+/// Runs the command, asserts it succeeded (showing its stderr if not), returns its output.
+fn succeed(cmd: &mut Command) -> std::process::Output {
+    let out = cmd.output().unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    out
+}
+
+/// A scratch folder for one test, removed when the test ends, passing or not.
+struct Scratch(std::path::PathBuf);
+
+impl Scratch {
+    fn new(tag: &str) -> Scratch {
+        let dir = std::env::temp_dir().join(format!("lightpath-{tag}-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        Scratch(dir)
+    }
+    fn join(&self, name: &str) -> std::path::PathBuf {
+        self.0.join(name)
+    }
+}
+
+impl Drop for Scratch {
+    fn drop(&mut self) {
+        let _ = std::fs::remove_dir_all(&self.0);
+    }
+}
+
 #[test]
 fn every_conformance_vector_passes_through_lpe_match_jsonl() {
     let vectors = include_str!("../../lpe/tests/vectors/conformance.jsonl");
@@ -148,26 +179,20 @@ fn explain_and_names_describe_the_language() {
 
 #[test]
 fn render_writes_exr_and_png_and_reports_speed() {
-    let dir = std::env::temp_dir().join(format!("lightpath-cli-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    let out = lightpath()
-        .args([
-            "render",
-            "cornell",
-            "--quiet",
-            "--spp",
-            "2",
-            "--resolution",
-            "24x16",
-            "-o",
-        ])
-        .arg(dir.join("shot.exr"))
-        .output()
-        .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
+    let dir = Scratch::new("cli");
+    let out = succeed(
+        lightpath()
+            .args([
+                "render",
+                "cornell",
+                "--quiet",
+                "--spp",
+                "2",
+                "--resolution",
+                "24x16",
+                "-o",
+            ])
+            .arg(dir.join("shot.exr")),
     );
     let text = String::from_utf8(out.stdout).unwrap();
     assert!(
@@ -186,32 +211,29 @@ fn render_writes_exr_and_png_and_reports_speed() {
     assert!(String::from_utf8(bad.stderr)
         .unwrap()
         .contains("no/such/scene.toml"));
-    std::fs::remove_dir_all(&dir).unwrap();
 }
 
 #[test]
 fn aovs_checks_partitions_and_comp_relights() {
-    let dir = std::env::temp_dir().join(format!("lightpath-comp-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+    let dir = Scratch::new("comp");
     let exr = dir.join("c.exr");
-    let out = lightpath()
-        .args([
-            "render",
-            "cornell",
-            "--quiet",
-            "--spp",
-            "2",
-            "--resolution",
-            "16x16",
-            "--light-groups",
-            "--bounces",
-            "2",
-            "-o",
-        ])
-        .arg(&exr)
-        .output()
-        .unwrap();
-    assert!(out.status.success());
+    succeed(
+        lightpath()
+            .args([
+                "render",
+                "cornell",
+                "--quiet",
+                "--spp",
+                "2",
+                "--resolution",
+                "16x16",
+                "--light-groups",
+                "--bounces",
+                "2",
+                "-o",
+            ])
+            .arg(&exr),
+    );
     let report = lightpath().arg("aovs").arg(&exr).output().unwrap();
     let text = String::from_utf8(report.stdout).unwrap();
     assert!(report.status.success(), "{text}");
@@ -289,52 +311,40 @@ fn aovs_checks_partitions_and_comp_relights() {
     assert!(String::from_utf8(missing.stderr)
         .unwrap()
         .contains("no AOV 'nothere'"));
-    std::fs::remove_dir_all(&dir).unwrap();
 }
 
 #[test]
 fn sample_ranges_rendered_apart_merge_into_the_whole_frame() {
-    let dir = std::env::temp_dir().join(format!("lightpath-merge-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+    let dir = Scratch::new("merge");
     let render = |first: u32, spp: u32, name: &str| {
-        let out = lightpath()
-            .args([
-                "render",
-                "cornell",
-                "--quiet",
-                "--resolution",
-                "12x10",
-                "--spp",
-                &spp.to_string(),
-                "--first-sample",
-                &first.to_string(),
-                "-o",
-            ])
-            .arg(dir.join(name))
-            .output()
-            .unwrap();
-        assert!(
-            out.status.success(),
-            "{}",
-            String::from_utf8_lossy(&out.stderr)
+        succeed(
+            lightpath()
+                .args([
+                    "render",
+                    "cornell",
+                    "--quiet",
+                    "--resolution",
+                    "12x10",
+                    "--spp",
+                    &spp.to_string(),
+                    "--first-sample",
+                    &first.to_string(),
+                    "-o",
+                ])
+                .arg(dir.join(name)),
         );
     };
     render(0, 4, "whole.exr");
     render(0, 1, "a.exr");
     render(1, 3, "b.exr");
     let merged = dir.join("merged.exr");
-    let out = lightpath()
-        .arg("merge")
-        .arg(dir.join("a.exr"))
-        .arg(dir.join("b.exr"))
-        .arg("-o")
-        .arg(&merged)
-        .output()
-        .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
+    succeed(
+        lightpath()
+            .arg("merge")
+            .arg(dir.join("a.exr"))
+            .arg(dir.join("b.exr"))
+            .arg("-o")
+            .arg(&merged),
     );
     let (whole, merged) = (
         lightpath::output::read_exr(&dir.join("whole.exr")).unwrap(),
@@ -362,29 +372,22 @@ fn sample_ranges_rendered_apart_merge_into_the_whole_frame() {
         .output()
         .unwrap();
     assert!(!twice.status.success());
-    std::fs::remove_dir_all(&dir).unwrap();
 }
 
 #[test]
 fn a_scene_can_ask_for_light_group_splits() {
-    let dir = std::env::temp_dir().join(format!("lightpath-lg-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+    let dir = Scratch::new("lg");
     let scene = format!(
         "light_groups = true\nlight_group_aovs = [\"directDiffuse\"]\n{}",
         include_str!("../../../scenes/cornell.toml")
     );
     std::fs::write(dir.join("s.toml"), scene).unwrap();
-    let out = lightpath()
-        .arg("render")
-        .arg(dir.join("s.toml"))
-        .args(["--quiet", "--spp", "1", "--resolution", "8x8", "-o"])
-        .arg(dir.join("s.exr"))
-        .output()
-        .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
+    succeed(
+        lightpath()
+            .arg("render")
+            .arg(dir.join("s.toml"))
+            .args(["--quiet", "--spp", "1", "--resolution", "8x8", "-o"])
+            .arg(dir.join("s.exr")),
     );
     let exr = lightpath::output::read_exr(&dir.join("s.exr")).unwrap();
     for name in [
@@ -396,5 +399,4 @@ fn a_scene_can_ask_for_light_group_splits() {
     ] {
         assert!(exr.channel(name).is_some(), "missing {name}");
     }
-    std::fs::remove_dir_all(&dir).unwrap();
 }
