@@ -1,12 +1,18 @@
-//! The acceleration structure: an 8-wide compressed BVH from `obvhs` over our primitives,
-//! reordered so that leaf indices address the primitive array directly.
+//! The acceleration structure. `obvhs` builds a binary BVH (PLOC, reinsertion, SAH leaf
+//! collapse to at most four primitives per leaf); we flatten it into a 4-wide BVH whose
+//! nodes store their children's boxes as four SIMD lanes and whose leaves store up to four
+//! triangles laid out for a four-at-once ray test.
+//!
+//! Why not obvhs's own CWBVH traversal: its nodes are quantised and decoded byte by byte,
+//! about 250 instructions a node, and its leaves are tested one primitive at a time. On
+//! `cornell-classic` that was ~560 instructions a shadow ray; this layout takes under half
+//! (docs/performance.md).
 
 use super::{Hit, Prim, Ray};
-use glam::{UVec2, Vec3A};
+use glam::{Vec3A, Vec4};
 use obvhs::aabb::Aabb;
-use obvhs::cwbvh::builder::build_cwbvh;
-use obvhs::cwbvh::CwBvh;
-use obvhs::ray::Ray as BvhRay;
+use obvhs::bvh2::builder::build_bvh2;
+use obvhs::bvh2::Bvh2;
 use obvhs::{Boundable, BvhBuildParams};
 
 struct Bounded(Aabb);
@@ -15,20 +21,6 @@ impl Boundable for Bounded {
     fn aabb(&self) -> Aabb {
         self.0
     }
-}
-
-pub struct Accel {
-    bvh: CwBvh,
-    prims: Vec<Prim>,
-    /// Object id of each primitive, in the same order.
-    objects: Vec<u32>,
-    /// Per-vertex shading normals of triangles that have them, three per entry.
-    normals: Vec<[Vec3A; 3]>,
-    /// Which kinds of ray see each primitive (`Visibility` bits), in the same order.
-    visibility: Vec<u8>,
-    /// Unit geometric normal of each triangle (unused for spheres), in the same order.
-    face_normals: Vec<Vec3A>,
-    empty: bool,
 }
 
 /// Ray kinds, as bits: an object can be hidden from each (trace sets).
@@ -41,6 +33,141 @@ impl Visibility {
     pub const ALL: u8 = 7;
 }
 
+/// A child reference with this bit set names a leaf, otherwise a node.
+const LEAF: u32 = 1 << 31;
+/// Traversal stack entries kept on the machine stack; deeper trees use a heap stack.
+const STACK: usize = 64;
+
+/// An inner node: up to four children, their boxes one lane each.
+#[derive(Clone, Copy)]
+struct Node {
+    /// min x, min y, min z, max x, max y, max z of each child, lane per child.
+    bounds: [Vec4; 6],
+    child: [u32; 4],
+    /// Bit per lane that holds a child.
+    lanes: u32,
+}
+
+/// Up to four primitives: triangles as SIMD lanes (vertex and edges), spheres tested one
+/// at a time. A leaf may run over several consecutive packets (`last` ends it).
+#[derive(Clone, Copy)]
+struct Leaf {
+    p0: [Vec4; 3],
+    e1: [Vec4; 3],
+    e2: [Vec4; 3],
+    /// Slot of lane 0 in the primitive arrays; lane `l` is slot `first + l`.
+    first: u32,
+    /// For each ray-kind mask (0..8), the lanes holding a triangle that kind of ray sees.
+    triangles: [u8; 8],
+    /// The same for spheres.
+    spheres: [u8; 8],
+    last: bool,
+}
+
+pub struct Accel {
+    nodes: Vec<Node>,
+    leaves: Vec<Leaf>,
+    /// Stack entries the deepest path can need.
+    stack_need: usize,
+    prims: Vec<Prim>,
+    /// Object id of each primitive, in the same order.
+    objects: Vec<u32>,
+    /// Per-vertex shading normals of triangles that have them, three per entry.
+    normals: Vec<[Vec3A; 3]>,
+    /// Unit geometric normal of each triangle (unused for spheres), in the same order.
+    face_normals: Vec<Vec3A>,
+}
+
+/// Per-ray constants of the box and triangle tests.
+struct RayLanes {
+    o: [Vec4; 3],
+    d: [Vec4; 3],
+    inv: [Vec4; 3],
+    /// origin × inverse direction, so a slab distance is `bound * inv - oinv`.
+    oinv: [Vec4; 3],
+    /// Index into `Node::bounds` of the near plane per axis (the far one is `3 - …`).
+    near: [usize; 3],
+    tmin: f32,
+}
+
+impl RayLanes {
+    #[inline(always)]
+    fn new(ray: &Ray, tmin: f32) -> RayLanes {
+        let o = ray.origin.to_array();
+        let d = ray.dir.to_array();
+        // A zero direction component would make 0 × ∞ = NaN in the slab test.
+        let inv = d.map(|c| {
+            1.0 / if c.abs() < 1e-30 {
+                1e-30f32.copysign(c)
+            } else {
+                c
+            }
+        });
+        RayLanes {
+            o: o.map(Vec4::splat),
+            d: d.map(Vec4::splat),
+            inv: inv.map(Vec4::splat),
+            oinv: [
+                Vec4::splat(o[0] * inv[0]),
+                Vec4::splat(o[1] * inv[1]),
+                Vec4::splat(o[2] * inv[2]),
+            ],
+            near: [
+                if inv[0] >= 0.0 { 0 } else { 3 },
+                if inv[1] >= 0.0 { 1 } else { 4 },
+                if inv[2] >= 0.0 { 2 } else { 5 },
+            ],
+            tmin,
+        }
+    }
+
+    /// Which children's boxes the ray enters before `tmax`, and where.
+    #[inline(always)]
+    fn hit_children(&self, node: &Node, tmax: f32) -> (u32, Vec4) {
+        let b = &node.bounds;
+        let [nx, ny, nz] = self.near;
+        let tn_x = b[nx] * self.inv[0] - self.oinv[0];
+        let tn_y = b[ny] * self.inv[1] - self.oinv[1];
+        let tn_z = b[nz] * self.inv[2] - self.oinv[2];
+        let tf_x = b[3 - nx] * self.inv[0] - self.oinv[0];
+        let tf_y = b[5 - ny] * self.inv[1] - self.oinv[1];
+        let tf_z = b[7 - nz] * self.inv[2] - self.oinv[2];
+        let tnear = tn_x.max(tn_y).max(tn_z.max(Vec4::splat(self.tmin)));
+        // Widened by a few ulps so rounding never loses a box the ray grazes.
+        let tfar = tf_x.min(tf_y).min(tf_z.min(Vec4::splat(tmax))) * 1.000_000_4;
+        (tnear.cmple(tfar).bitmask() & node.lanes, tnear)
+    }
+
+    /// Möller–Trumbore on four triangles: distances and the lanes hit in (tmin, tmax).
+    #[inline(always)]
+    fn hit_triangles(&self, leaf: &Leaf, tmax: f32) -> (u32, Vec4) {
+        let [dx, dy, dz] = self.d;
+        let [e1x, e1y, e1z] = leaf.e1;
+        let [e2x, e2y, e2z] = leaf.e2;
+        let pvx = dy * e2z - dz * e2y;
+        let pvy = dz * e2x - dx * e2z;
+        let pvz = dx * e2y - dy * e2x;
+        let det = e1x * pvx + e1y * pvy + e1z * pvz;
+        let inv = Vec4::ONE / det;
+        let tvx = self.o[0] - leaf.p0[0];
+        let tvy = self.o[1] - leaf.p0[1];
+        let tvz = self.o[2] - leaf.p0[2];
+        let u = (tvx * pvx + tvy * pvy + tvz * pvz) * inv;
+        let qvx = tvy * e1z - tvz * e1y;
+        let qvy = tvz * e1x - tvx * e1z;
+        let qvz = tvx * e1y - tvy * e1x;
+        let v = (dx * qvx + dy * qvy + dz * qvz) * inv;
+        let t = (e2x * qvx + e2y * qvy + e2z * qvz) * inv;
+        let ok = det.abs().cmpge(Vec4::splat(1e-12))
+            & u.cmpge(Vec4::ZERO)
+            & v.cmpge(Vec4::ZERO)
+            & (u + v).cmple(Vec4::ONE)
+            & t.cmpgt(Vec4::splat(self.tmin))
+            & t.cmplt(Vec4::splat(tmax));
+        (ok.bitmask(), t)
+    }
+}
+
 impl Accel {
     /// Builds the BVH. `prims[i]` belongs to object `objects[i]`.
     /// `visibility[i]` says which ray kinds see it.
@@ -50,22 +177,17 @@ impl Accel {
         normals: Vec<[Vec3A; 3]>,
         visibility: Vec<u8>,
     ) -> Accel {
+        let mut accel = Accel {
+            nodes: Vec::new(),
+            leaves: Vec::new(),
+            stack_need: 0,
+            prims: Vec::new(),
+            objects: Vec::new(),
+            normals,
+            face_normals: Vec::new(),
+        };
         if prims.is_empty() {
-            let dummy = [Bounded(Aabb::new(Vec3A::ZERO, Vec3A::ZERO))];
-            let bvh = build_cwbvh(
-                &dummy,
-                BvhBuildParams::fast_build(),
-                &mut Default::default(),
-            );
-            return Accel {
-                bvh,
-                prims,
-                objects,
-                normals,
-                visibility,
-                face_normals: Vec::new(),
-                empty: true,
-            };
+            return accel;
         }
         let boxes: Vec<Bounded> = prims
             .iter()
@@ -74,40 +196,139 @@ impl Accel {
                 Bounded(Aabb::new(lo, hi))
             })
             .collect();
-        let mut bvh = build_cwbvh(
-            &boxes,
-            // Spatial pre-splits and more optimisation make a better tree (4.5 % fewer
-            // instructions on cornell-classic); past a few hundred thousand primitives the
-            // build time is not worth it.
-            if boxes.len() < 200_000 {
+        let params = BvhBuildParams {
+            max_prims_per_leaf: 4,
+            // Past a few hundred thousand primitives a better tree is not worth the build.
+            ..if boxes.len() < 200_000 {
                 BvhBuildParams::slow_build()
             } else {
                 BvhBuildParams::medium_build()
-            },
-            &mut Default::default(),
-        );
-        // Lay the primitives out in leaf order so traversal indexes them directly.
-        let order = std::mem::take(&mut bvh.primitive_indices);
-        let prims: Vec<Prim> = order.iter().map(|&i| prims[i as usize]).collect();
-        let objects: Vec<u32> = order.iter().map(|&i| objects[i as usize]).collect();
+            }
+        };
+        let bvh = build_bvh2(&boxes, params, &mut Default::default());
+        // Lay the primitives out in leaf order so leaves address them by range.
+        let order = &bvh.primitive_indices;
+        accel.prims = order.iter().map(|&i| prims[i as usize]).collect();
+        accel.objects = order.iter().map(|&i| objects[i as usize]).collect();
         let visibility: Vec<u8> = order.iter().map(|&i| visibility[i as usize]).collect();
-        bvh.primitive_indices = (0..order.len() as u32).collect();
-        let face_normals = prims
+        accel.face_normals = accel
+            .prims
             .iter()
             .map(|p| match p {
                 Prim::Triangle { e1, e2, .. } => e1.cross(*e2).normalize_or(Vec3A::Z),
                 Prim::Sphere { .. } => Vec3A::Z,
             })
             .collect();
-        Accel {
-            bvh,
-            prims,
-            objects,
-            normals,
-            visibility,
-            face_normals,
-            empty: false,
+
+        let root = &bvh.nodes[0];
+        let depth = if root.is_leaf() {
+            // A lone leaf still goes under a node, so traversal always starts at node 0.
+            accel.nodes.push(Node {
+                bounds: [Vec4::ZERO; 6],
+                child: [0; 4],
+                lanes: 0,
+            });
+            let leaf = accel.add_leaf(root.first_index, root.prim_count, &visibility);
+            accel.nodes[0] = node_of(&[(root.aabb, leaf)]);
+            1
+        } else {
+            accel.add_node(&bvh, 0, &visibility)
+        };
+        accel.stack_need = 3 * depth + 1;
+        accel
+    }
+
+    /// Flattens the subtree of binary node `index` (an inner node) into 4-wide nodes;
+    /// returns its depth in 4-wide nodes.
+    fn add_node(&mut self, bvh: &Bvh2, index: usize, visibility: &[u8]) -> usize {
+        // Open the largest inner grandchildren until there are four children.
+        let first = bvh.nodes[index].first_index as usize;
+        let mut kids = vec![first, first + 1];
+        while kids.len() < 4 {
+            let widest = kids
+                .iter()
+                .enumerate()
+                .filter(|(_, &k)| !bvh.nodes[k].is_leaf())
+                .max_by(|a, b| {
+                    let area = |k: usize| bvh.nodes[k].aabb.half_area();
+                    area(*a.1).total_cmp(&area(*b.1))
+                })
+                .map(|(slot, _)| slot);
+            let Some(slot) = widest else { break };
+            let k = bvh.nodes[kids[slot]].first_index as usize;
+            kids[slot] = k;
+            kids.push(k + 1);
         }
+        let me = self.nodes.len();
+        self.nodes.push(Node {
+            bounds: [Vec4::ZERO; 6],
+            child: [0; 4],
+            lanes: 0,
+        });
+        let mut depth = 0;
+        let children: Vec<(Aabb, u32)> = kids
+            .iter()
+            .map(|&k| {
+                let n = &bvh.nodes[k];
+                let reference = if n.is_leaf() {
+                    self.add_leaf(n.first_index, n.prim_count, visibility)
+                } else {
+                    let at = self.nodes.len() as u32;
+                    depth = depth.max(self.add_node(bvh, k, visibility));
+                    at
+                };
+                (n.aabb, reference)
+            })
+            .collect();
+        self.nodes[me] = node_of(&children);
+        depth + 1
+    }
+
+    /// Packs primitives `first .. first + count` (slots) into leaf packets; returns the
+    /// child reference of the first.
+    fn add_leaf(&mut self, first: u32, count: u32, visibility: &[u8]) -> u32 {
+        let reference = LEAF | self.leaves.len() as u32;
+        let end = first + count;
+        let mut start = first;
+        while start < end {
+            let mut leaf = Leaf {
+                p0: [Vec4::ZERO; 3],
+                e1: [Vec4::ZERO; 3],
+                e2: [Vec4::ZERO; 3],
+                first: start,
+                triangles: [0; 8],
+                spheres: [0; 8],
+                last: start + 4 >= end,
+            };
+            for lane in 0..(end - start).min(4) as usize {
+                let slot = start as usize + lane;
+                let seen_by = |mask: usize| visibility[slot] as usize & mask != 0;
+                match self.prims[slot] {
+                    Prim::Triangle { p0, e1, e2, .. } => {
+                        for axis in 0..3 {
+                            leaf.p0[axis][lane] = p0[axis];
+                            leaf.e1[axis][lane] = e1[axis];
+                            leaf.e2[axis][lane] = e2[axis];
+                        }
+                        for mask in 0..8 {
+                            if seen_by(mask) {
+                                leaf.triangles[mask] |= 1 << lane;
+                            }
+                        }
+                    }
+                    Prim::Sphere { .. } => {
+                        for mask in 0..8 {
+                            if seen_by(mask) {
+                                leaf.spheres[mask] |= 1 << lane;
+                            }
+                        }
+                    }
+                }
+            }
+            self.leaves.push(leaf);
+            start += 4;
+        }
+        reference
     }
 
     pub fn prims(&self) -> &[Prim] {
@@ -121,70 +342,201 @@ impl Accel {
     /// The nearest hit along the ray among primitives visible to rays of kind `mask`.
     #[inline]
     pub fn intersect(&self, ray: &Ray, tmin: f32, mask: u8) -> Option<Hit> {
-        if self.empty {
+        if self.nodes.is_empty() {
             return None;
         }
-        // obvhs's traversal macro, so the primitive test inlines into the loop.
-        let mut traverse_ray = BvhRay::new(ray.origin, ray.dir, tmin, ray.tmax);
-        let mut state = self.bvh.new_traversal(ray.dir);
-        let mut node;
+        let (prim, t) = if self.stack_need <= STACK {
+            self.closest(ray, tmin, mask, &mut Stack::<(u32, f32), STACK>::new())
+        } else {
+            self.closest(ray, tmin, mask, &mut vec![(0, 0.0); self.stack_need])
+        };
+        (prim != u32::MAX).then(|| self.surface(ray, prim, t))
+    }
+
+    /// Closest-hit traversal, nearest child first; returns (slot, t) or (`u32::MAX`, _).
+    #[inline(always)]
+    fn closest(
+        &self,
+        ray: &Ray,
+        tmin: f32,
+        mask: u8,
+        stack: &mut impl TraversalStack<(u32, f32)>,
+    ) -> (u32, f32) {
+        let r = RayLanes::new(ray, tmin);
+        let mask = (mask & 7) as usize;
+        let mut tmax = ray.tmax;
         let mut best = u32::MAX;
-        let bvh = &self.bvh;
-        obvhs::traverse!(
-            bvh,
-            node,
-            state,
-            node.intersect_ray(&traverse_ray, state.oct_inv4),
-            {
-                let i = state.primitive_id as usize;
-                if self.visibility[i] & mask != 0 {
-                    let t = self.prims[i].intersect(
-                        traverse_ray.origin,
-                        traverse_ray.direction,
-                        traverse_ray.tmin,
-                        traverse_ray.tmax,
-                    );
-                    if t < traverse_ray.tmax {
-                        best = i as u32;
-                        traverse_ray.tmax = t;
+        let mut sp = 0;
+        let mut current = 0u32;
+        loop {
+            if current & LEAF == 0 {
+                let node = &self.nodes[current as usize];
+                let (hits, tnear) = r.hit_children(node, tmax);
+                if hits != 0 {
+                    let first = hits.trailing_zeros() as usize;
+                    if hits & (hits - 1) == 0 {
+                        current = node.child[first];
+                        continue;
                     }
+                    // Two to four children: visit the nearest, stack the rest far to near.
+                    let tnear = tnear.to_array();
+                    let mut order = [(0.0f32, 0u32); 4];
+                    let mut n = 0;
+                    let mut bits = hits;
+                    while bits != 0 {
+                        let lane = bits.trailing_zeros() as usize;
+                        bits &= bits - 1;
+                        let entry = (tnear[lane], node.child[lane]);
+                        // Insertion into descending order.
+                        let mut j = n;
+                        while j > 0 && order[j - 1].0 < entry.0 {
+                            order[j] = order[j - 1];
+                            j -= 1;
+                        }
+                        order[j] = entry;
+                        n += 1;
+                    }
+                    for &(t, child) in &order[..n - 1] {
+                        stack.put(sp, (child, t));
+                        sp += 1;
+                    }
+                    current = order[n - 1].1;
+                    continue;
+                }
+            } else {
+                let mut index = (current & !LEAF) as usize;
+                loop {
+                    let leaf = &self.leaves[index];
+                    let lanes = leaf.triangles[mask] as u32;
+                    if lanes != 0 {
+                        let (mut hits, t) = r.hit_triangles(leaf, tmax);
+                        hits &= lanes;
+                        if hits != 0 {
+                            let t = t.to_array();
+                            while hits != 0 {
+                                let lane = hits.trailing_zeros() as usize;
+                                hits &= hits - 1;
+                                if t[lane] < tmax {
+                                    tmax = t[lane];
+                                    best = leaf.first + lane as u32;
+                                }
+                            }
+                        }
+                    }
+                    let mut spheres = leaf.spheres[mask] as u32;
+                    while spheres != 0 {
+                        let slot = leaf.first + spheres.trailing_zeros();
+                        spheres &= spheres - 1;
+                        let t =
+                            self.prims[slot as usize].intersect(ray.origin, ray.dir, tmin, tmax);
+                        if t < tmax {
+                            tmax = t;
+                            best = slot;
+                        }
+                    }
+                    if leaf.last {
+                        break;
+                    }
+                    index += 1;
                 }
             }
-        );
-        (best != u32::MAX).then(|| self.surface(ray, best, traverse_ray.tmax))
+            // Next stacked child that is still nearer than the nearest hit.
+            loop {
+                if sp == 0 {
+                    return (best, tmax);
+                }
+                sp -= 1;
+                let (child, t) = stack.take(sp);
+                if t <= tmax {
+                    current = child;
+                    break;
+                }
+            }
+        }
     }
 
     /// Is anything that casts shadows between the origin and `tmax`, other than object
     /// `ignore` (the light the shadow ray aims at)?
     #[inline]
     pub fn occluded(&self, ray: &Ray, tmin: f32, ignore: u32) -> bool {
-        if self.empty {
+        if self.nodes.is_empty() {
             return false;
         }
-        let bray = BvhRay::new(ray.origin, ray.dir, tmin, ray.tmax);
-        let mut state = self.bvh.new_traversal(ray.dir);
-        let mut node;
-        let mut hit = false;
-        let bvh = &self.bvh;
-        obvhs::traverse!(
-            bvh,
-            node,
-            state,
-            node.intersect_ray(&bray, state.oct_inv4),
-            {
-                let i = state.primitive_id as usize;
-                if self.visibility[i] & Visibility::SHADOW != 0
-                    && self.objects[i] != ignore
-                    && self.prims[i]
-                        .intersect(bray.origin, bray.direction, bray.tmin, bray.tmax)
-                        .is_finite()
-                {
-                    hit = true;
-                    break;
+        if self.stack_need <= STACK {
+            self.any_hit(ray, tmin, ignore, &mut Stack::<u32, STACK>::new())
+        } else {
+            self.any_hit(ray, tmin, ignore, &mut vec![0; self.stack_need])
+        }
+    }
+
+    /// Any-hit traversal in whatever order is cheapest.
+    #[inline(always)]
+    fn any_hit(
+        &self,
+        ray: &Ray,
+        tmin: f32,
+        ignore: u32,
+        stack: &mut impl TraversalStack<u32>,
+    ) -> bool {
+        const SHADOW: usize = super::Visibility::SHADOW as usize;
+        let r = RayLanes::new(ray, tmin);
+        let tmax = ray.tmax;
+        let mut sp = 0;
+        let mut current = 0u32;
+        loop {
+            if current & LEAF == 0 {
+                let node = &self.nodes[current as usize];
+                let (mut hits, _) = r.hit_children(node, tmax);
+                if hits != 0 {
+                    current = node.child[hits.trailing_zeros() as usize];
+                    hits &= hits - 1;
+                    while hits != 0 {
+                        stack.put(sp, node.child[hits.trailing_zeros() as usize]);
+                        sp += 1;
+                        hits &= hits - 1;
+                    }
+                    continue;
+                }
+            } else {
+                let mut index = (current & !LEAF) as usize;
+                loop {
+                    let leaf = &self.leaves[index];
+                    let lanes = leaf.triangles[SHADOW] as u32;
+                    if lanes != 0 {
+                        let (mut hits, _) = r.hit_triangles(leaf, tmax);
+                        hits &= lanes;
+                        while hits != 0 {
+                            let slot = leaf.first + hits.trailing_zeros();
+                            hits &= hits - 1;
+                            if self.objects[slot as usize] != ignore {
+                                return true;
+                            }
+                        }
+                    }
+                    let mut spheres = leaf.spheres[SHADOW] as u32;
+                    while spheres != 0 {
+                        let slot = leaf.first + spheres.trailing_zeros();
+                        spheres &= spheres - 1;
+                        if self.objects[slot as usize] != ignore
+                            && self.prims[slot as usize]
+                                .intersect(ray.origin, ray.dir, tmin, tmax)
+                                .is_finite()
+                        {
+                            return true;
+                        }
+                    }
+                    if leaf.last {
+                        break;
+                    }
+                    index += 1;
                 }
             }
-        );
-        hit
+            if sp == 0 {
+                return false;
+            }
+            sp -= 1;
+            current = stack.take(sp);
+        }
     }
 
     fn surface(&self, ray: &Ray, prim: u32, t: f32) -> Hit {
@@ -230,5 +582,169 @@ impl Accel {
             prim,
             object: self.objects[prim as usize],
         }
+    }
+}
+
+/// Storage for a traversal stack: entries are written with `put` before `take` reads them.
+trait TraversalStack<T: Copy> {
+    fn put(&mut self, at: usize, value: T);
+    fn take(&self, at: usize) -> T;
+}
+
+/// The heap stack of very deep trees.
+impl<T: Copy> TraversalStack<T> for Vec<T> {
+    #[inline(always)]
+    fn put(&mut self, at: usize, value: T) {
+        self[at] = value;
+    }
+    #[inline(always)]
+    fn take(&self, at: usize) -> T {
+        self[at]
+    }
+}
+
+/// A fixed stack on the machine stack, left uninitialised: zeroing it cost more than the
+/// traversal of a short shadow ray. Each slot remembers nothing but what `put` wrote.
+struct Stack<T, const N: usize> {
+    items: [std::mem::MaybeUninit<T>; N],
+    written: usize,
+}
+
+impl<T: Copy, const N: usize> Stack<T, N> {
+    #[inline(always)]
+    fn new() -> Self {
+        Stack {
+            items: [const { std::mem::MaybeUninit::uninit() }; N],
+            written: 0,
+        }
+    }
+}
+
+impl<T: Copy, const N: usize> TraversalStack<T> for Stack<T, N> {
+    #[inline(always)]
+    fn put(&mut self, at: usize, value: T) {
+        self.items[at].write(value);
+        self.written = self.written.max(at + 1);
+    }
+    #[inline(always)]
+    fn take(&self, at: usize) -> T {
+        assert!(at < self.written);
+        // SAFETY: every slot below `written` was written by `put` (slots are filled in
+        // order from 0, as a stack does), and `T: Copy` has no drop.
+        unsafe { self.items[at].assume_init() }
+    }
+}
+
+/// A 4-wide node over `children` (one to four boxes with their references).
+fn node_of(children: &[(Aabb, u32)]) -> Node {
+    let mut node = Node {
+        bounds: [Vec4::ZERO; 6],
+        child: [0; 4],
+        lanes: 0,
+    };
+    for (lane, (aabb, reference)) in children.iter().enumerate() {
+        for axis in 0..3 {
+            node.bounds[axis][lane] = aabb.min[axis];
+            node.bounds[axis + 3][lane] = aabb.max[axis];
+        }
+        node.child[lane] = *reference;
+        node.lanes |= 1 << lane;
+    }
+    node
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::sampling::{uniform_sphere, Rng};
+
+    /// A soup of triangles and spheres of mixed visibility, in and around a unit box.
+    fn soup(n: usize, rng: &mut Rng) -> (Vec<Prim>, Vec<u32>, Vec<u8>) {
+        let mut point =
+            || Vec3A::new(rng.next_f32(), rng.next_f32(), rng.next_f32()) * 2.0 - Vec3A::ONE;
+        let mut prims = Vec::new();
+        for i in 0..n {
+            if i % 7 == 3 {
+                prims.push(Prim::Sphere {
+                    center: point(),
+                    radius: 0.05,
+                });
+            } else {
+                let p0 = point();
+                let e1 = (point() - p0) * 0.3;
+                let e2 = (point() - p0) * 0.3;
+                prims.push(Prim::Triangle {
+                    p0,
+                    e1,
+                    e2,
+                    normals: u32::MAX,
+                });
+            }
+        }
+        let objects = (0..n as u32).map(|i| i % 5).collect();
+        let visibility = (0..n).map(|i| [7, 7, 7, 1, 2, 4, 6][i % 7]).collect();
+        (prims, objects, visibility)
+    }
+
+    /// The BVH answers exactly what testing every primitive answers.
+    #[test]
+    fn traversal_matches_brute_force() {
+        let mut rng = Rng::for_sample(7, 8, 9);
+        for n in [1, 3, 4, 5, 17, 300, 2000] {
+            let (prims, objects, visibility) = soup(n, &mut rng);
+            let accel = Accel::build(
+                prims.clone(),
+                objects.clone(),
+                Vec::new(),
+                visibility.clone(),
+            );
+            for _ in 0..400 {
+                let origin = Vec3A::new(rng.next_f32(), rng.next_f32(), rng.next_f32()) * 3.0
+                    - Vec3A::splat(1.5);
+                let ray = Ray {
+                    origin,
+                    dir: uniform_sphere(rng.next_2d()),
+                    tmax: if rng.next_f32() < 0.5 {
+                        f32::INFINITY
+                    } else {
+                        1.0
+                    },
+                };
+                for mask in [Visibility::CAMERA, Visibility::INDIRECT, Visibility::SHADOW] {
+                    let brute = (0..n)
+                        .filter(|&i| visibility[i] & mask != 0)
+                        .map(|i| prims[i].intersect(ray.origin, ray.dir, 0.0, ray.tmax))
+                        .fold(f32::INFINITY, f32::min);
+                    let got = accel
+                        .intersect(&ray, 0.0, mask)
+                        .map_or(f32::INFINITY, |h| h.t);
+                    assert!(
+                        got == brute || (got - brute).abs() <= 1e-5 * brute.abs(),
+                        "n {n} mask {mask}: bvh {got} brute {brute}"
+                    );
+                }
+                let ignore = (rng.next_f32() * 5.0) as u32;
+                let brute_blocked = (0..n).any(|i| {
+                    visibility[i] & Visibility::SHADOW != 0
+                        && objects[i] != ignore
+                        && prims[i]
+                            .intersect(ray.origin, ray.dir, 0.0, ray.tmax)
+                            .is_finite()
+                });
+                assert_eq!(accel.occluded(&ray, 0.0, ignore), brute_blocked, "n {n}");
+            }
+        }
+    }
+
+    #[test]
+    fn empty_scene_hits_nothing() {
+        let accel = Accel::build(Vec::new(), Vec::new(), Vec::new(), Vec::new());
+        let ray = Ray {
+            origin: Vec3A::ZERO,
+            dir: Vec3A::X,
+            tmax: f32::INFINITY,
+        };
+        assert!(accel.intersect(&ray, 0.0, Visibility::ALL).is_none());
+        assert!(!accel.occluded(&ray, 0.0, u32::MAX));
     }
 }

@@ -1,5 +1,5 @@
 //! Primitives (triangles and spheres) and the acceleration structure behind a small
-//! `intersect` / `occluded` seam; `obvhs` builds and traverses the BVH.
+//! `intersect` / `occluded` seam; `obvhs` builds the BVH, `bvh` lays it out 4 wide.
 
 mod bvh;
 pub mod shapes;
