@@ -33,8 +33,8 @@ impl PixelFilter {
             PixelFilter::Gaussian { stddev } => {
                 // Box–Muller, truncated at 3σ.
                 let r = (-2.0 * (1.0 - u.x).max(1e-12).ln()).sqrt().min(3.0) * stddev;
-                let phi = 2.0 * std::f32::consts::PI * u.y;
-                Vec2::new(r * phi.cos(), r * phi.sin())
+                let (sin, cos) = crate::sampling::sin_cos_turns(u.y);
+                Vec2::new(r * cos, r * sin)
             }
         }
     }

@@ -177,10 +177,10 @@ impl Ggx {
         };
         let t2 = vh.cross(t1);
         let r = u.x.sqrt();
-        let phi = 2.0 * PI * u.y;
-        let p1 = r * phi.cos();
+        let (sin_phi, cos_phi) = crate::sampling::sin_cos_turns(u.y);
+        let p1 = r * cos_phi;
         let s = 0.5 * (1.0 + vh.z);
-        let p2 = (1.0 - s) * (1.0 - p1 * p1).max(0.0).sqrt() + s * r * phi.sin();
+        let p2 = (1.0 - s) * (1.0 - p1 * p1).max(0.0).sqrt() + s * r * sin_phi;
         let nh = t1 * p1 + t2 * p2 + vh * (1.0 - p1 * p1 - p2 * p2).max(0.0).sqrt();
         Vec3A::new(self.alpha * nh.x, self.alpha * nh.y, nh.z.max(1e-6)).normalize()
     }
