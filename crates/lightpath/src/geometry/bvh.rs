@@ -93,29 +93,22 @@ struct RayLanes {
 impl RayLanes {
     #[inline(always)]
     fn new(ray: &Ray, tmin: f32) -> RayLanes {
-        let o = ray.origin.to_array();
-        let d = ray.dir.to_array();
         // A zero direction component would make 0 × ∞ = NaN in the slab test.
-        let inv = d.map(|c| {
-            1.0 / if c.abs() < 1e-30 {
-                1e-30f32.copysign(c)
-            } else {
-                c
-            }
-        });
+        let tiny = Vec3A::splat(1e-30);
+        let safe = Vec3A::select(ray.dir.abs().cmplt(tiny), tiny.copysign(ray.dir), ray.dir);
+        let inv = Vec3A::ONE / safe;
+        let oinv = ray.origin * inv;
+        let splat = |v: Vec3A| [Vec4::splat(v.x), Vec4::splat(v.y), Vec4::splat(v.z)];
+        let negative = inv.cmplt(Vec3A::ZERO).bitmask() as usize;
         RayLanes {
-            o: o.map(Vec4::splat),
-            d: d.map(Vec4::splat),
-            inv: inv.map(Vec4::splat),
-            oinv: [
-                Vec4::splat(o[0] * inv[0]),
-                Vec4::splat(o[1] * inv[1]),
-                Vec4::splat(o[2] * inv[2]),
-            ],
+            o: splat(ray.origin),
+            d: splat(ray.dir),
+            inv: splat(inv),
+            oinv: splat(oinv),
             near: [
-                if inv[0] >= 0.0 { 0 } else { 3 },
-                if inv[1] >= 0.0 { 1 } else { 4 },
-                if inv[2] >= 0.0 { 2 } else { 5 },
+                3 * (negative & 1),
+                1 + 3 * ((negative >> 1) & 1),
+                2 + 3 * ((negative >> 2) & 1),
             ],
             tmin,
         }
@@ -374,12 +367,26 @@ impl Accel {
                 let (hits, tnear) = r.hit_children(node, tmax);
                 if hits != 0 {
                     let first = hits.trailing_zeros() as usize;
-                    if hits & (hits - 1) == 0 {
+                    let rest = hits & (hits - 1);
+                    if rest == 0 {
                         current = node.child[first];
                         continue;
                     }
-                    // Two to four children: visit the nearest, stack the rest far to near.
                     let tnear = tnear.to_array();
+                    if rest & (rest - 1) == 0 {
+                        // Two children, the commonest case: visit the nearer first.
+                        let second = rest.trailing_zeros() as usize;
+                        let (near, far) = if tnear[second] < tnear[first] {
+                            (second, first)
+                        } else {
+                            (first, second)
+                        };
+                        stack.put(sp, (node.child[far], tnear[far]));
+                        sp += 1;
+                        current = node.child[near];
+                        continue;
+                    }
+                    // Three or four: visit the nearest, stack the rest far to near.
                     let mut order = [(0.0f32, 0u32); 4];
                     let mut n = 0;
                     let mut bits = hits;
