@@ -47,6 +47,8 @@ struct Route {
     noinfinitecheck: bool,
     /// First part of this AOV's light-group split, or `u32::MAX`.
     split_base: u32,
+    /// Number of parts of the split (light groups + the default part).
+    split_parts: u32,
 }
 
 #[derive(Clone, Debug, Default)]
@@ -113,6 +115,7 @@ impl<'a> Tracer<'a> {
                 noclamp: a.flags.contains(Prefix::NoClamp),
                 noinfinitecheck: a.flags.contains(Prefix::NoInfiniteCheck),
                 split_base: a.split_base.unwrap_or(u32::MAX),
+                split_parts: scene.light_groups.len() as u32 + 1,
             })
             .collect();
         Tracer {
@@ -206,6 +209,15 @@ impl<'a> Tracer<'a> {
             }
             acc.add(k, v, r.overwrite);
             if r.split_base != u32::MAX {
+                if r.overwrite {
+                    // The whole now holds only `v`, so its parts must too: clear the
+                    // part an earlier contribution of another group went to.
+                    for part in 0..r.split_parts {
+                        if part != origin.part {
+                            acc.add((r.split_base + part) as usize, Vec3A::ZERO, true);
+                        }
+                    }
+                }
                 acc.add((r.split_base + origin.part) as usize, v, r.overwrite);
             }
         }

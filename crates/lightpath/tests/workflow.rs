@@ -266,6 +266,30 @@ fn light_group_splits_sum_to_any_split_aov() {
     assert!(sum(&film, idx(&scene, "beauty__default")).x > 0.0);
 }
 
+/// `albedo` is an `overwrite` AOV that both an emitter (`O`, in the light's group) and the
+/// data lobe of the emitter's own material (no group) reach in the same sample: the last
+/// one wins in the whole, and must win in the parts too.
+#[test]
+fn overwritten_split_aovs_still_sum() {
+    let src = lightpath::load_source("cornell-classic").unwrap();
+    let aovs = vec![AovSpec::new("albedo", "lpe:albedo").split()];
+    let (scene, film, _) = run(&src, small(32, 2), aovs);
+    let whole = idx(&scene, "albedo");
+    let parts: Vec<usize> = (0..scene.aovs.len())
+        .filter(|&k| scene.aovs[k].part_of == Some(whole as u32))
+        .collect();
+    assert_eq!(parts.len(), 2, "the light's group and the default part");
+    for c in 0..3 {
+        for (i, &w) in film.channel(whole, c).iter().enumerate() {
+            let total: f32 = parts.iter().map(|&k| film.channel(k, c)[i]).sum();
+            assert!(
+                (total - w).abs() <= 1e-5 * w.abs().max(1.0),
+                "pixel {i} channel {c}: parts {total} vs albedo {w}"
+            );
+        }
+    }
+}
+
 #[test]
 fn relighting_from_aovs_equals_re_rendering() {
     let src = lightpath::load_source("cornell").unwrap();
