@@ -39,3 +39,8 @@ done | tee "$out/results.txt"
 
 python3 "$here/compare.py" "$out/results.txt" "$here/ref/cornell_ref.exr" \
   "$out/mitsuba_llvm_ad_rgb.exr" "$out/mitsuba_scalar_rgb.exr" "$out/lightpath.exr"
+
+# The AOVs of the timed render add up (standard set, light-group parts, bounces).
+"$lightpath" aovs "$out/lightpath_aovs.exr" | grep -E '^(ok|FAIL)'
+
+"$here/scaling.sh" "$repeats"
