@@ -129,8 +129,8 @@ struct RenderArgs {
     /// 0 --spp 64`, `--first-sample 64 --spp 64`, …) and `lightpath merge` joins them.
     #[arg(long, default_value_t = 0)]
     first_sample: u32,
-    /// EXR compression: none, rle, zip (default) or piz.
-    #[arg(long, default_value = "zip", value_parser = output::ExrCompression::parse)]
+    /// EXR compression: none, rle, zips (ZIP by scan line, default), zip (16 lines) or piz.
+    #[arg(long, default_value = "zips", value_parser = output::ExrCompression::parse)]
     compression: output::ExrCompression,
     /// Exposure of the PNG preview, in stops.
     #[arg(long, default_value_t = 0.0)]

@@ -21,8 +21,13 @@ pub struct ExrOptions {
 pub enum ExrCompression {
     None,
     Rle,
-    /// ZIP over 16 scan lines: compact, the default.
+    /// ZIP one scan line at a time: the default. As compact as `zip` on renders (85.46 vs
+    /// 85.42 MB for 1080p with 37 AOVs), faster to write and to read a line at a time
+    /// (Nuke), and its blocks in flight are small: with 16-line blocks and ~110 channels
+    /// the parallel writer held ~120 MB of blocks at once.
     #[default]
+    Zips,
+    /// ZIP over 16 scan lines.
     Zip,
     /// Wavelet: the usual choice for noisy float renders in VFX pipelines.
     Piz,
@@ -33,11 +38,12 @@ impl ExrCompression {
         Ok(match s {
             "none" => ExrCompression::None,
             "rle" => ExrCompression::Rle,
+            "zips" => ExrCompression::Zips,
             "zip" => ExrCompression::Zip,
             "piz" => ExrCompression::Piz,
             other => {
                 return Err(format!(
-                    "unknown compression '{other}': expected none, rle, zip or piz"
+                    "unknown compression '{other}': expected none, rle, zips, zip or piz"
                 ))
             }
         })
@@ -47,6 +53,7 @@ impl ExrCompression {
         let compression = match self {
             ExrCompression::None => Compression::Uncompressed,
             ExrCompression::Rle => Compression::RLE,
+            ExrCompression::Zips => Compression::ZIP1,
             ExrCompression::Zip => Compression::ZIP16,
             ExrCompression::Piz => Compression::PIZ,
         };
