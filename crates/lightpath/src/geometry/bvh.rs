@@ -35,8 +35,15 @@ impl Visibility {
 
 /// A child reference with this bit set names a leaf, otherwise a node.
 const LEAF: u32 = 1 << 31;
-/// Traversal stack entries kept on the machine stack; deeper trees use a heap stack.
+/// Traversal stack entries kept on the machine stack (scenes of a million random triangles
+/// need ~40); deeper trees, from degenerate inputs, use a per-thread heap stack.
 const STACK: usize = 64;
+
+thread_local! {
+    // Grown once per thread, so rays through a very deep tree still allocate nothing.
+    static DEEP_CLOSEST: std::cell::RefCell<Vec<(u32, f32)>> = const { std::cell::RefCell::new(Vec::new()) };
+    static DEEP_ANY: std::cell::RefCell<Vec<u32>> = const { std::cell::RefCell::new(Vec::new()) };
+}
 
 /// An inner node: up to four children, their boxes one lane each.
 #[derive(Clone, Copy)]
@@ -225,56 +232,61 @@ impl Accel {
             accel.nodes[0] = node_of(&[(root.aabb, leaf)]);
             1
         } else {
-            accel.add_node(&bvh, 0, &visibility)
+            accel.add_nodes(&bvh, 0, &visibility)
         };
         accel.stack_need = 3 * depth + 1;
         accel
     }
 
-    /// Flattens the subtree of binary node `index` (an inner node) into 4-wide nodes;
-    /// returns its depth in 4-wide nodes.
-    fn add_node(&mut self, bvh: &Bvh2, index: usize, visibility: &[u8]) -> usize {
-        // Open the largest inner grandchildren until there are four children.
-        let first = bvh.nodes[index].first_index as usize;
-        let mut kids = vec![first, first + 1];
-        while kids.len() < 4 {
-            let widest = kids
-                .iter()
-                .enumerate()
-                .filter(|(_, &k)| !bvh.nodes[k].is_leaf())
-                .max_by(|a, b| {
-                    let area = |k: usize| bvh.nodes[k].aabb.half_area();
-                    area(*a.1).total_cmp(&area(*b.1))
-                })
-                .map(|(slot, _)| slot);
-            let Some(slot) = widest else { break };
-            let k = bvh.nodes[kids[slot]].first_index as usize;
-            kids[slot] = k;
-            kids.push(k + 1);
-        }
-        let me = self.nodes.len();
-        self.nodes.push(Node {
+    /// Flattens the subtree of binary node `root` (an inner node) into 4-wide nodes, node
+    /// 0 its root; returns its depth in 4-wide nodes. Iterative: a degenerate input (many
+    /// identical primitives) can make a binary tree thousands of levels deep.
+    fn add_nodes(&mut self, bvh: &Bvh2, root: usize, visibility: &[u8]) -> usize {
+        let empty = Node {
             bounds: [Vec4::ZERO; 6],
             child: [0; 4],
             lanes: 0,
-        });
-        let mut depth = 0;
-        let children: Vec<(Aabb, u32)> = kids
-            .iter()
-            .map(|&k| {
+        };
+        self.nodes.push(empty);
+        // (binary node, its 4-wide slot, depth of that slot)
+        let mut work = vec![(root, 0usize, 1usize)];
+        let mut deepest = 1;
+        while let Some((index, slot, depth)) = work.pop() {
+            deepest = deepest.max(depth);
+            // Open the largest inner grandchildren until there are four children.
+            let first = bvh.nodes[index].first_index as usize;
+            let mut kids = vec![first, first + 1];
+            while kids.len() < 4 {
+                let widest = kids
+                    .iter()
+                    .enumerate()
+                    .filter(|(_, &k)| !bvh.nodes[k].is_leaf())
+                    .max_by(|a, b| {
+                        let area = |k: usize| bvh.nodes[k].aabb.half_area();
+                        area(*a.1).total_cmp(&area(*b.1))
+                    })
+                    .map(|(at, _)| at);
+                let Some(at) = widest else { break };
+                let k = bvh.nodes[kids[at]].first_index as usize;
+                kids[at] = k;
+                kids.push(k + 1);
+            }
+            let mut children = Vec::with_capacity(4);
+            for &k in &kids {
                 let n = &bvh.nodes[k];
                 let reference = if n.is_leaf() {
                     self.add_leaf(n.first_index, n.prim_count, visibility)
                 } else {
-                    let at = self.nodes.len() as u32;
-                    depth = depth.max(self.add_node(bvh, k, visibility));
-                    at
+                    let at = self.nodes.len();
+                    self.nodes.push(empty);
+                    work.push((k, at, depth + 1));
+                    at as u32
                 };
-                (n.aabb, reference)
-            })
-            .collect();
-        self.nodes[me] = node_of(&children);
-        depth + 1
+                children.push((n.aabb, reference));
+            }
+            self.nodes[slot] = node_of(&children);
+        }
+        deepest
     }
 
     /// Packs primitives `first .. first + count` (slots) into leaf packets; returns the
@@ -341,7 +353,12 @@ impl Accel {
         let (prim, t) = if self.stack_need <= STACK {
             self.closest(ray, tmin, mask, &mut Stack::<(u32, f32), STACK>::new())
         } else {
-            self.closest(ray, tmin, mask, &mut vec![(0, 0.0); self.stack_need])
+            DEEP_CLOSEST.with_borrow_mut(|stack| {
+                if stack.len() < self.stack_need {
+                    stack.resize(self.stack_need, (0, 0.0));
+                }
+                self.closest(ray, tmin, mask, stack)
+            })
         };
         (prim != u32::MAX).then(|| self.surface(ray, prim, t))
     }
@@ -472,7 +489,12 @@ impl Accel {
         if self.stack_need <= STACK {
             self.any_hit(ray, tmin, ignore, &mut Stack::<u32, STACK>::new())
         } else {
-            self.any_hit(ray, tmin, ignore, &mut vec![0; self.stack_need])
+            DEEP_ANY.with_borrow_mut(|stack| {
+                if stack.len() < self.stack_need {
+                    stack.resize(self.stack_need, 0);
+                }
+                self.any_hit(ray, tmin, ignore, stack)
+            })
         }
     }
 
@@ -598,7 +620,7 @@ trait TraversalStack<T: Copy> {
     fn take(&self, at: usize) -> T;
 }
 
-/// The heap stack of very deep trees.
+/// The per-thread heap stack of very deep trees.
 impl<T: Copy> TraversalStack<T> for Vec<T> {
     #[inline(always)]
     fn put(&mut self, at: usize, value: T) {
@@ -741,6 +763,34 @@ mod tests {
                 assert_eq!(accel.occluded(&ray, 0.0, ignore), brute_blocked, "n {n}");
             }
         }
+    }
+
+    /// Identical primitives make a binary tree as deep as it is wide (obvhs pairs them in a
+    /// chain): building and tracing it must neither overflow a stack nor miss.
+    #[test]
+    fn degenerate_deep_trees_build_and_trace() {
+        let n = 2_000;
+        let tri = Prim::Triangle {
+            p0: Vec3A::ZERO,
+            e1: Vec3A::X,
+            e2: Vec3A::Y,
+            normals: u32::MAX,
+        };
+        let accel = Accel::build(
+            vec![tri; n],
+            (0..n as u32).collect(),
+            Vec::new(),
+            vec![7; n],
+        );
+        assert!(accel.stack_need > STACK, "the test wants a deep tree");
+        let ray = Ray {
+            origin: Vec3A::new(0.2, 0.2, 1.0),
+            dir: -Vec3A::Z,
+            tmax: f32::INFINITY,
+        };
+        let hit = accel.intersect(&ray, 0.0, Visibility::ALL).expect("a hit");
+        assert!((hit.t - 1.0).abs() < 1e-6);
+        assert!(accel.occluded(&ray, 0.0, u32::MAX));
     }
 
     #[test]
