@@ -189,13 +189,59 @@ impl Accel {
         if prims.is_empty() {
             return accel;
         }
-        let boxes: Vec<Bounded> = prims
+        // Many exact duplicates of one box (doubled faces, copies stacked in place) go to
+        // obvhs once: its PLOC build pairs identical boxes into a chain as deep as their
+        // number, in quadratic time. They share a leaf as consecutive packets (a ray that
+        // enters one box enters them all). A few (the two halves of an axis-aligned quad)
+        // stay apart, where the tree can separate them best.
+        const MERGE_ABOVE: u32 = 4;
+        let keys: Vec<[u32; 6]> = prims
             .iter()
             .map(|p| {
                 let (lo, hi) = p.bounds();
-                Bounded(Aabb::new(lo, hi))
+                [lo.x, lo.y, lo.z, hi.x, hi.y, hi.z].map(f32::to_bits)
             })
             .collect();
+        let mut copies: std::collections::HashMap<[u32; 6], (u32, u32)> = Default::default();
+        for key in &keys {
+            copies.entry(*key).or_insert((0, u32::MAX)).0 += 1;
+        }
+        let mut boxes: Vec<Bounded> = Vec::new();
+        let group: Vec<u32> = prims
+            .iter()
+            .zip(&keys)
+            .map(|(p, key)| {
+                let (lo, hi) = p.bounds();
+                let mut new_box = || {
+                    boxes.push(Bounded(Aabb::new(lo, hi)));
+                    boxes.len() as u32 - 1
+                };
+                match copies.get_mut(key) {
+                    Some((count, shared)) if *count > MERGE_ABOVE => {
+                        if *shared == u32::MAX {
+                            *shared = new_box();
+                        }
+                        *shared
+                    }
+                    _ => new_box(),
+                }
+            })
+            .collect();
+        drop(copies);
+        // Primitives listed group by group (a counting sort).
+        let mut group_start = vec![0u32; boxes.len() + 1];
+        for &g in &group {
+            group_start[g as usize + 1] += 1;
+        }
+        for g in 0..boxes.len() {
+            group_start[g + 1] += group_start[g];
+        }
+        let mut by_group = vec![0u32; prims.len()];
+        let mut fill = group_start.clone();
+        for (i, &g) in group.iter().enumerate() {
+            by_group[fill[g as usize] as usize] = i as u32;
+            fill[g as usize] += 1;
+        }
         let params = BvhBuildParams {
             max_prims_per_leaf: 4,
             // Past a few hundred thousand primitives a better tree is not worth the build.
@@ -206,8 +252,17 @@ impl Accel {
             }
         };
         let bvh = build_bvh2(&boxes, params, &mut Default::default());
-        // Lay the primitives out in leaf order so leaves address them by range.
-        let order = &bvh.primitive_indices;
+        // Lay the primitives out in leaf order so leaves address them by range:
+        // `slot_start[k]` is the first slot of the k-th box in obvhs's order.
+        let mut order = Vec::with_capacity(prims.len());
+        let mut slot_start = Vec::with_capacity(bvh.primitive_indices.len() + 1);
+        for &g in &bvh.primitive_indices {
+            slot_start.push(order.len() as u32);
+            let g = g as usize;
+            order
+                .extend_from_slice(&by_group[group_start[g] as usize..group_start[g + 1] as usize]);
+        }
+        slot_start.push(order.len() as u32);
         accel.prims = order.iter().map(|&i| prims[i as usize]).collect();
         accel.objects = order.iter().map(|&i| objects[i as usize]).collect();
         let visibility: Vec<u8> = order.iter().map(|&i| visibility[i as usize]).collect();
@@ -228,20 +283,20 @@ impl Accel {
                 child: [0; 4],
                 lanes: 0,
             });
-            let leaf = accel.add_leaf(root.first_index, root.prim_count, &visibility);
+            let leaf = accel.add_leaf(&slot_start, root.first_index, root.prim_count, &visibility);
             accel.nodes[0] = node_of(&[(root.aabb, leaf)]);
             1
         } else {
-            accel.add_nodes(&bvh, 0, &visibility)
+            accel.add_nodes(&bvh, &slot_start, &visibility)
         };
         accel.stack_need = 3 * depth + 1;
         accel
     }
 
-    /// Flattens the subtree of binary node `root` (an inner node) into 4-wide nodes, node
-    /// 0 its root; returns its depth in 4-wide nodes. Iterative: a degenerate input (many
+    /// Flattens the binary tree (its root an inner node) into 4-wide nodes, node 0 its
+    /// root; returns its depth in 4-wide nodes. Iterative: a degenerate input (many
     /// identical primitives) can make a binary tree thousands of levels deep.
-    fn add_nodes(&mut self, bvh: &Bvh2, root: usize, visibility: &[u8]) -> usize {
+    fn add_nodes(&mut self, bvh: &Bvh2, slot_start: &[u32], visibility: &[u8]) -> usize {
         let empty = Node {
             bounds: [Vec4::ZERO; 6],
             child: [0; 4],
@@ -249,7 +304,7 @@ impl Accel {
         };
         self.nodes.push(empty);
         // (binary node, its 4-wide slot, depth of that slot)
-        let mut work = vec![(root, 0usize, 1usize)];
+        let mut work = vec![(0usize, 0usize, 1usize)];
         let mut deepest = 1;
         while let Some((index, slot, depth)) = work.pop() {
             deepest = deepest.max(depth);
@@ -275,7 +330,7 @@ impl Accel {
             for &k in &kids {
                 let n = &bvh.nodes[k];
                 let reference = if n.is_leaf() {
-                    self.add_leaf(n.first_index, n.prim_count, visibility)
+                    self.add_leaf(slot_start, n.first_index, n.prim_count, visibility)
                 } else {
                     let at = self.nodes.len();
                     self.nodes.push(empty);
@@ -289,12 +344,13 @@ impl Accel {
         deepest
     }
 
-    /// Packs primitives `first .. first + count` (slots) into leaf packets; returns the
-    /// child reference of the first.
-    fn add_leaf(&mut self, first: u32, count: u32, visibility: &[u8]) -> u32 {
+    /// Packs the primitives of obvhs's boxes `first .. first + count` (with their
+    /// duplicates: slots `slot_start[first] .. slot_start[first + count]`) into leaf
+    /// packets; returns the child reference of the first.
+    fn add_leaf(&mut self, slot_start: &[u32], first: u32, count: u32, visibility: &[u8]) -> u32 {
         let reference = LEAF | self.leaves.len() as u32;
-        let end = first + count;
-        let mut start = first;
+        let end = slot_start[(first + count) as usize];
+        let mut start = slot_start[first as usize];
         while start < end {
             let mut leaf = Leaf {
                 p0: [Vec4::ZERO; 3],
@@ -687,13 +743,20 @@ mod tests {
     use super::*;
     use crate::sampling::{uniform_sphere, Rng};
 
-    /// A soup of triangles and spheres of mixed visibility, in and around a unit box.
+    /// A soup of triangles and spheres of mixed visibility, some duplicated, in and around a
+    /// unit box.
     fn soup(n: usize, rng: &mut Rng) -> (Vec<Prim>, Vec<u32>, Vec<u8>) {
         let mut point =
             || Vec3A::new(rng.next_f32(), rng.next_f32(), rng.next_f32()) * 2.0 - Vec3A::ONE;
         let mut prims = Vec::new();
         for i in 0..n {
-            if i % 7 == 3 {
+            if i >= 50 && (1..=6).contains(&(i % 50)) {
+                // Seven copies in a row, enough to be merged into one box.
+                prims.push(prims[i - i % 50]);
+            } else if i % 11 == 5 {
+                // An exact duplicate of the previous one (of another object and visibility).
+                prims.push(prims[i - 1]);
+            } else if i % 7 == 3 {
                 prims.push(Prim::Sphere {
                     center: point(),
                     radius: 0.05,
@@ -765,24 +828,26 @@ mod tests {
         }
     }
 
-    /// Identical primitives make a binary tree as deep as it is wide (obvhs pairs them in a
-    /// chain): building and tracing it must neither overflow a stack nor miss.
+    /// Identical primitives (obvhs would pair them in a chain as deep as their number, in
+    /// quadratic time) share one box of the tree.
     #[test]
-    fn degenerate_deep_trees_build_and_trace() {
-        let n = 2_000;
+    fn identical_primitives_share_a_leaf() {
+        let n = 20_000;
         let tri = Prim::Triangle {
             p0: Vec3A::ZERO,
             e1: Vec3A::X,
             e2: Vec3A::Y,
             normals: u32::MAX,
         };
-        let accel = Accel::build(
-            vec![tri; n],
-            (0..n as u32).collect(),
-            Vec::new(),
-            vec![7; n],
-        );
-        assert!(accel.stack_need > STACK, "the test wants a deep tree");
+        let mut prims = vec![tri; n];
+        prims.push(Prim::Sphere {
+            center: Vec3A::new(5.0, 0.0, 0.0),
+            radius: 1.0,
+        });
+        let objects: Vec<u32> = (0..=n as u32).collect();
+        let accel = Accel::build(prims, objects, Vec::new(), vec![7; n + 1]);
+        assert_eq!(accel.nodes.len(), 1);
+        assert_eq!(accel.leaves.len(), n / 4 + 1);
         let ray = Ray {
             origin: Vec3A::new(0.2, 0.2, 1.0),
             dir: -Vec3A::Z,
@@ -790,7 +855,33 @@ mod tests {
         };
         let hit = accel.intersect(&ray, 0.0, Visibility::ALL).expect("a hit");
         assert!((hit.t - 1.0).abs() < 1e-6);
+        assert!(hit.object < n as u32);
         assert!(accel.occluded(&ray, 0.0, u32::MAX));
+        // Every copy but one ignored: still occluded by the others.
+        assert!(accel.occluded(&ray, 0.0, hit.object));
+    }
+
+    /// Trees deeper than the fixed stack (none of the inputs above makes one any more)
+    /// traverse on the per-thread heap stack: the same answers.
+    #[test]
+    fn heap_stack_traverses_like_the_fixed_one() {
+        let mut rng = Rng::for_sample(4, 5, 6);
+        let (prims, objects, visibility) = soup(3000, &mut rng);
+        let accel = Accel::build(prims, objects, Vec::new(), visibility);
+        for _ in 0..500 {
+            let ray = Ray {
+                origin: Vec3A::new(rng.next_f32(), rng.next_f32(), rng.next_f32())
+                    - Vec3A::splat(0.5),
+                dir: uniform_sphere(rng.next_2d()),
+                tmax: f32::INFINITY,
+            };
+            let fixed = accel.closest(&ray, 0.0, 7, &mut Stack::<(u32, f32), STACK>::new());
+            let heap = accel.closest(&ray, 0.0, 7, &mut vec![(0, 0.0); accel.stack_need]);
+            assert_eq!(fixed, heap);
+            let fixed = accel.any_hit(&ray, 0.0, 2, &mut Stack::<u32, STACK>::new());
+            let heap = accel.any_hit(&ray, 0.0, 2, &mut vec![0; accel.stack_need]);
+            assert_eq!(fixed, heap);
+        }
     }
 
     #[test]
