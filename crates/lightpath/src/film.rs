@@ -107,26 +107,25 @@ impl Film {
 /// nothing.
 pub struct SampleAccumulator {
     values: Vec<Vec3A>,
-    touched: Vec<u32>,
-    is_touched: Vec<bool>,
+    /// A bit per AOV: has this sample touched it? (A list of touched AOVs cost a push
+    /// with its capacity check per first touch.)
+    touched: Vec<u64>,
 }
 
 impl SampleAccumulator {
     pub fn new(aovs: usize) -> SampleAccumulator {
         SampleAccumulator {
             values: vec![Vec3A::ZERO; aovs],
-            touched: Vec::with_capacity(aovs),
-            is_touched: vec![false; aovs],
+            touched: vec![0; aovs.div_ceil(64)],
         }
     }
 
     #[inline(always)]
     pub fn add(&mut self, aov: usize, value: Vec3A, overwrite: bool) {
-        if !self.is_touched[aov] {
-            self.is_touched[aov] = true;
-            self.touched.push(aov as u32);
-            self.values[aov] = value;
-        } else if overwrite {
+        let bit = 1u64 << (aov & 63);
+        let word = &mut self.touched[aov >> 6];
+        if *word & bit == 0 || overwrite {
+            *word |= bit;
             self.values[aov] = value;
         } else {
             self.values[aov] += value;
@@ -136,14 +135,17 @@ impl SampleAccumulator {
     /// Adds the sample to a pixel's run of the film and clears it.
     #[inline]
     pub fn flush(&mut self, pixel: &mut [f32]) {
-        for &k in &self.touched {
-            let k = k as usize;
-            let v = self.values[k];
-            pixel[3 * k] += v.x;
-            pixel[3 * k + 1] += v.y;
-            pixel[3 * k + 2] += v.z;
-            self.is_touched[k] = false;
+        for (w, word) in self.touched.iter_mut().enumerate() {
+            let mut bits = std::mem::take(word);
+            while bits != 0 {
+                let k = w * 64 + bits.trailing_zeros() as usize;
+                bits &= bits - 1;
+                let v = self.values[k];
+                let p = &mut pixel[3 * k..3 * k + 3];
+                p[0] += v.x;
+                p[1] += v.y;
+                p[2] += v.z;
+            }
         }
-        self.touched.clear();
     }
 }

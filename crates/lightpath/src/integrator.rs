@@ -35,12 +35,107 @@ enum Via {
     Data,
 }
 
+impl Via {
+    /// Every `Via`, in `index` order.
+    const ALL: [Via; Via::COUNT] = [
+        Via::Hit {
+            light_sampled: false,
+            light_after_scatter: false,
+        },
+        Via::Hit {
+            light_sampled: true,
+            light_after_scatter: false,
+        },
+        Via::Hit {
+            light_sampled: false,
+            light_after_scatter: true,
+        },
+        Via::Hit {
+            light_sampled: true,
+            light_after_scatter: true,
+        },
+        Via::LightSample { visible: false },
+        Via::LightSample { visible: true },
+        Via::LightsOnly { occluded: false },
+        Via::LightsOnly { occluded: true },
+        Via::Data,
+    ];
+    const COUNT: usize = 9;
+
+    #[inline(always)]
+    fn index(self) -> usize {
+        match self {
+            Via::Hit {
+                light_sampled,
+                light_after_scatter,
+            } => light_sampled as usize | (light_after_scatter as usize) << 1,
+            Via::LightSample { visible } => 4 + visible as usize,
+            Via::LightsOnly { occluded } => 6 + occluded as usize,
+            Via::Data => 8,
+        }
+    }
+}
+
+/// What a rule takes of a contribution.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+enum Take {
+    /// Nothing.
+    #[default]
+    Skip,
+    /// The value as it is.
+    Whole,
+    /// The value times its MIS weight.
+    Weighted,
+}
+
+/// The prefixes' routing rules (docs/lpe.md): what an AOV with these flags takes of a
+/// contribution that came this way, outside holdouts.
+fn take(unoccluded: bool, shadows: bool, via: Via) -> Take {
+    match via {
+        Via::Hit {
+            light_sampled,
+            light_after_scatter,
+        } => {
+            if shadows || (unoccluded && light_after_scatter) {
+                Take::Skip
+            } else if unoccluded || !light_sampled {
+                Take::Whole
+            } else {
+                Take::Weighted
+            }
+        }
+        Via::LightSample { visible } => {
+            if shadows {
+                if visible {
+                    Take::Skip
+                } else {
+                    Take::Whole
+                }
+            } else if unoccluded {
+                Take::Whole
+            } else if visible {
+                Take::Weighted
+            } else {
+                Take::Skip
+            }
+        }
+        Via::LightsOnly { occluded } => {
+            if unoccluded || (shadows && occluded) {
+                Take::Whole
+            } else {
+                Take::Skip
+            }
+        }
+        Via::Data => Take::Whole,
+    }
+}
+
 /// Per-rule routing flags, unpacked from the prefixes for the hot loop.
 #[derive(Clone, Copy, Debug, Default)]
 struct Route {
-    unoccluded: bool,
-    shadows: bool,
-    holdouts: bool,
+    /// What the rule takes of a contribution, by `Via::index`, outside holdouts (row 0)
+    /// and inside (row 1): a lookup instead of the prefix logic per rule.
+    take: [[Take; Via::COUNT]; 2],
     nothruput: bool,
     overwrite: bool,
     noclamp: bool,
@@ -107,9 +202,22 @@ impl<'a> Tracer<'a> {
             .aovs
             .iter()
             .map(|a| Route {
-                unoccluded: a.flags.contains(Prefix::Unoccluded),
-                shadows: a.flags.contains(Prefix::Shadows),
-                holdouts: a.flags.contains(Prefix::Holdouts),
+                take: {
+                    let unoccluded = a.flags.contains(Prefix::Unoccluded);
+                    let shadows = a.flags.contains(Prefix::Shadows);
+                    // `holdouts` AOVs take only what holdouts see, the others only the rest.
+                    let holdouts = a.flags.contains(Prefix::Holdouts);
+                    let row = |in_holdout: bool| {
+                        Via::ALL.map(|via| {
+                            if in_holdout == holdouts {
+                                take(unoccluded, shadows, via)
+                            } else {
+                                Take::Skip
+                            }
+                        })
+                    };
+                    [row(false), row(true)]
+                },
                 nothruput: a.flags.contains(Prefix::NoThruput),
                 overwrite: a.flags.contains(Prefix::Overwrite),
                 noclamp: a.flags.contains(Prefix::NoClamp),
@@ -149,54 +257,20 @@ impl<'a> Tracer<'a> {
             settings.clamp_indirect
         };
         let mut dropped = false;
+        let takes = counters.holdout as usize;
+        let case = origin.via.index();
+        // The four values a rule can take: with or without the throughput, whole or
+        // weighted.
+        let full = throughput * local;
+        let values = [[local, local * mis], [full, full * mis]];
         for rule in rules {
             let k = rule.0 as usize;
-            let r = self.routes[k];
-            if r.holdouts != counters.holdout {
+            let r = &self.routes[k];
+            let take = r.take[takes][case];
+            if take == Take::Skip {
                 continue;
             }
-            let weight = match origin.via {
-                Via::Hit {
-                    light_sampled,
-                    light_after_scatter,
-                } => {
-                    if r.shadows || (r.unoccluded && light_after_scatter) {
-                        continue;
-                    }
-                    if r.unoccluded || !light_sampled {
-                        1.0
-                    } else {
-                        mis
-                    }
-                }
-                Via::LightSample { visible } => {
-                    if r.shadows {
-                        if visible {
-                            continue;
-                        }
-                        1.0
-                    } else if r.unoccluded {
-                        1.0
-                    } else if visible {
-                        mis
-                    } else {
-                        continue;
-                    }
-                }
-                Via::LightsOnly { occluded } => {
-                    if r.unoccluded || (r.shadows && occluded) {
-                        1.0
-                    } else {
-                        continue;
-                    }
-                }
-                Via::Data => 1.0,
-            };
-            let mut v = if r.nothruput {
-                local
-            } else {
-                throughput * local
-            } * weight;
+            let mut v = values[!r.nothruput as usize][(take == Take::Weighted) as usize];
             if !r.noinfinitecheck && !v.is_finite() {
                 dropped = true;
                 continue;
