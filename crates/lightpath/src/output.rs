@@ -216,8 +216,62 @@ pub fn write_channels(
         image
             .write()
             .to_file(tmp)
+            .and_then(|()| sort_header_attributes(tmp).map_err(exr::error::Error::from))
             .map_err(|e| format!("cannot write {}: {e}", path.display()))
     })
+}
+
+/// Rewrites a single-part EXR's header with its attributes in name order. The `exr` crate
+/// keeps them in a `HashMap`, so two identical renders wrote the same attributes in a
+/// different order: a farm could not compare outputs by checksum. The set of attributes
+/// is the same either way, so the header keeps its length and nothing after it moves.
+fn sort_header_attributes(path: &Path) -> std::io::Result<()> {
+    use std::io::{Read, Seek, SeekFrom, Write};
+    let mut file = std::fs::OpenOptions::new()
+        .read(true)
+        .write(true)
+        .open(path)?;
+    // Headers are small; one that does not end within this much is left as it is.
+    let mut head = Vec::new();
+    (&mut file).take(1 << 22).read_to_end(&mut head)?;
+    let multipart = head.len() >= 8 && head[5] & 0x10 != 0;
+    if head.len() < 8 || head[..4] != [0x76, 0x2f, 0x31, 0x01] || multipart {
+        return Ok(());
+    }
+    // Attributes: name\0 type\0 size (i32 LE) value; an empty name ends the header.
+    let mut attributes: Vec<(&[u8], &[u8])> = Vec::new();
+    let mut at = 8;
+    loop {
+        let Some(name_len) = head[at..].iter().position(|&b| b == 0) else {
+            return Ok(());
+        };
+        if name_len == 0 {
+            break;
+        }
+        let name = &head[at..at + name_len];
+        let Some(type_len) = head[at + name_len + 1..].iter().position(|&b| b == 0) else {
+            return Ok(());
+        };
+        let size_at = at + name_len + 1 + type_len + 1;
+        let Some(size) = head.get(size_at..size_at + 4) else {
+            return Ok(());
+        };
+        let size = i32::from_le_bytes([size[0], size[1], size[2], size[3]]);
+        let end = size_at + 4 + size.max(0) as usize;
+        if end > head.len() {
+            return Ok(());
+        }
+        attributes.push((name, &head[at..end]));
+        at = end;
+    }
+    attributes.sort_by(|a, b| a.0.cmp(b.0));
+    let sorted: Vec<u8> = attributes
+        .iter()
+        .flat_map(|a| a.1.iter().copied())
+        .collect();
+    debug_assert_eq!(sorted.len(), at - 8);
+    file.seek(SeekFrom::Start(8))?;
+    file.write_all(&sorted)
 }
 
 /// An EXR read back: its channels by name and the header's AOV definitions.
