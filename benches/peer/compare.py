@@ -23,13 +23,17 @@ for line in open(results):
         speeds.setdefault(m.group(1), []).append(float(m.group(2)))
 med = {k: statistics.median(v) for k, v in speeds.items()}
 for k, v in sorted(med.items()):
-    print(f"{k:>18}: {v:6.2f} M samples/s (median of {len(speeds[k])})")
+    print(f"{k:>26}: {v:6.2f} M samples/s (median of {len(speeds[k])})")
 if "lightpath" in med:
     for peer in ("llvm_ad_rgb", "scalar_rgb"):
         if peer in med:
             print(f"lightpath / {peer}: {med['lightpath'] / med[peer]:.2f}x" + (" (target >= 2x)" if peer == "llvm_ad_rgb" else ""))
-    if "lightpath_40aovs" in med:
-        print(f"AOV overhead (40-AOV time / beauty-only time): {med['lightpath'] / med['lightpath_40aovs']:.3f} (target <= 1.15)")
+for base, aovs, what in (
+    ("lightpath", "lightpath_40aovs", "cornell-classic, 37 AOVs"),
+    ("lightpath_cornell", "lightpath_cornell_44aovs", "cornell, 44 AOVs, 3-group split"),
+):
+    if base in med and aovs in med:
+        print(f"AOV overhead ({what}; AOV time / beauty-only time): {med[base] / med[aovs]:.3f} (target <= 1.15)")
 ref = load(ref_path)
 for path in images:
     img = load(path)
