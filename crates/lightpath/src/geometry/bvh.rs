@@ -92,7 +92,7 @@ struct RayLanes {
     inv: [Vec4; 3],
     /// origin × inverse direction, so a slab distance is `bound * inv - oinv`.
     oinv: [Vec4; 3],
-    /// Index into `Node::bounds` of the near plane per axis (the far one is `3 - …`).
+    /// Index into `Node::bounds` of the near plane per axis (the far one is 3 away).
     near: [usize; 3],
     tmin: f32,
 }
