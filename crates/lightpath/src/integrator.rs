@@ -746,3 +746,36 @@ pub fn render(scene: &Scene, options: &RenderOptions) -> (Film, RenderStats) {
     };
     (film, stats)
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The routing table is indexed by `Via::index`: `ALL` must list every way once, in
+    /// that order.
+    #[test]
+    fn every_via_has_its_own_row() {
+        for (i, via) in Via::ALL.iter().enumerate() {
+            assert_eq!(via.index(), i, "{via:?}");
+        }
+    }
+
+    /// Spot checks of the prefix rules (docs/lpe.md): plain AOVs take visible light
+    /// samples weighted, `shadows` only blocked ones, `unoccluded` all of them whole.
+    #[test]
+    fn prefixes_take_what_the_docs_say() {
+        let sample = |visible| Via::LightSample { visible };
+        assert_eq!(take(false, false, sample(true)), Take::Weighted);
+        assert_eq!(take(false, false, sample(false)), Take::Skip);
+        assert_eq!(take(false, true, sample(false)), Take::Whole);
+        assert_eq!(take(false, true, sample(true)), Take::Skip);
+        assert_eq!(take(true, false, sample(false)), Take::Whole);
+        let emitter_after_scatter = Via::Hit {
+            light_sampled: true,
+            light_after_scatter: true,
+        };
+        assert_eq!(take(false, false, emitter_after_scatter), Take::Weighted);
+        assert_eq!(take(true, false, emitter_after_scatter), Take::Skip);
+        assert_eq!(take(false, false, Via::Data), Take::Whole);
+    }
+}
