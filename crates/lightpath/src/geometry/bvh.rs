@@ -266,14 +266,7 @@ impl Accel {
         accel.prims = order.iter().map(|&i| prims[i as usize]).collect();
         accel.objects = order.iter().map(|&i| objects[i as usize]).collect();
         let visibility: Vec<u8> = order.iter().map(|&i| visibility[i as usize]).collect();
-        accel.face_normals = accel
-            .prims
-            .iter()
-            .map(|p| match p {
-                Prim::Triangle { e1, e2, .. } => e1.cross(*e2).normalize_or(Vec3A::Z),
-                Prim::Sphere { .. } => Vec3A::Z,
-            })
-            .collect();
+        accel.face_normals = accel.prims.iter().map(Prim::face_normal).collect();
 
         let root = &bvh.nodes[0];
         let depth = if root.is_leaf() {

@@ -117,6 +117,15 @@ impl Prim {
         }
     }
 
+    /// The unit geometric normal of a triangle (its winding's side); `+Z` for a sphere,
+    /// whose normal depends on the point.
+    pub fn face_normal(&self) -> Vec3A {
+        match *self {
+            Prim::Triangle { e1, e2, .. } => e1.cross(e2).normalize_or(Vec3A::Z),
+            Prim::Sphere { .. } => Vec3A::Z,
+        }
+    }
+
     pub fn area(&self) -> f32 {
         match *self {
             Prim::Triangle { e1, e2, .. } => 0.5 * e1.cross(e2).length(),

@@ -360,14 +360,7 @@ fn light_shape(
     let xf = placement(l.translate, l.rotate, l.scale, l.matrix);
     let area = |prims: ShapePrims| {
         let areas: Vec<f32> = prims.prims.iter().map(Prim::area).collect();
-        let normals = prims
-            .prims
-            .iter()
-            .map(|p| match p {
-                Prim::Triangle { e1, e2, .. } => e1.cross(*e2).normalize_or(Vec3A::Z),
-                Prim::Sphere { .. } => Vec3A::Z,
-            })
-            .collect();
+        let normals = prims.prims.iter().map(Prim::face_normal).collect();
         let shape = LightShape::Triangles {
             parallelogram: parallelogram(&prims.prims),
             prims: prims.prims.clone(),
