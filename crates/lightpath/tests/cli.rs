@@ -19,6 +19,13 @@ fn succeed(cmd: &mut Command) -> std::process::Output {
     out
 }
 
+/// Runs the command, asserts it failed, returns its stderr.
+fn refuse(cmd: &mut Command) -> String {
+    let out = cmd.output().unwrap();
+    assert!(!out.status.success());
+    String::from_utf8(out.stderr).unwrap()
+}
+
 /// A scratch folder for one test, removed when the test ends, passing or not.
 struct Scratch(std::path::PathBuf);
 
@@ -203,14 +210,8 @@ fn render_writes_exr_and_png_and_reports_speed() {
     assert_eq!((exr.width, exr.height), (24, 16));
     assert!(exr.channel("directDiffuse.R").is_some() && exr.channel("A").is_some());
     assert!(dir.join("shot.png").exists());
-    let bad = lightpath()
-        .args(["render", "no/such/scene.toml", "--quiet"])
-        .output()
-        .unwrap();
-    assert!(!bad.status.success());
-    assert!(String::from_utf8(bad.stderr)
-        .unwrap()
-        .contains("no/such/scene.toml"));
+    let bad = refuse(lightpath().args(["render", "no/such/scene.toml", "--quiet"]));
+    assert!(bad.contains("no/such/scene.toml"));
 }
 
 /// Same scene, same options: the same bytes, whatever the thread count (a farm compares
@@ -333,17 +334,14 @@ fn aovs_checks_partitions_and_comp_relights() {
         .unwrap()
         .contains("FAIL beauty = emission + directDiffuse"));
 
-    let missing = lightpath()
-        .arg("comp")
-        .arg(&exr)
-        .args(["beauty + nothere", "-o"])
-        .arg(dir.join("x.exr"))
-        .output()
-        .unwrap();
-    assert!(!missing.status.success());
-    assert!(String::from_utf8(missing.stderr)
-        .unwrap()
-        .contains("no AOV 'nothere'"));
+    let missing = refuse(
+        lightpath()
+            .arg("comp")
+            .arg(&exr)
+            .args(["beauty + nothere", "-o"])
+            .arg(dir.join("x.exr")),
+    );
+    assert!(missing.contains("no AOV 'nothere'"));
 }
 
 #[test]
@@ -396,15 +394,14 @@ fn sample_ranges_rendered_apart_merge_into_the_whole_frame() {
         .attributes
         .contains(&("lightpath/spp".to_string(), "4".to_string())));
     // The same range twice would count its samples twice.
-    let twice = lightpath()
-        .arg("merge")
-        .arg(dir.join("a.exr"))
-        .arg(dir.join("a.exr"))
-        .arg("-o")
-        .arg(dir.join("x.exr"))
-        .output()
-        .unwrap();
-    assert!(!twice.status.success());
+    refuse(
+        lightpath()
+            .arg("merge")
+            .arg(dir.join("a.exr"))
+            .arg(dir.join("a.exr"))
+            .arg("-o")
+            .arg(dir.join("x.exr")),
+    );
 }
 
 #[test]

@@ -195,28 +195,28 @@ impl Accel {
         // enters one box enters them all). A few (the two halves of an axis-aligned quad)
         // stay apart, where the tree can separate them best.
         const MERGE_ABOVE: u32 = 4;
-        let keys: Vec<[u32; 6]> = prims
+        let bounds: Vec<Aabb> = prims
             .iter()
             .map(|p| {
                 let (lo, hi) = p.bounds();
-                [lo.x, lo.y, lo.z, hi.x, hi.y, hi.z].map(f32::to_bits)
+                Aabb::new(lo, hi)
             })
             .collect();
+        let key =
+            |b: &Aabb| [b.min.x, b.min.y, b.min.z, b.max.x, b.max.y, b.max.z].map(f32::to_bits);
         let mut copies: std::collections::HashMap<[u32; 6], (u32, u32)> = Default::default();
-        for key in &keys {
-            copies.entry(*key).or_insert((0, u32::MAX)).0 += 1;
+        for b in &bounds {
+            copies.entry(key(b)).or_insert((0, u32::MAX)).0 += 1;
         }
         let mut boxes: Vec<Bounded> = Vec::new();
-        let group: Vec<u32> = prims
+        let group: Vec<u32> = bounds
             .iter()
-            .zip(&keys)
-            .map(|(p, key)| {
-                let (lo, hi) = p.bounds();
+            .map(|b| {
                 let mut new_box = || {
-                    boxes.push(Bounded(Aabb::new(lo, hi)));
+                    boxes.push(Bounded(*b));
                     boxes.len() as u32 - 1
                 };
-                match copies.get_mut(key) {
+                match copies.get_mut(&key(b)) {
                     Some((count, shared)) if *count > MERGE_ABOVE => {
                         if *shared == u32::MAX {
                             *shared = new_box();
