@@ -13,6 +13,7 @@ pub mod integrator;
 pub mod light;
 pub mod material;
 pub mod output;
+pub mod progress;
 pub mod sampling;
 pub mod scene;
 
