@@ -224,11 +224,11 @@ fn material(
         )),
     };
     let bsdf = match m.kind.get_ref().as_str() {
-        "diffuse" => Bsdf::Diffuse { albedo: need(m.albedo, "albedo")? },
-        "translucent" => Bsdf::Translucent { reflect: need(m.reflect, "reflect")?, transmit: need(m.transmit, "transmit")? },
-        "conductor" => Bsdf::Conductor { f0: need(m.f0, "f0")?, alpha },
-        "dielectric" => Bsdf::Dielectric { eta: ior()?, alpha, tint: m.tint.map(v3).unwrap_or(Vec3A::ONE) },
-        "plastic" => Bsdf::Plastic { albedo: need(m.albedo, "albedo")?, eta: ior()?, alpha },
+        "diffuse" => Bsdf::diffuse(need(m.albedo, "albedo")?),
+        "translucent" => Bsdf::translucent(need(m.reflect, "reflect")?, need(m.transmit, "transmit")?),
+        "conductor" => Bsdf::conductor(need(m.f0, "f0")?, alpha),
+        "dielectric" => Bsdf::dielectric(ior()?, alpha, m.tint.map(v3).unwrap_or(Vec3A::ONE)),
+        "plastic" => Bsdf::plastic(need(m.albedo, "albedo")?, ior()?, alpha),
         other => {
             return Err(src.error(
                 Some(m.kind.span()),

@@ -1,0 +1,79 @@
+//! A dielectric clear coat (RS4) over base lobes: its specular reflection, and the
+//! Fresnel transmittance that attenuates what lies beneath.
+
+use super::fresnel::{fresnel_dielectric, reflect};
+use super::lobe::{tag, LobeModel, LobeSample, LobeTag, SampleCtx};
+use super::microfacet::Ggx;
+use glam::{Vec2, Vec3A};
+use lpe::Scatter;
+
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Coat {
+    pub eta: f32,
+    /// GGX alpha; 0 is a smooth coat.
+    pub alpha: f32,
+}
+
+impl Coat {
+    /// The factor on a base lobe's `f`: light crosses the coat going in and coming out.
+    pub fn transmittance(&self, wo: Vec3A, wi: Vec3A) -> f32 {
+        (1.0 - fresnel_dielectric(wo.z, self.eta)) * (1.0 - fresnel_dielectric(wi.z, self.eta))
+    }
+
+    /// Probability of choosing the coat over a base whose selection weights sum to
+    /// `base`: its Fresnel share of the reflected energy, kept within [0.1, 0.9] so
+    /// neither layer starves.
+    pub fn selection(&self, wo: Vec3A, base: f32) -> f32 {
+        let f = fresnel_dielectric(wo.z.abs(), self.eta);
+        let d = (1.0 - f) * base;
+        (f / (f + d).max(1e-6)).clamp(0.1, 0.9)
+    }
+}
+
+impl LobeModel for Coat {
+    fn tags(&self) -> &'static [LobeTag] {
+        const SMOOTH: [LobeTag; 1] = [tag(false, Scatter::specular(4), true)];
+        const ROUGH: [LobeTag; 1] = [tag(false, Scatter::specular(4), false)];
+        if self.alpha == 0.0 {
+            &SMOOTH
+        } else {
+            &ROUGH
+        }
+    }
+    fn eval(&self, _: usize, wo: Vec3A, wi: Vec3A, sel: f32) -> (Vec3A, f32) {
+        if self.alpha == 0.0 || wo.z <= 0.0 || wi.z <= 0.0 {
+            return (Vec3A::ZERO, 0.0);
+        }
+        let g = Ggx { alpha: self.alpha };
+        let m = (wo + wi).normalize();
+        let f = fresnel_dielectric(wi.dot(m), self.eta) * g.d(m) * g.g(wo, wi) / (4.0 * wo.z);
+        (
+            Vec3A::splat(f),
+            sel * g.pdf_visible(wo, m) / (4.0 * wo.dot(m)),
+        )
+    }
+    fn sample(&self, wo: Vec3A, ctx: SampleCtx, u: Vec2) -> Option<LobeSample> {
+        if wo.z <= 0.0 {
+            return None;
+        }
+        if self.alpha == 0.0 {
+            let f = fresnel_dielectric(wo.z, self.eta);
+            return Some(LobeSample {
+                sub: 0,
+                wi: Vec3A::new(-wo.x, -wo.y, wo.z),
+                eta: 1.0,
+                value: Some((Vec3A::splat(f / ctx.sel), ctx.sel, true)),
+            });
+        }
+        let m = Ggx { alpha: self.alpha }.sample_visible(wo, u);
+        let wi = reflect(wo, m);
+        if wi.z <= 0.0 {
+            return None;
+        }
+        LobeSample::direction(0, wi)
+    }
+    /// Unused: a coat's share comes from [`Coat::selection`].
+    fn selection_weight(&self, _: Vec3A) -> f32 {
+        1.0
+    }
+}

@@ -1,0 +1,299 @@
+//! Materials as small lists of lobes. Each lobe event is reflection or transmission,
+//! diffuse or specular, with RenderMan's lobe number (LPE.md §1), so that light sampling
+//! can send every lobe's contribution through its own LPE event.
+//!
+//! ```toml
+//! [materials.white]
+//! type = "diffuse"          # diffuse | translucent | conductor | dielectric | plastic
+//! albedo = [0.8, 0.8, 0.8]
+//! ```
+//!
+//! Conventions: directions point away from the surface; `f` values include the cosine
+//! of the incoming direction (`f · |cos θi|`); every pdf is in solid angle and includes
+//! the probability of choosing the lobe. Transmission through a dielectric scales
+//! radiance by 1/η² (η the relative index crossed, reported as `BsdfSample::eta`).
+//!
+//! Layout: [`lobe`] defines the lobe interface ([`LobeModel`]) and the [`Lobe`] enum;
+//! one file per lobe kind; [`microfacet`] (GGX) and [`fresnel`] are shared. A [`Bsdf`]
+//! holds up to [`MAX_LOBES`] lobes inline, optionally under a [`Coat`] layer.
+
+mod coat;
+mod conductor;
+mod dielectric;
+pub mod fresnel;
+mod lambert;
+pub mod lobe;
+pub mod microfacet;
+mod translucent;
+
+#[cfg(test)]
+mod tests;
+
+pub use coat::Coat;
+pub use conductor::Conductor;
+pub use dielectric::Dielectric;
+pub use fresnel::fresnel_dielectric;
+pub use lambert::Lambert;
+pub use lobe::{Lobe, LobeModel, LobeTag};
+pub use translucent::DiffuseTransmission;
+
+use crate::sampling::Frame;
+use glam::{Vec2, Vec3A};
+use lobe::SampleCtx;
+
+/// Lobes a Bsdf can hold, and LPE events they can emit.
+pub const MAX_LOBES: usize = 4;
+const MAX_TAGS: usize = 2 * MAX_LOBES;
+
+/// A fixed-capacity list of lobes; when `coat` is set, the last lobe is that coat and
+/// the ones before it are the base it attenuates.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Bsdf {
+    lobes: [Lobe; MAX_LOBES],
+    n_lobes: usize,
+    tags: [LobeTag; MAX_TAGS],
+    /// For each event: (lobe index, `sub` within the lobe).
+    tag_lobe: [(u8, u8); MAX_TAGS],
+    n_tags: usize,
+    coat: Option<Coat>,
+    albedo: Vec3A,
+    two_sided: bool,
+}
+
+pub struct BsdfSample {
+    pub lobe: usize,
+    pub wi: Vec3A,
+    /// `f · |cos θi| / pdf`.
+    pub weight: Vec3A,
+    pub pdf: f32,
+    pub delta: bool,
+    /// Relative index of refraction crossed (1 for reflection), for Russian roulette.
+    pub eta: f32,
+}
+
+/// Where and how a surface is shaded.
+#[derive(Clone, Copy, Debug)]
+pub struct Shading {
+    pub frame: Frame,
+    /// The outgoing direction in the local frame.
+    pub wo: Vec3A,
+}
+
+impl Shading {
+    /// A frame around the shading normal. Two-sided materials (all but glass) flip it
+    /// towards `wo`, so reflection is `wi.z > 0` and transmission `wi.z < 0`;
+    /// dielectrics keep the geometric orientation (it tells inside from outside).
+    pub fn new(bsdf: &Bsdf, ns: Vec3A, ng: Vec3A, wo_world: Vec3A) -> Shading {
+        let n = if bsdf.two_sided && wo_world.dot(ng) < 0.0 {
+            -ns
+        } else {
+            ns
+        };
+        let frame = Frame::new(n);
+        Shading {
+            frame,
+            wo: frame.to_local(wo_world),
+        }
+    }
+}
+
+/// Roughness as artists write it (0 smooth … 1 rough) to GGX alpha.
+pub fn roughness_to_alpha(r: f32) -> f32 {
+    let r = r.clamp(0.0, 1.0);
+    if r < 1e-3 {
+        0.0
+    } else {
+        r * r
+    }
+}
+
+impl Bsdf {
+    /// A Bsdf of `base` lobes, optionally under `coat`; `albedo` is what the `U2` lobe
+    /// reports.
+    ///
+    /// # Panics
+    /// With no lobes or more than [`MAX_LOBES`] (a bug in a constructor below).
+    pub fn layered(base: &[Lobe], coat: Option<Coat>, albedo: Vec3A) -> Bsdf {
+        let filler = Lobe::Lambert(Lambert {
+            albedo: Vec3A::ZERO,
+        });
+        let mut bsdf = Bsdf {
+            lobes: [filler; MAX_LOBES],
+            n_lobes: 0,
+            tags: [lambert::RD2; MAX_TAGS],
+            tag_lobe: [(0, 0); MAX_TAGS],
+            n_tags: 0,
+            coat,
+            albedo,
+            two_sided: true,
+        };
+        let all = base.iter().copied().chain(coat.map(Lobe::Coat));
+        for lobe in all {
+            assert!(bsdf.n_lobes < MAX_LOBES, "too many lobes");
+            for (sub, t) in lobe.tags().iter().enumerate() {
+                bsdf.tags[bsdf.n_tags] = *t;
+                bsdf.tag_lobe[bsdf.n_tags] = (bsdf.n_lobes as u8, sub as u8);
+                bsdf.n_tags += 1;
+            }
+            bsdf.two_sided &= lobe.two_sided();
+            bsdf.lobes[bsdf.n_lobes] = lobe;
+            bsdf.n_lobes += 1;
+        }
+        assert!(bsdf.n_lobes > 0, "a Bsdf needs a lobe");
+        bsdf
+    }
+
+    /// Lambertian reflection (RD2).
+    pub fn diffuse(albedo: Vec3A) -> Bsdf {
+        Bsdf::layered(&[Lambert { albedo }.into()], None, albedo)
+    }
+
+    /// Diffuse reflection (RD2) and diffuse transmission (TD3): thin translucent sheets.
+    pub fn translucent(reflect: Vec3A, transmit: Vec3A) -> Bsdf {
+        Bsdf::layered(
+            &[
+                Lambert { albedo: reflect }.into(),
+                DiffuseTransmission { transmit }.into(),
+            ],
+            None,
+            reflect + transmit,
+        )
+    }
+
+    /// Metal: a mirror (RS2) when `alpha` is 0, GGX (RS3) otherwise.
+    pub fn conductor(f0: Vec3A, alpha: f32) -> Bsdf {
+        Bsdf::layered(&[Conductor { f0, alpha }.into()], None, f0)
+    }
+
+    /// Glass (RS8 + TS8), smooth or rough.
+    pub fn dielectric(eta: f32, alpha: f32, tint: Vec3A) -> Bsdf {
+        Bsdf::layered(&[Dielectric { eta, alpha, tint }.into()], None, tint)
+    }
+
+    /// A diffuse base (RD2) under a dielectric clear coat (RS4).
+    pub fn plastic(albedo: Vec3A, eta: f32, alpha: f32) -> Bsdf {
+        Bsdf::layered(
+            &[Lambert { albedo }.into()],
+            Some(Coat { eta, alpha }),
+            albedo,
+        )
+    }
+
+    /// The LPE events of the lobes, in the order `eval_lobe` and `BsdfSample::lobe` use.
+    pub fn lobes(&self) -> &[LobeTag] {
+        &self.tags[..self.n_tags]
+    }
+
+    /// The colour the `U2` albedo lobe reports.
+    pub fn albedo(&self) -> Vec3A {
+        self.albedo
+    }
+
+    fn n_base(&self) -> usize {
+        self.n_lobes - usize::from(self.coat.is_some())
+    }
+
+    /// Probability of choosing each lobe when sampling: base lobes in proportion to
+    /// their selection weights (uniformly if those are all zero), the coat by its own
+    /// rule, taking its share from the base.
+    fn selection(&self, wo: Vec3A) -> [f32; MAX_LOBES] {
+        let mut p = [0.0; MAX_LOBES];
+        if self.n_lobes == 1 {
+            p[0] = 1.0;
+            return p;
+        }
+        let n_base = self.n_base();
+        let mut sum = 0.0;
+        for (pk, lobe) in p.iter_mut().zip(&self.lobes[..n_base]) {
+            *pk = lobe.selection_weight(wo);
+            sum += *pk;
+        }
+        for pk in &mut p[..n_base] {
+            *pk = if sum <= 0.0 {
+                1.0 / n_base as f32
+            } else {
+                *pk / sum
+            };
+        }
+        if let Some(coat) = &self.coat {
+            let spec = coat.selection(wo, sum);
+            for pk in &mut p[..n_base] {
+                *pk *= 1.0 - spec;
+            }
+            p[n_base] = spec;
+        }
+        p
+    }
+
+    /// `f · |cos θi|` of lobe event `k` for the local directions, and its pdf
+    /// (selection included). Delta lobes evaluate to zero.
+    pub fn eval_lobe(&self, k: usize, sh: &Shading, wi: Vec3A) -> (Vec3A, f32) {
+        let wo = sh.wo;
+        let sel = self.selection(wo);
+        let (l, sub) = self.tag_lobe[k];
+        let l = l as usize;
+        let (mut f, pdf) = self.lobes[l].eval(sub as usize, wo, wi, sel[l]);
+        if let Some(coat) = &self.coat {
+            if l < self.n_base() {
+                f *= coat.transmittance(wo, wi);
+            }
+        }
+        (f, pdf)
+    }
+
+    /// Samples a lobe and a direction: `u_lobe` chooses the lobe, `u` the direction.
+    pub fn sample(&self, sh: &Shading, u_lobe: f32, u: Vec2) -> Option<BsdfSample> {
+        let wo = sh.wo;
+        let sel = self.selection(wo);
+        let (l, u_rest) = if self.n_lobes == 1 {
+            (0, u_lobe)
+        } else {
+            let mut lo = 0.0;
+            let mut l = self.n_lobes - 1;
+            for (k, &pk) in sel[..self.n_lobes - 1].iter().enumerate() {
+                if u_lobe < lo + pk {
+                    l = k;
+                    break;
+                }
+                lo += pk;
+            }
+            (l, ((u_lobe - lo) / sel[l]).min(1.0 - f32::EPSILON / 2.0))
+        };
+        let ctx = SampleCtx {
+            sel: sel[l],
+            u_lobe: u_rest,
+            alone: self.n_lobes == 1 && self.coat.is_none(),
+        };
+        let s = self.lobes[l].sample(wo, ctx, u)?;
+        let k = self.tag_index(l, s.sub);
+        if let Some((weight, pdf, delta)) = s.value {
+            return Some(BsdfSample {
+                lobe: k,
+                wi: sh.frame.to_world(s.wi),
+                weight,
+                pdf,
+                delta,
+                eta: s.eta,
+            });
+        }
+        let (f, pdf) = self.eval_lobe(k, sh, s.wi);
+        if pdf <= 0.0 || f == Vec3A::ZERO {
+            return None;
+        }
+        Some(BsdfSample {
+            lobe: k,
+            wi: sh.frame.to_world(s.wi),
+            weight: f / pdf,
+            pdf,
+            delta: false,
+            eta: s.eta,
+        })
+    }
+
+    fn tag_index(&self, lobe: usize, sub: usize) -> usize {
+        self.tag_lobe[..self.n_tags]
+            .iter()
+            .position(|&(l, s)| l as usize == lobe && s as usize == sub)
+            .expect("a lobe samples one of its own events")
+    }
+}
