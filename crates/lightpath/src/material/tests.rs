@@ -1,5 +1,8 @@
+use super::lobe::SampleCtx;
 use super::*;
-use crate::sampling::Rng;
+use crate::light::luminance;
+use crate::sampling::{uniform_sphere, Rng};
+use std::f64::consts::PI;
 
 fn local(wo: Vec3A) -> Shading {
     Shading {
@@ -70,4 +73,583 @@ fn translucent_energy_is_reflect_plus_transmit() {
     let bsdf = Bsdf::translucent(Vec3A::splat(0.3), Vec3A::splat(0.5));
     let a = albedo(&bsdf, Vec3A::new(0.0, 0.2, 0.98).normalize(), 20_000);
     assert!((a.x - 0.8).abs() < 0.02, "{a}");
+}
+
+// ---- Lobe-level harness ------------------------------------------------------------
+
+/// A lobe sampled on its own (selection probability one, not alone so that every
+/// non-delta direction goes through `eval`, as inside a multi-lobe Bsdf).
+struct Drawn {
+    wi: Vec3A,
+    weight: Vec3A,
+    eta: f32,
+    delta: bool,
+}
+
+fn draw(lobe: &Lobe, wo: Vec3A, rng: &mut Rng) -> Option<Drawn> {
+    let ctx = SampleCtx {
+        sel: 1.0,
+        u_lobe: rng.next_f32(),
+        alone: false,
+    };
+    let s = lobe.sample(wo, ctx, rng.next_2d())?;
+    if let Some((weight, _, delta)) = s.value {
+        return Some(Drawn {
+            wi: s.wi,
+            weight,
+            eta: s.eta,
+            delta,
+        });
+    }
+    let (f, pdf) = lobe.eval(s.sub, wo, s.wi, 1.0);
+    if pdf <= 0.0 || f == Vec3A::ZERO {
+        return None;
+    }
+    Some(Drawn {
+        wi: s.wi,
+        weight: f / pdf,
+        eta: s.eta,
+        delta: false,
+    })
+}
+
+/// Sum over the lobe's events of (f · |cos θi|, pdf): at most one is non-zero.
+fn eval_all(lobe: &Lobe, wo: Vec3A, wi: Vec3A) -> (Vec3A, f32) {
+    (0..lobe.tags().len()).fold((Vec3A::ZERO, 0.0), |(f, p), sub| {
+        let (fs, ps) = lobe.eval(sub, wo, wi, 1.0);
+        (f + fs, p + ps)
+    })
+}
+
+fn dir(theta_deg: f32, phi_deg: f32) -> Vec3A {
+    let (t, p) = (theta_deg.to_radians(), phi_deg.to_radians());
+    Vec3A::new(t.sin() * p.cos(), t.sin() * p.sin(), t.cos())
+}
+
+/// Every non-delta lobe kind at several roughnesses, with the outgoing directions to
+/// test (glass also from inside).
+fn rough_lobe_cases() -> Vec<(String, Lobe, Vec<Vec3A>)> {
+    let up = vec![dir(10.0, 0.0), dir(50.0, 30.0), dir(80.0, 200.0)];
+    let mut cases: Vec<(String, Lobe, Vec<Vec3A>)> = vec![
+        (
+            "lambert".into(),
+            Lambert {
+                albedo: Vec3A::new(0.8, 0.5, 0.2),
+            }
+            .into(),
+            up.clone(),
+        ),
+        (
+            "diffuse transmission".into(),
+            DiffuseTransmission {
+                transmit: Vec3A::new(0.3, 0.6, 0.4),
+            }
+            .into(),
+            up.clone(),
+        ),
+    ];
+    for alpha in [0.25, 0.5, 0.8] {
+        cases.push((
+            format!("conductor alpha {alpha}"),
+            Conductor {
+                f0: Vec3A::new(0.95, 0.64, 0.54),
+                alpha,
+            }
+            .into(),
+            up.clone(),
+        ));
+        cases.push((
+            format!("coat alpha {alpha}"),
+            Coat { eta: 1.5, alpha }.into(),
+            up.clone(),
+        ));
+        cases.push((
+            format!("dielectric alpha {alpha}"),
+            Dielectric {
+                eta: 1.5,
+                alpha,
+                tint: Vec3A::ONE,
+            }
+            .into(),
+            up.clone(),
+        ));
+    }
+    cases
+}
+
+/// Rough glass seen from inside (`wo.z < 0`).
+fn rough_glass_inside_cases() -> Vec<(String, Lobe, Vec<Vec3A>)> {
+    [0.25, 0.5, 0.8]
+        .into_iter()
+        .map(|alpha| {
+            (
+                format!("dielectric alpha {alpha}, inside"),
+                Dielectric {
+                    eta: 1.5,
+                    alpha,
+                    tint: Vec3A::ONE,
+                }
+                .into(),
+                vec![dir(170.0, 0.0), dir(130.0, 90.0)],
+            )
+        })
+        .collect()
+}
+
+// ---- χ² goodness of fit (after pbrt-v4's bsdfs_test.cpp) ----------------------------
+
+const THETA_BINS: usize = 10;
+const PHI_BINS: usize = 20;
+const CHI2_SAMPLES: usize = 200_000;
+
+fn bin_of(w: Vec3A) -> usize {
+    let theta = (w.z.clamp(-1.0, 1.0) as f64).acos();
+    let mut phi = (w.y as f64).atan2(w.x as f64);
+    if phi < 0.0 {
+        phi += 2.0 * PI;
+    }
+    let t = ((theta / PI * THETA_BINS as f64) as usize).min(THETA_BINS - 1);
+    let p = ((phi / (2.0 * PI) * PHI_BINS as f64) as usize).min(PHI_BINS - 1);
+    t * PHI_BINS + p
+}
+
+/// Expected sample counts per bin: the pdf integrated over each bin (midpoint rule on a
+/// fine θ×φ grid, with the sin θ of the solid angle).
+fn expected_counts(pdf: impl Fn(Vec3A) -> f32, n: usize) -> Vec<f64> {
+    const SUB: usize = 24;
+    let (dt, dp) = (
+        PI / (THETA_BINS * SUB) as f64,
+        2.0 * PI / (PHI_BINS * SUB) as f64,
+    );
+    let mut e = vec![0.0; THETA_BINS * PHI_BINS];
+    for i in 0..THETA_BINS * SUB {
+        let theta = (i as f64 + 0.5) * dt;
+        for j in 0..PHI_BINS * SUB {
+            let phi = (j as f64 + 0.5) * dp;
+            let w = Vec3A::new(
+                (theta.sin() * phi.cos()) as f32,
+                (theta.sin() * phi.sin()) as f32,
+                theta.cos() as f32,
+            );
+            let p = pdf(w) as f64;
+            e[(i / SUB) * PHI_BINS + j / SUB] += p * theta.sin() * dt * dp * n as f64;
+        }
+    }
+    e
+}
+
+/// ln Γ(x), Lanczos (g = 7, n = 9).
+fn ln_gamma(x: f64) -> f64 {
+    const C: [f64; 9] = [
+        0.999_999_999_999_809_9,
+        676.520_368_121_885_1,
+        -1_259.139_216_722_402_8,
+        771.323_428_777_653_1,
+        -176.615_029_162_140_6,
+        12.507_343_278_686_905,
+        -0.138_571_095_265_720_12,
+        9.984_369_578_019_572e-6,
+        1.505_632_735_149_311_6e-7,
+    ];
+    let x = x - 1.0;
+    let t = x + 7.5;
+    let s = C[1..]
+        .iter()
+        .enumerate()
+        .fold(C[0], |s, (i, c)| s + c / (x + i as f64 + 1.0));
+    0.5 * (2.0 * PI).ln() + (x + 0.5) * t.ln() - t + s.ln()
+}
+
+/// Upper regularised incomplete gamma Q(a, x) (series below a + 1, continued fraction
+/// above; Numerical Recipes §6.2).
+fn gamma_q(a: f64, x: f64) -> f64 {
+    if x <= 0.0 {
+        return 1.0;
+    }
+    let front = (-x + a * x.ln() - ln_gamma(a)).exp();
+    if x < a + 1.0 {
+        let (mut ap, mut del, mut sum) = (a, 1.0 / a, 1.0 / a);
+        for _ in 0..10_000 {
+            ap += 1.0;
+            del *= x / ap;
+            sum += del;
+            if del.abs() < sum.abs() * 1e-15 {
+                break;
+            }
+        }
+        1.0 - sum * front
+    } else {
+        let tiny = 1e-300;
+        let mut b = x + 1.0 - a;
+        let mut c = 1.0 / tiny;
+        let mut d = 1.0 / b;
+        let mut h = d;
+        for i in 1..10_000 {
+            let an = -(i as f64) * (i as f64 - a);
+            b += 2.0;
+            d = an * d + b;
+            if d.abs() < tiny {
+                d = tiny;
+            }
+            c = b + an / c;
+            if c.abs() < tiny {
+                c = tiny;
+            }
+            d = 1.0 / d;
+            let del = d * c;
+            h *= del;
+            if (del - 1.0).abs() < 1e-15 {
+                break;
+            }
+        }
+        front * h
+    }
+}
+
+#[test]
+fn chi2_survival_matches_known_values() {
+    // χ²(1) at 3.841: p = 0.05; χ²(10) at 23.209: p = 0.01; χ²(100) at 124.342: p = 0.05.
+    for (x, k, p) in [
+        (3.841, 1.0, 0.05),
+        (23.209, 10.0, 0.01),
+        (124.342, 100.0, 0.05),
+    ] {
+        let q = gamma_q(k / 2.0, x / 2.0);
+        assert!((q - p).abs() < 2e-4, "χ²({k}) at {x}: {q}");
+    }
+}
+
+/// p-value of observed vs expected counts; bins expecting fewer than 5 samples are
+/// pooled. Err if a sample fell where the pdf integrates to zero.
+fn chi2_p_value(observed: &[u64], expected: &[f64]) -> Result<f64, String> {
+    let mut order: Vec<usize> = (0..expected.len()).collect();
+    order.sort_by(|&a, &b| expected[a].total_cmp(&expected[b]));
+    let (mut chi2, mut dof) = (0.0, 0usize);
+    let (mut pool_obs, mut pool_exp) = (0.0, 0.0);
+    for i in order {
+        let (o, e) = (observed[i] as f64, expected[i]);
+        if e == 0.0 {
+            if o > 0.0 {
+                return Err(format!("{o} samples in bin {i} where the pdf is zero"));
+            }
+        } else if e < 5.0 || (pool_exp > 0.0 && pool_exp < 5.0) {
+            pool_obs += o;
+            pool_exp += e;
+        } else {
+            chi2 += (o - e) * (o - e) / e;
+            dof += 1;
+        }
+    }
+    if pool_exp > 0.0 || pool_obs > 0.0 {
+        chi2 += (pool_obs - pool_exp) * (pool_obs - pool_exp) / pool_exp;
+        dof += 1;
+    }
+    let dof = dof.saturating_sub(1).max(1);
+    Ok(gamma_q(dof as f64 / 2.0, chi2 / 2.0))
+}
+
+/// Runs the χ² test of `sample` against `pdf`; returns a failure message.
+fn chi2_case(
+    what: &str,
+    sample: &mut dyn FnMut() -> Option<Vec3A>,
+    pdf: &dyn Fn(Vec3A) -> f32,
+    threshold: f64,
+) -> Option<String> {
+    let mut observed = vec![0u64; THETA_BINS * PHI_BINS];
+    for _ in 0..CHI2_SAMPLES {
+        if let Some(wi) = sample() {
+            observed[bin_of(wi)] += 1;
+        }
+    }
+    let expected = expected_counts(pdf, CHI2_SAMPLES);
+    match chi2_p_value(&observed, &expected) {
+        Ok(p) if p >= threshold => None,
+        Ok(p) => Some(format!("{what}: p = {p:e} < {threshold:e}")),
+        Err(e) => Some(format!("{what}: {e}")),
+    }
+}
+
+/// Šidák-corrected significance for `n` tests at overall level 0.01.
+fn sidak(n: usize) -> f64 {
+    1.0 - 0.99f64.powf(1.0 / n as f64)
+}
+
+#[test]
+fn chi2_sampled_directions_follow_each_lobe_pdf() {
+    chi2_lobes(rough_lobe_cases());
+}
+
+/// Known bug, kept so that it shows: `Dielectric::sample` takes the microfacet's
+/// Fresnel term with the normal flipped to `wo`'s side (as if outside), `eval` with the
+/// normal up (inside: 1/η), so from inside the sampled reflect/transmit split differs
+/// from the pdf. Fixing it changes renders; see notes-materials.md.
+#[test]
+#[ignore = "known bug: rough glass from inside samples outside Fresnel"]
+fn chi2_rough_glass_from_inside_follows_its_pdf() {
+    chi2_lobes(rough_glass_inside_cases());
+}
+
+fn chi2_lobes(cases: Vec<(String, Lobe, Vec<Vec3A>)>) {
+    let n: usize = cases.iter().map(|c| c.2.len()).sum();
+    let threshold = sidak(n);
+    let mut failures = Vec::new();
+    for (seed, (name, lobe, wos)) in cases.iter().enumerate() {
+        for (i, &wo) in wos.iter().enumerate() {
+            let mut rng = Rng::for_sample(11, seed as u64, i as u64);
+            let mut sample = || draw(lobe, wo, &mut rng).map(|d| d.wi);
+            let pdf = |wi: Vec3A| eval_all(lobe, wo, wi).1;
+            failures.extend(chi2_case(
+                &format!("{name}, wo {wo}"),
+                &mut sample,
+                &pdf,
+                threshold,
+            ));
+        }
+    }
+    assert!(failures.is_empty(), "{failures:#?}");
+}
+
+/// Every material through `Bsdf::sample`: the lobe selection and the pdfs `eval_lobe`
+/// reports (selection included) must describe the sampled directions together.
+/// Delta samples are left out; their lobes have no density.
+#[test]
+fn chi2_sampled_directions_follow_each_material_pdf() {
+    let materials = [
+        ("diffuse", Bsdf::diffuse(Vec3A::splat(0.7))),
+        (
+            "translucent",
+            Bsdf::translucent(Vec3A::splat(0.3), Vec3A::new(0.5, 0.4, 0.3)),
+        ),
+        ("plastic smooth", Bsdf::plastic(Vec3A::splat(0.5), 1.5, 0.0)),
+        ("plastic rough", Bsdf::plastic(Vec3A::splat(0.5), 1.5, 0.3)),
+        ("conductor rough", Bsdf::conductor(Vec3A::splat(0.9), 0.4)),
+        ("glass rough", Bsdf::dielectric(1.5, 0.4, Vec3A::ONE)),
+        // More lobes than any built-in material: selection and `u_lobe` rescaling.
+        (
+            "three lobes under a rough coat",
+            Bsdf::layered(
+                &[
+                    Lambert {
+                        albedo: Vec3A::splat(0.4),
+                    }
+                    .into(),
+                    Conductor {
+                        f0: Vec3A::splat(0.2),
+                        alpha: 0.8,
+                    }
+                    .into(),
+                    Conductor {
+                        f0: Vec3A::splat(0.9),
+                        alpha: 0.5,
+                    }
+                    .into(),
+                ],
+                Some(Coat {
+                    eta: 1.5,
+                    alpha: 0.3,
+                }),
+                Vec3A::splat(0.5),
+            ),
+        ),
+    ];
+    let wos = [dir(20.0, 0.0), dir(70.0, 45.0)];
+    let threshold = sidak(materials.len() * wos.len());
+    let mut failures = Vec::new();
+    for (seed, (name, bsdf)) in materials.iter().enumerate() {
+        for (i, &wo) in wos.iter().enumerate() {
+            let sh = local(wo);
+            let mut rng = Rng::for_sample(13, seed as u64, i as u64);
+            let mut sample = || {
+                bsdf.sample(&sh, rng.next_f32(), rng.next_2d())
+                    .filter(|s| !s.delta)
+                    .map(|s| sh.frame.to_local(s.wi))
+            };
+            let pdf = |wi: Vec3A| {
+                (0..bsdf.lobes().len())
+                    .map(|k| bsdf.eval_lobe(k, &sh, wi).1)
+                    .sum()
+            };
+            failures.extend(chi2_case(
+                &format!("{name}, wo {wo}"),
+                &mut sample,
+                &pdf,
+                threshold,
+            ));
+        }
+    }
+    assert!(failures.is_empty(), "{failures:#?}");
+}
+
+// ---- Energy ---------------------------------------------------------------------------
+
+/// Mean and standard error of the mean.
+fn mean_se(values: impl Iterator<Item = f64>) -> (f64, f64) {
+    let (mut n, mut s, mut s2) = (0.0, 0.0, 0.0);
+    for v in values {
+        n += 1.0;
+        s += v;
+        s2 += v * v;
+    }
+    let mean = s / n;
+    let var = (s2 / n - mean * mean).max(0.0) * n / (n - 1.0);
+    (mean, (var / n).sqrt())
+}
+
+/// Where every sample has the same value the standard error is zero; what is left is
+/// f32 rounding of that value and of the f64 sums.
+const ROUNDING: f64 = 1e-5;
+
+/// Directional albedo ∫ f · |cos θi| dωi from the lobe's own samples (luminance).
+fn sampled_albedo(lobe: &Lobe, wo: Vec3A, n: usize, seed: u64) -> (f64, f64) {
+    let mut rng = Rng::for_sample(seed, 1, 0);
+    mean_se((0..n).map(|_| draw(lobe, wo, &mut rng).map_or(0.0, |d| luminance(d.weight) as f64)))
+}
+
+/// The same integral by uniform sphere sampling of `eval`.
+fn uniform_albedo(lobe: &Lobe, wo: Vec3A, n: usize, seed: u64) -> (f64, f64) {
+    let mut rng = Rng::for_sample(seed, 2, 0);
+    mean_se((0..n).map(|_| {
+        let wi = uniform_sphere(rng.next_2d());
+        luminance(eval_all(lobe, wo, wi).0) as f64 * 4.0 * PI
+    }))
+}
+
+fn close(a: (f64, f64), b: (f64, f64)) -> bool {
+    (a.0 - b.0).abs() <= 5.0 * (a.1 * a.1 + b.1 * b.1).sqrt() + ROUNDING
+}
+
+#[test]
+fn sampled_albedo_of_each_rough_lobe_matches_uniform_integration() {
+    albedo_lobes(rough_lobe_cases());
+}
+
+/// The same known bug as `chi2_rough_glass_from_inside_follows_its_pdf`.
+#[test]
+#[ignore = "known bug: rough glass from inside samples outside Fresnel"]
+fn sampled_albedo_of_rough_glass_from_inside_matches_uniform_integration() {
+    albedo_lobes(rough_glass_inside_cases());
+}
+
+fn albedo_lobes(cases: Vec<(String, Lobe, Vec<Vec3A>)>) {
+    let mut failures = Vec::new();
+    for (seed, (name, lobe, wos)) in cases.iter().enumerate() {
+        for &wo in wos {
+            let s = sampled_albedo(lobe, wo, 100_000, seed as u64);
+            let u = uniform_albedo(lobe, wo, 400_000, seed as u64);
+            if !close(s, u) {
+                failures.push(format!("{name}, wo {wo}: sampled {s:?}, uniform {u:?}"));
+            }
+        }
+    }
+    assert!(failures.is_empty(), "{failures:#?}");
+}
+
+#[test]
+fn diffuse_lobes_reflect_and_transmit_their_albedo() {
+    let albedo = Vec3A::new(0.8, 0.5, 0.2);
+    let transmit = Vec3A::new(0.3, 0.6, 0.4);
+    for wo in [dir(10.0, 0.0), dir(60.0, 100.0), dir(85.0, 300.0)] {
+        for (lobe, want) in [
+            (Lobe::from(Lambert { albedo }), albedo),
+            (DiffuseTransmission { transmit }.into(), transmit),
+        ] {
+            let want = (luminance(want) as f64, 0.0);
+            let s = sampled_albedo(&lobe, wo, 20_000, 3);
+            let u = uniform_albedo(&lobe, wo, 400_000, 3);
+            assert!(close(s, want), "{lobe:?} sampled {s:?}, want {want:?}");
+            assert!(close(u, want), "{lobe:?} uniform {u:?}, want {want:?}");
+        }
+        // The Bsdf's fast path (the lone diffuse lobe) returns the albedo exactly.
+        let bsdf = Bsdf::diffuse(albedo);
+        let mut rng = Rng::for_sample(4, 0, 0);
+        for _ in 0..1000 {
+            if let Some(s) = bsdf.sample(&local(wo), rng.next_f32(), rng.next_2d()) {
+                assert_eq!(s.weight, albedo);
+            }
+        }
+    }
+}
+
+#[test]
+fn smooth_lobes_reflect_their_fresnel_and_glass_conserves_energy() {
+    for wo in [dir(5.0, 0.0), dir(45.0, 60.0), dir(80.0, 200.0)] {
+        let f0 = Vec3A::new(0.95, 0.64, 0.54);
+        let mirror = Lobe::from(Conductor { f0, alpha: 0.0 });
+        let want = (luminance(fresnel::schlick(f0, wo.z)) as f64, 0.0);
+        let got = sampled_albedo(&mirror, wo, 10_000, 5);
+        assert!(close(got, want), "mirror at {wo}: {got:?} vs {want:?}");
+
+        let coat = Lobe::from(Coat {
+            eta: 1.5,
+            alpha: 0.0,
+        });
+        let want = (fresnel_dielectric(wo.z, 1.5) as f64, 0.0);
+        let got = sampled_albedo(&coat, wo, 10_000, 6);
+        assert!(close(got, want), "coat at {wo}: {got:?} vs {want:?}");
+    }
+    // Reflection + transmission · η² = 1 for clear glass, from either side (the η²
+    // undoes the 1/η² radiance compression of transmission).
+    let glass = Lobe::from(Dielectric {
+        eta: 1.5,
+        alpha: 0.0,
+        tint: Vec3A::ONE,
+    });
+    for wo in [
+        dir(10.0, 0.0),
+        dir(60.0, 30.0),
+        dir(170.0, 0.0),
+        dir(120.0, 0.0),
+    ] {
+        let mut rng = Rng::for_sample(8, 0, 0);
+        let got = mean_se((0..50_000).map(|_| {
+            draw(&glass, wo, &mut rng).map_or(0.0, |d| {
+                assert!(d.delta);
+                (d.weight.x * d.eta * d.eta) as f64
+            })
+        }));
+        assert!(close(got, (1.0, 0.0)), "glass at {wo}: {got:?}");
+    }
+}
+
+#[test]
+fn eval_pdf_equals_sample_pdf_for_every_material() {
+    let materials = [
+        Bsdf::diffuse(Vec3A::new(0.8, 0.5, 0.2)),
+        Bsdf::translucent(Vec3A::splat(0.3), Vec3A::new(0.5, 0.4, 0.3)),
+        Bsdf::plastic(Vec3A::splat(0.5), 1.5, 0.0),
+        Bsdf::plastic(Vec3A::splat(0.5), 1.5, 0.4),
+        Bsdf::conductor(Vec3A::splat(0.9), 0.3),
+        Bsdf::dielectric(1.5, 0.3, Vec3A::new(0.9, 0.8, 0.7)),
+    ];
+    let mut rng = Rng::for_sample(9, 0, 0);
+    for bsdf in &materials {
+        let mut checked = 0;
+        for _ in 0..50 {
+            let mut wo = uniform_sphere(rng.next_2d());
+            // Shading flips two-sided materials' frames towards wo.
+            if bsdf.two_sided {
+                wo.z = wo.z.abs();
+            }
+            let sh = local(wo);
+            for _ in 0..20 {
+                let Some(s) = bsdf.sample(&sh, rng.next_f32(), rng.next_2d()) else {
+                    continue;
+                };
+                if s.delta {
+                    continue;
+                }
+                let (f, pdf) = bsdf.eval_lobe(s.lobe, &sh, sh.frame.to_local(s.wi));
+                let rel = |a: f32, b: f32| (a - b).abs() <= 1e-4 * a.abs().max(b.abs());
+                assert!(rel(pdf, s.pdf), "{bsdf:?} wo {wo}: {pdf} vs {}", s.pdf);
+                let w = f / pdf;
+                assert!(
+                    (0..3).all(|c| rel(w[c], s.weight[c])),
+                    "{bsdf:?} wo {wo}: {w} vs {}",
+                    s.weight
+                );
+                checked += 1;
+            }
+        }
+        assert!(checked > 100, "{bsdf:?}: only {checked} samples");
+    }
 }
