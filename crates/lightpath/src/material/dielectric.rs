@@ -83,7 +83,9 @@ impl LobeModel for Dielectric {
         let flipz = if wo.z < 0.0 { -1.0 } else { 1.0 };
         let wo_up = wo * flipz;
         let m = g.sample_visible(wo_up, u) * flipz;
-        let f = fresnel_dielectric(wo.dot(m), eta);
+        // Fresnel of the up-facing microfacet, as `rough_eval` takes it: from inside, cos < 0
+        // selects the inside-to-outside ratio.
+        let f = fresnel_dielectric(wo.dot(m) * flipz, eta);
         let (k, wi) = if ctx.u_lobe < f {
             (0, reflect(wo, m))
         } else {

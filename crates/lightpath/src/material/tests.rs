@@ -384,7 +384,6 @@ fn chi2_sampled_directions_follow_each_lobe_pdf() {
 /// normal up (inside: 1/η), so from inside the sampled reflect/transmit split differs
 /// from the pdf. Fixing it changes renders; see notes-materials.md.
 #[test]
-#[ignore = "known bug: rough glass from inside samples outside Fresnel"]
 fn chi2_rough_glass_from_inside_follows_its_pdf() {
     chi2_lobes(rough_glass_inside_cases());
 }
@@ -525,7 +524,6 @@ fn sampled_albedo_of_each_rough_lobe_matches_uniform_integration() {
 
 /// The same known bug as `chi2_rough_glass_from_inside_follows_its_pdf`.
 #[test]
-#[ignore = "known bug: rough glass from inside samples outside Fresnel"]
 fn sampled_albedo_of_rough_glass_from_inside_matches_uniform_integration() {
     albedo_lobes(rough_glass_inside_cases());
 }
