@@ -23,7 +23,7 @@ fn run(
 ) -> (Scene, Film, RenderStats) {
     let mut desc = src.parse().unwrap();
     edit(&mut desc);
-    let scene = Scene::build(src, &desc, &aov::assemble(aovs)).unwrap();
+    let scene = Scene::build(&desc, &aov::assemble(aovs)).unwrap();
     let (film, stats) = render(
         &scene,
         &RenderOptions {
@@ -197,8 +197,8 @@ fn holdouts_make_a_matte_and_collect_its_shadows() {
         d.film.resolution = [32, 32];
         d.render.spp = 16;
         for o in &mut d.objects {
-            if o.get_ref().name.as_deref() == Some("floor") {
-                o.get_mut().holdout = true;
+            if o.name.as_deref() == Some("floor") {
+                o.holdout = true;
             }
         }
     };
@@ -299,8 +299,8 @@ fn relighting_from_aovs_equals_re_rendering() {
         d.film.resolution = [20, 20];
         d.render.spp = 3;
         for l in &mut d.lights {
-            if l.get_ref().groups == ["key"] {
-                l.get_mut().strength = 1.5;
+            if l.groups == ["key"] {
+                l.strength = 1.5;
             }
         }
     };
