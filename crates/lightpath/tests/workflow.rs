@@ -332,7 +332,7 @@ fn trace_sets_and_light_linking_change_what_rays_see() {
         &src,
         |d| {
             small(24, 2)(d);
-            d.objects[1].get_mut().casts_shadows = false;
+            d.objects[1].casts_shadows = false;
         },
         aovs(),
     );
@@ -343,7 +343,7 @@ fn trace_sets_and_light_linking_change_what_rays_see() {
         &src,
         |d| {
             small(24, 2)(d);
-            d.lights[0].get_mut().exclude = vec!["floor".into()];
+            d.lights[0].exclude = vec!["floor".into()];
         },
         aovs(),
     );
@@ -366,7 +366,7 @@ fn trace_sets_and_light_linking_change_what_rays_see() {
         &src,
         |d| {
             depth3(d);
-            d.objects[1].get_mut().visible_indirect = false;
+            d.objects[1].visible_indirect = false;
         },
         bounce(),
     );
@@ -377,7 +377,7 @@ fn trace_sets_and_light_linking_change_what_rays_see() {
         &src,
         |d| {
             small(24, 2)(d);
-            d.objects[0].get_mut().visible_camera = false;
+            d.objects[0].visible_camera = false;
         },
         aovs(),
     );
