@@ -111,6 +111,9 @@ fn add_objects(
     Ok(objects)
 }
 
+/// Where an area light's primitives were added to the scene's primitive list.
+type LightPrims = Option<Range<u32>>;
+
 /// The scene's lights; the surface of each area light becomes an object too, its
 /// primitives at the returned range of the primitive list.
 fn add_lights(
@@ -118,7 +121,7 @@ fn add_lights(
     material_ids: &HashMap<String, u32>,
     geometry: &mut GeometryBuilder,
     objects: &mut Vec<Object>,
-) -> Result<(Vec<Light>, Vec<Option<Range<u32>>>), SceneError> {
+) -> Result<(Vec<Light>, Vec<LightPrims>), SceneError> {
     let mut lights = Vec::new();
     let mut ranges = Vec::new();
     for l in &desc.lights {
