@@ -12,7 +12,7 @@ fn classic(aovs: Vec<AovSpec>, res: u32) -> Scene {
     let src = lightpath::load_source("cornell-classic").unwrap();
     let mut desc = src.parse().unwrap();
     desc.film.resolution = [res, res];
-    Scene::build(&src, &desc, &aov::assemble(aovs)).unwrap()
+    Scene::build(&desc, &aov::assemble(aovs)).unwrap()
 }
 
 fn rays(c: &mut Criterion) {

@@ -375,7 +375,8 @@ impl<'a> Tracer<'a> {
             let tmax = best.map_or(f32::INFINITY, |b| b.1);
             match &light.shape {
                 LightShape::Triangles { prims, .. } => {
-                    for p in prims {
+                    for &i in prims {
+                        let p = &self.scene.accel.prims()[i as usize];
                         let t = p.intersect(ray.origin, ray.dir, 0.0, tmax);
                         if t < best.map_or(f32::INFINITY, |b| b.1) {
                             if let Prim::Triangle { e1, e2, .. } = p {
@@ -528,7 +529,7 @@ impl<'a> Tracer<'a> {
                 let (li, select_pmf, _) = scene.light_select.sample(u_light);
                 let light = &scene.lights[li];
                 let sample = if lit(hit.object, li as u32) {
-                    light.sample(hit.p, u_point)
+                    light.sample(hit.p, u_point, scene.accel.prims())
                 } else {
                     None
                 };

@@ -7,6 +7,8 @@
 pub mod aov;
 pub mod camera;
 pub mod comp;
+pub mod error;
+pub mod events;
 pub mod film;
 pub mod geometry;
 pub mod integrator;
@@ -17,17 +19,16 @@ pub mod progress;
 pub mod sampling;
 pub mod scene;
 
+pub use error::Error;
 pub use integrator::{render, RenderOptions, RenderStats};
 pub use scene::{Scene, SceneError, Source};
 
 /// Loads a built-in scene by name or a scene file by path.
 pub fn load_source(scene: &str) -> Result<Source, SceneError> {
-    if let Some(text) = scene::builtin::get(scene) {
-        return Ok(Source {
-            name: format!("builtin:{scene}"),
-            text: text.to_string(),
-            dir: std::path::PathBuf::new(),
-        });
-    }
-    Source::from_file(std::path::Path::new(scene))
+    scene::load::source(scene)
+}
+
+/// Loads and parses a built-in scene by name or a scene file by path.
+pub fn load_scene(name_or_path: &str) -> Result<scene::desc::SceneDesc, Error> {
+    Ok(load_source(name_or_path)?.parse()?)
 }

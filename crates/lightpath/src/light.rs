@@ -123,7 +123,8 @@ pub enum LightShape {
     /// Triangles (of a rectangle, quad or disk) sampled by area; emits on the side of
     /// their normal unless two-sided.
     Triangles {
-        prims: Vec<Prim>,
+        /// The triangles, as indices into the scene's primitive list (`Accel::prims`).
+        prims: Vec<u32>,
         /// Unit normal of each triangle, precomputed for sampling.
         normals: Vec<Vec3A>,
         /// Corner and edges when the triangles form one parallelogram (rectangle and
@@ -219,11 +220,12 @@ impl Light {
         }
     }
 
-    /// Samples a point of the light as seen from `p`.
-    pub fn sample(&self, p: Vec3A, u: Vec2) -> Option<LightSample> {
+    /// Samples a point of the light as seen from `p`; `prims` is the scene's primitive
+    /// list, which area lights index.
+    pub fn sample(&self, p: Vec3A, u: Vec2, prims: &[Prim]) -> Option<LightSample> {
         match &self.shape {
             LightShape::Triangles {
-                prims,
+                prims: ids,
                 normals,
                 parallelogram,
                 by_area,
@@ -234,7 +236,7 @@ impl Light {
                     Some([p0, e1, e2]) => (*p0 + *e1 * u.x + *e2 * u.y, normals[0]),
                     None => {
                         let (i, _, ux) = by_area.sample(u.x);
-                        let Prim::Triangle { p0, e1, e2, .. } = prims[i] else {
+                        let Prim::Triangle { p0, e1, e2, .. } = prims[ids[i] as usize] else {
                             return None;
                         };
                         let (b1, b2) = uniform_triangle(Vec2::new(ux, u.y));

@@ -356,7 +356,7 @@ fn render(args: RenderArgs) -> ExitCode {
     specs.extend(
         desc.aovs
             .iter()
-            .map(|(n, d)| AovSpec::new(n.clone(), d.get_ref().clone())),
+            .map(|(n, d)| AovSpec::new(n.clone(), d.definition.clone())),
     );
     for a in &args.aovs {
         match AovSpec::parse(a) {
@@ -395,11 +395,7 @@ fn render(args: RenderArgs) -> ExitCode {
         }
     }
     if !split.is_empty() {
-        let mut groups: Vec<&String> = desc
-            .lights
-            .iter()
-            .flat_map(|l| &l.get_ref().groups)
-            .collect();
+        let mut groups: Vec<&String> = desc.lights.iter().flat_map(|l| &l.groups).collect();
         groups.sort();
         groups.dedup();
         let total = specs.len() + split.len() * (groups.len() + 1);
@@ -407,7 +403,7 @@ fn render(args: RenderArgs) -> ExitCode {
             tell!("warning: the light-group split makes {total} AOVs");
         }
     }
-    let scene = match lightpath::Scene::build(&src, &desc, &specs) {
+    let scene = match lightpath::Scene::build(&desc, &specs) {
         Ok(s) => s,
         Err(e) => {
             tell!("error: {e}");

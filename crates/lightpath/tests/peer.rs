@@ -8,7 +8,7 @@ fn render_classic(spp: u32, seed: u64) -> [Vec<f32>; 3] {
     let src = lightpath::load_source("cornell-classic").unwrap();
     let mut desc = src.parse().unwrap();
     desc.render.seed = seed;
-    let scene = Scene::build(&src, &desc, &aov::assemble(vec![])).unwrap();
+    let scene = Scene::build(&desc, &aov::assemble(vec![])).unwrap();
     let (film, _) = render(
         &scene,
         &RenderOptions {

@@ -29,7 +29,7 @@ fn render_aovs(
     if let Some(d) = max_depth {
         desc.render.max_depth = d;
     }
-    let scene = Scene::build(src, &desc, &aov::assemble(extra)).unwrap();
+    let scene = Scene::build(&desc, &aov::assemble(extra)).unwrap();
     let (film, _) = render(
         &scene,
         &RenderOptions {
@@ -267,7 +267,7 @@ fn sample_ranges_merge_into_the_whole_render() {
     let src = cornell();
     let mut desc = src.parse().unwrap();
     desc.film.resolution = [16, 16];
-    let scene = Scene::build(&src, &desc, &aov::assemble(vec![])).unwrap();
+    let scene = Scene::build(&desc, &aov::assemble(vec![])).unwrap();
     let (whole, _) = render(
         &scene,
         &RenderOptions {
@@ -366,9 +366,7 @@ fn scene_errors_name_the_file_line_and_what_was_expected() {
         "[camera]\nfov = 40\n\n[[objects]]\nshape = \"sphere\"\nmaterial = \"nope\"\nradius = 1\n";
     let src = source("bad.toml", text);
     let desc = src.parse().unwrap();
-    let err = Scene::build(&src, &desc, &aov::assemble(vec![]))
-        .err()
-        .unwrap();
+    let err = Scene::build(&desc, &aov::assemble(vec![])).err().unwrap();
     assert_eq!((err.file.as_str(), err.line), ("bad.toml", 6), "{err}");
     assert!(err.message.contains("unknown material 'nope'"), "{err}");
 
@@ -377,8 +375,9 @@ fn scene_errors_name_the_file_line_and_what_was_expected() {
     assert_eq!(err.line, 2, "{err}");
 
     let src = source("shape.toml", "[[objects]]\nshape = \"cone\"\n");
-    let desc = src.parse().unwrap();
-    let err = Scene::build(&src, &desc, &aov::assemble(vec![]))
+    let err = src
+        .parse()
+        .and_then(|desc| Scene::build(&desc, &aov::assemble(vec![])))
         .err()
         .unwrap();
     assert!(
@@ -407,18 +406,14 @@ fn scene_errors_name_the_file_line_and_what_was_expected() {
     ] {
         let src = source("v.toml", text);
         let desc = src.parse().unwrap();
-        let err = Scene::build(&src, &desc, &aov::assemble(vec![]))
-            .err()
-            .unwrap();
+        let err = Scene::build(&desc, &aov::assemble(vec![])).err().unwrap();
         assert!(err.message.contains(what), "{err}");
         assert_eq!(err.line, line, "{err}");
     }
 
     let bad_aov = aov::assemble(vec![AovSpec::new("x", "C<RD")]);
     let src = cornell();
-    let err = Scene::build(&src, &src.parse().unwrap(), &bad_aov)
-        .err()
-        .unwrap();
+    let err = Scene::build(&src.parse().unwrap(), &bad_aov).err().unwrap();
     assert!(
         err.message.contains("AOV 'x'") && err.message.contains('^'),
         "{err}"
@@ -578,7 +573,9 @@ fn obj_meshes_load_relative_to_the_scene_file() {
     )
     .unwrap();
     let src = Source::from_file(&dir.join("bad.toml")).unwrap();
-    let err = Scene::build(&src, &src.parse().unwrap(), &aov::assemble(vec![]))
+    let err = src
+        .parse()
+        .and_then(|desc| Scene::build(&desc, &aov::assemble(vec![])))
         .err()
         .unwrap();
     assert!(

@@ -23,7 +23,7 @@ fn run(
 ) -> (Scene, Film, RenderStats) {
     let mut desc = src.parse().unwrap();
     edit(&mut desc);
-    let scene = Scene::build(src, &desc, &aov::assemble(aovs)).unwrap();
+    let scene = Scene::build(&desc, &aov::assemble(aovs)).unwrap();
     let (film, stats) = render(
         &scene,
         &RenderOptions {
@@ -197,8 +197,8 @@ fn holdouts_make_a_matte_and_collect_its_shadows() {
         d.film.resolution = [32, 32];
         d.render.spp = 16;
         for o in &mut d.objects {
-            if o.get_ref().name.as_deref() == Some("floor") {
-                o.get_mut().holdout = true;
+            if o.name.as_deref() == Some("floor") {
+                o.holdout = true;
             }
         }
     };
@@ -299,8 +299,8 @@ fn relighting_from_aovs_equals_re_rendering() {
         d.film.resolution = [20, 20];
         d.render.spp = 3;
         for l in &mut d.lights {
-            if l.get_ref().groups == ["key"] {
-                l.get_mut().strength = 1.5;
+            if l.groups == ["key"] {
+                l.strength = 1.5;
             }
         }
     };
@@ -332,7 +332,7 @@ fn trace_sets_and_light_linking_change_what_rays_see() {
         &src,
         |d| {
             small(24, 2)(d);
-            d.objects[1].get_mut().casts_shadows = false;
+            d.objects[1].casts_shadows = false;
         },
         aovs(),
     );
@@ -343,7 +343,7 @@ fn trace_sets_and_light_linking_change_what_rays_see() {
         &src,
         |d| {
             small(24, 2)(d);
-            d.lights[0].get_mut().exclude = vec!["floor".into()];
+            d.lights[0].exclude = vec!["floor".into()];
         },
         aovs(),
     );
@@ -366,7 +366,7 @@ fn trace_sets_and_light_linking_change_what_rays_see() {
         &src,
         |d| {
             depth3(d);
-            d.objects[1].get_mut().visible_indirect = false;
+            d.objects[1].visible_indirect = false;
         },
         bounce(),
     );
@@ -377,7 +377,7 @@ fn trace_sets_and_light_linking_change_what_rays_see() {
         &src,
         |d| {
             small(24, 2)(d);
-            d.objects[0].get_mut().visible_camera = false;
+            d.objects[0].visible_camera = false;
         },
         aovs(),
     );

@@ -276,5 +276,5 @@ fn label_list<'a>(items: impl Iterator<Item = &'a Item>) -> Vec<String> {
     v
 }
 
-/// The event types the renderer never emits (LPE.md §1): V and B.
+/// The event types the generic profile does not emit (LPE.md §1): V and B.
 pub const RESERVED_TYPES: u8 = (1 << EventType::Volume as u8) | (1 << EventType::Background as u8);

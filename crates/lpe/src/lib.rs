@@ -31,6 +31,6 @@ pub use error::{Error, ErrorKind, Span};
 pub use event::{format_path, parse_path, Event, EventType, Scatter, ScatterClass};
 pub use prefix::{standard_name, Flags, Prefix, BEAUTY_PARTITION, STANDARD_NAMES};
 pub use runtime::{
-    compile, matches, Automaton, ClassId, Compiler, Rule, RuleId, StateId, Stats, Warning,
+    compile, matches, Automaton, ClassId, Compiler, Profile, Rule, RuleId, StateId, Stats, Warning,
     DEFAULT_STATE_LIMIT,
 };

@@ -118,9 +118,42 @@ pub struct Stats {
     pub min_dfa_states: usize,
 }
 
+/// What a renderer can emit (LPE.md §1): the event types its paths contain. Rules that
+/// need other types get a warning: they would stay black.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Profile {
+    emits: u8,
+}
+
+impl Profile {
+    /// Paths of camera, reflection, transmission, light and emission events; no volume
+    /// (`V`) or background (`B`) events.
+    pub const GENERIC: Profile = Profile {
+        emits: !RESERVED_TYPES,
+    };
+
+    /// A renderer that emits exactly these event types.
+    pub fn new(emits: &[EventType]) -> Profile {
+        Profile {
+            emits: emits.iter().fold(0, |bits, t| bits | t.bit()),
+        }
+    }
+
+    pub fn emits(&self, ty: EventType) -> bool {
+        self.emits & ty.bit() != 0
+    }
+}
+
+impl Default for Profile {
+    fn default() -> Self {
+        Profile::GENERIC
+    }
+}
+
 /// Builds an [`Automaton`] from rules and the events it must classify.
 #[derive(Clone, Debug)]
 pub struct Compiler {
+    profile: Profile,
     rules: Vec<Rule>,
     vocabulary: Vec<Event>,
     state_limit: usize,
@@ -141,6 +174,7 @@ pub const DEFAULT_STATE_LIMIT: usize = 10_000;
 impl Compiler {
     pub fn new() -> Compiler {
         Compiler {
+            profile: Profile::GENERIC,
             rules: Vec::new(),
             vocabulary: Vec::new(),
             state_limit: DEFAULT_STATE_LIMIT,
@@ -162,6 +196,12 @@ impl Compiler {
     /// its whole scene as the vocabulary turns this off for the smallest table.
     pub fn default_alphabet(mut self, on: bool) -> Compiler {
         self.default_alphabet = on;
+        self
+    }
+
+    /// What the renderer can emit, for the warnings (default: [`Profile::GENERIC`]).
+    pub fn profile(mut self, profile: Profile) -> Compiler {
+        self.profile = profile;
         self
     }
 
@@ -255,11 +295,19 @@ impl Compiler {
                     message: "this rule can never match: no event satisfies one of its parts"
                         .into(),
                 });
-            } else if !renderable(&rule.hir, false) {
-                if renderable(&rule.hir, true) {
+            } else if !renderable(&rule.hir, !self.profile.emits) {
+                if renderable(&rule.hir, 0) {
+                    let missing: Vec<&str> = EventType::ALL
+                        .iter()
+                        .filter(|t| !self.profile.emits(**t) && **t != EventType::Camera)
+                        .map(|t| type_name(*t))
+                        .collect();
                     out.push(Warning {
                         rule: id,
-                        message: "this rule needs a V (volume) or B (background) event, which Lightpath never emits: it will stay black".into(),
+                        message: format!(
+                            "this rule needs a {} event, which this renderer never emits: it will stay black",
+                            missing.join(" or ")
+                        ),
                     });
                 } else {
                     out.push(Warning {
@@ -280,11 +328,24 @@ fn single_rule_nfa(hir: &Hir) -> Nfa {
     b.build().unwrap_or_else(|_| unreachable!("no limit"))
 }
 
+/// How a warning names an event type.
+fn type_name(t: EventType) -> &'static str {
+    match t {
+        EventType::Camera => "C (camera)",
+        EventType::Reflect => "R (reflection)",
+        EventType::Transmit => "T (transmission)",
+        EventType::Volume => "V (volume)",
+        EventType::Light => "L (light)",
+        EventType::Emission => "O (emission)",
+        EventType::Background => "B (background)",
+    }
+}
+
 /// Can the rule match a path of the shape renderers produce: `C` first, no other `C`, and
-/// (unless `allow_reserved`) no `V` or `B`? A walk of the rule's NFA paired with a flag
-/// "the first event is behind us".
-fn renderable(hir: &Hir, allow_reserved: bool) -> bool {
-    let excluded = EventType::Camera.bit() | if allow_reserved { 0 } else { RESERVED_TYPES };
+/// no event of the types in `never` (a bit set)? A walk of the rule's NFA paired with a
+/// flag "the first event is behind us".
+fn renderable(hir: &Hir, never: u8) -> bool {
+    let excluded = EventType::Camera.bit() | never;
     let nfa = single_rule_nfa(hir);
     let mut seen = vec![[false; 2]; nfa.states.len()];
     let mut stack = vec![(nfa.start, 0usize)];
@@ -317,6 +378,8 @@ fn renderable(hir: &Hir, allow_reserved: bool) -> bool {
 #[derive(Clone, Debug)]
 struct Alphabet {
     words: usize,
+    /// The class of each vocabulary event, in the order given.
+    vocabulary: Vec<ClassId>,
     /// Signature bits of each class, `words` u64s per class.
     classes: Vec<Vec<u64>>,
     by_signature: HashMap<Vec<u64>, u32>,
@@ -327,6 +390,7 @@ impl Alphabet {
         let words = preds.len().div_ceil(64).max(1);
         let mut a = Alphabet {
             words,
+            vocabulary: Vec::new(),
             classes: Vec::new(),
             by_signature: HashMap::new(),
         };
@@ -348,7 +412,8 @@ impl Alphabet {
             }
         }
         for e in vocabulary {
-            a.insert(preds, e);
+            let class = a.insert(preds, e);
+            a.vocabulary.push(ClassId(class));
         }
         a
     }
@@ -363,13 +428,16 @@ impl Alphabet {
         sig
     }
 
-    fn insert(&mut self, preds: &[Pred], e: &Event) {
+    /// Adds the event's class if it is new; returns its class.
+    fn insert(&mut self, preds: &[Pred], e: &Event) -> u32 {
         let sig = self.signature(preds, e);
-        if !self.by_signature.contains_key(&sig) {
-            self.by_signature
-                .insert(sig.clone(), self.classes.len() as u32);
-            self.classes.push(sig);
+        if let Some(&class) = self.by_signature.get(&sig) {
+            return class;
         }
+        let class = self.classes.len() as u32;
+        self.by_signature.insert(sig.clone(), class);
+        self.classes.push(sig);
+        class
     }
 }
 
@@ -472,6 +540,13 @@ impl Automaton {
     pub fn classify(&self, event: &Event) -> Option<ClassId> {
         let sig = self.alphabet.signature(&self.nfa.preds, event);
         self.alphabet.by_signature.get(&sig).map(|&c| ClassId(c))
+    }
+
+    /// The class of each event given to [`Compiler::vocabulary`], in that order: a
+    /// renderer that builds its vocabulary once classifies it without a lookup that
+    /// could miss.
+    pub fn vocabulary_classes(&self) -> &[ClassId] {
+        &self.alphabet.vocabulary
     }
 
     /// Advances the path by one event: one table load.

@@ -83,6 +83,8 @@ pub struct Accel {
     normals: Vec<[Vec3A; 3]>,
     /// Unit geometric normal of each triangle (unused for spheres), in the same order.
     face_normals: Vec<Vec3A>,
+    /// Where each primitive, by its index as given to `build`, sits in `prims`.
+    slots: Vec<u32>,
 }
 
 /// Per-ray constants of the box and triangle tests.
@@ -185,6 +187,7 @@ impl Accel {
             objects: Vec::new(),
             normals,
             face_normals: Vec::new(),
+            slots: Vec::new(),
         };
         if prims.is_empty() {
             return accel;
@@ -264,6 +267,10 @@ impl Accel {
         }
         slot_start.push(order.len() as u32);
         accel.prims = order.iter().map(|&i| prims[i as usize]).collect();
+        accel.slots = vec![0; prims.len()];
+        for (slot, &i) in order.iter().enumerate() {
+            accel.slots[i as usize] = slot as u32;
+        }
         accel.objects = order.iter().map(|&i| objects[i as usize]).collect();
         let visibility: Vec<u8> = order.iter().map(|&i| visibility[i as usize]).collect();
         accel.face_normals = accel.prims.iter().map(Prim::face_normal).collect();
@@ -387,6 +394,11 @@ impl Accel {
 
     pub fn prims(&self) -> &[Prim] {
         &self.prims
+    }
+
+    /// The index in `prims()` of the primitive given to `build` as number `original`.
+    pub fn slot(&self, original: u32) -> u32 {
+        self.slots[original as usize]
     }
 
     pub fn object_of(&self, prim: u32) -> u32 {

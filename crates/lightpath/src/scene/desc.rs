@@ -1,150 +1,147 @@
-//! The scene file as written: plain data deserialised from TOML, with spans kept where a
-//! later check needs to point at the file (see `docs/scene-format.md`).
+//! The scene as neutral plain data: what every loader (TOML, OBJ, the built-in scenes)
+//! produces and the build step consumes. No parser types; every entity carries the
+//! `Origin` that errors about it point at (see `docs/scene-format.md`).
 
-use serde::Deserialize;
+use crate::camera::FovAxis;
+use glam::Affine3A;
 use std::collections::BTreeMap;
-use toml::Spanned;
+use std::fmt;
+use std::path::PathBuf;
 
-#[derive(Debug, Deserialize, Default)]
-#[serde(deny_unknown_fields)]
+/// Where an entity was written: file, 1-based line and column (line 0: the whole file).
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub struct Origin {
+    pub file: String,
+    pub line: usize,
+    pub col: usize,
+}
+
+impl Origin {
+    /// The whole file, for errors no single entity is to blame for.
+    pub fn file(file: impl Into<String>) -> Origin {
+        Origin {
+            file: file.into(),
+            line: 0,
+            col: 0,
+        }
+    }
+}
+
+impl fmt::Display for Origin {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        if self.line > 0 {
+            write!(f, "{}:{}:{}", self.file, self.line, self.col)
+        } else {
+            write!(f, "{}", self.file)
+        }
+    }
+}
+
+/// A name that refers to another entity, with where the reference was written.
+#[derive(Clone, Debug)]
+pub struct NameRef {
+    pub name: String,
+    pub origin: Origin,
+}
+
+#[derive(Clone, Debug, Default)]
 pub struct SceneDesc {
-    #[serde(default)]
-    pub camera: Option<Spanned<CameraDesc>>,
-    #[serde(default)]
+    /// The scene's file (or built-in) name, for errors about the scene as a whole.
+    pub source: String,
+    /// None: the default camera.
+    pub camera: Option<CameraDesc>,
     pub film: FilmDesc,
-    #[serde(default)]
     pub render: RenderDesc,
-    #[serde(default)]
-    pub materials: BTreeMap<String, Spanned<MaterialDesc>>,
-    #[serde(default)]
-    pub objects: Vec<Spanned<ObjectDesc>>,
-    #[serde(default)]
-    pub lights: Vec<Spanned<LightDesc>>,
+    pub materials: BTreeMap<String, MaterialDesc>,
+    pub objects: Vec<ObjectDesc>,
+    pub lights: Vec<LightDesc>,
     /// AOV name → definition (`lpe:…` or a standard name).
-    #[serde(default)]
-    pub aovs: BTreeMap<String, Spanned<String>>,
+    pub aovs: BTreeMap<String, AovDesc>,
     /// Split beauty per light group (`beauty_<group>`).
-    #[serde(default)]
     pub light_groups: bool,
     /// Also split these AOVs per light group.
-    #[serde(default)]
     pub light_group_aovs: Vec<String>,
 }
 
-#[derive(Debug, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct CameraDesc {
-    #[serde(default = "default_position")]
-    pub position: [f32; 3],
-    #[serde(default)]
-    pub look_at: [f32; 3],
-    #[serde(default = "default_up")]
-    pub up: [f32; 3],
-    #[serde(default = "default_fov")]
-    pub fov: f32,
-    #[serde(default)]
-    pub fov_axis: Option<Spanned<String>>,
-    #[serde(default)]
-    pub aperture_radius: f32,
-    #[serde(default)]
-    pub focus_distance: Option<f32>,
+#[derive(Clone, Debug)]
+pub struct AovDesc {
+    pub definition: String,
+    pub origin: Origin,
 }
 
-fn default_position() -> [f32; 3] {
-    [0.0, 0.0, 5.0]
-}
-fn default_up() -> [f32; 3] {
-    [0.0, 1.0, 0.0]
-}
-fn default_fov() -> f32 {
-    40.0
+#[derive(Clone, Debug)]
+pub struct CameraDesc {
+    pub position: [f32; 3],
+    pub look_at: [f32; 3],
+    pub up: [f32; 3],
+    pub fov: f32,
+    pub fov_axis: FovAxis,
+    pub aperture_radius: f32,
+    pub focus_distance: Option<f32>,
+    pub origin: Origin,
 }
 
 impl Default for CameraDesc {
     fn default() -> Self {
         CameraDesc {
-            position: default_position(),
+            position: [0.0, 0.0, 5.0],
             look_at: [0.0; 3],
-            up: default_up(),
-            fov: default_fov(),
-            fov_axis: None,
+            up: [0.0, 1.0, 0.0],
+            fov: 40.0,
+            fov_axis: FovAxis::Smaller,
             aperture_radius: 0.0,
             focus_distance: None,
+            origin: Origin::default(),
         }
     }
 }
 
-#[derive(Debug, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct FilmDesc {
-    #[serde(default = "default_resolution")]
-    pub resolution: [u32; 2],
-    /// `box` or `gaussian`.
-    #[serde(default)]
-    pub filter: Option<Spanned<String>>,
-    /// Standard deviation of the Gaussian filter, in pixels.
-    #[serde(default = "default_stddev")]
-    pub filter_stddev: f32,
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum FilterDesc {
+    Box,
+    /// Standard deviation in pixels.
+    Gaussian {
+        stddev: f32,
+    },
 }
 
-fn default_resolution() -> [u32; 2] {
-    [256, 256]
-}
-fn default_stddev() -> f32 {
-    0.5
+#[derive(Clone, Debug)]
+pub struct FilmDesc {
+    pub resolution: [u32; 2],
+    pub filter: FilterDesc,
 }
 
 impl Default for FilmDesc {
     fn default() -> Self {
         FilmDesc {
-            resolution: default_resolution(),
-            filter: None,
-            filter_stddev: default_stddev(),
+            resolution: [256, 256],
+            filter: FilterDesc::Box,
         }
     }
 }
 
-#[derive(Debug, Deserialize)]
-#[serde(deny_unknown_fields)]
+#[derive(Clone, Debug)]
 pub struct RenderDesc {
-    #[serde(default = "default_spp")]
     pub spp: u32,
     /// Path segments, as Mitsuba counts them: 1 = emitters seen directly.
-    #[serde(default = "default_max_depth")]
     pub max_depth: u32,
-    #[serde(default)]
     pub max_diffuse_depth: Option<u32>,
-    #[serde(default)]
     pub max_specular_depth: Option<u32>,
-    #[serde(default = "default_rr_depth")]
     pub rr_depth: u32,
     /// Maximum luminance of one contribution (0: off), for direct and indirect light.
-    #[serde(default)]
     pub clamp_direct: f32,
-    #[serde(default)]
     pub clamp_indirect: f32,
-    #[serde(default)]
     pub seed: u64,
-}
-
-fn default_spp() -> u32 {
-    16
-}
-fn default_max_depth() -> u32 {
-    8
-}
-fn default_rr_depth() -> u32 {
-    5
 }
 
 impl Default for RenderDesc {
     fn default() -> Self {
         RenderDesc {
-            spp: default_spp(),
-            max_depth: default_max_depth(),
+            spp: 16,
+            max_depth: 8,
             max_diffuse_depth: None,
             max_specular_depth: None,
-            rr_depth: default_rr_depth(),
+            rr_depth: 5,
             clamp_direct: 0.0,
             clamp_indirect: 0.0,
             seed: 0,
@@ -152,136 +149,142 @@ impl Default for RenderDesc {
     }
 }
 
-#[derive(Debug, Deserialize, Clone)]
-#[serde(deny_unknown_fields)]
+#[derive(Clone, Debug)]
+pub enum MaterialKind {
+    Diffuse {
+        albedo: [f32; 3],
+    },
+    Translucent {
+        reflect: [f32; 3],
+        transmit: [f32; 3],
+    },
+    Conductor {
+        f0: [f32; 3],
+    },
+    /// `ior` None: 1.5.
+    Dielectric {
+        ior: Option<f32>,
+        tint: Option<[f32; 3]>,
+    },
+    Plastic {
+        albedo: [f32; 3],
+        ior: Option<f32>,
+    },
+}
+
+#[derive(Clone, Debug)]
 pub struct MaterialDesc {
-    #[serde(rename = "type")]
-    pub kind: Spanned<String>,
-    pub albedo: Option<[f32; 3]>,
-    /// Translucent: reflected and transmitted albedo.
-    pub reflect: Option<[f32; 3]>,
-    pub transmit: Option<[f32; 3]>,
-    /// Conductor: reflectance at normal incidence.
-    pub f0: Option<[f32; 3]>,
-    #[serde(default)]
+    pub kind: MaterialKind,
     pub roughness: f32,
-    pub ior: Option<f32>,
-    pub tint: Option<[f32; 3]>,
     /// Colour reported by the `U4` user lobe.
     pub user_color: Option<[f32; 3]>,
+    pub origin: Origin,
 }
 
-/// Object-to-world placement: scale, then rotate (degrees about X, then Y, then Z), then
-/// translate; or a row-major 4×4 `matrix`.
-pub fn placement(
-    translate: Option<[f32; 3]>,
-    rotate: Option<[f32; 3]>,
-    scale: Option<ScaleDesc>,
-    matrix: Option<[f32; 16]>,
-) -> glam::Affine3A {
-    use glam::{Affine3A, Mat4, Quat, Vec3};
-    if let Some(m) = matrix {
-        return Affine3A::from_mat4(Mat4::from_cols_array(&m).transpose());
-    }
-    let s = match scale {
-        None => Vec3::ONE,
-        Some(ScaleDesc::Uniform(k)) => Vec3::splat(k),
-        Some(ScaleDesc::PerAxis(v)) => Vec3::from(v),
-    };
-    let r = rotate.unwrap_or([0.0; 3]);
-    let q = Quat::from_rotation_z(r[2].to_radians())
-        * Quat::from_rotation_y(r[1].to_radians())
-        * Quat::from_rotation_x(r[0].to_radians());
-    Affine3A::from_scale_rotation_translation(s, q, Vec3::from(translate.unwrap_or([0.0; 3])))
+/// Triangle mesh data; optional per-vertex attributes have one entry per position.
+#[derive(Clone, Debug, Default)]
+pub struct MeshData {
+    pub positions: Vec<[f32; 3]>,
+    pub indices: Vec<[u32; 3]>,
+    /// Shading normals.
+    pub normals: Option<Vec<[f32; 3]>>,
+    /// Texture coordinates (carried for the materials to come; not used by shading yet).
+    pub uvs: Option<Vec<[f32; 2]>>,
 }
 
-#[derive(Debug, Deserialize, Clone, Copy)]
-#[serde(untagged)]
-pub enum ScaleDesc {
-    Uniform(f32),
-    PerAxis([f32; 3]),
+/// A shape in its local space; the object's `transform` places it.
+#[derive(Clone, Debug)]
+pub enum ShapeDesc {
+    /// The square [-1, 1]² in the z = 0 plane, facing +z.
+    Rectangle,
+    Cube,
+    Disk {
+        segments: u32,
+    },
+    /// Corners in world space (the transform does not apply).
+    Quad {
+        corners: [[f32; 3]; 4],
+    },
+    Sphere {
+        center: [f32; 3],
+        radius: f32,
+    },
+    /// Inline mesh or the models of an OBJ file.
+    Mesh {
+        parts: Vec<MeshData>,
+    },
 }
 
-#[derive(Debug, Deserialize)]
-#[serde(deny_unknown_fields)]
+#[derive(Clone, Debug)]
 pub struct ObjectDesc {
     pub name: Option<String>,
-    /// rectangle | quad | cube | disk | sphere | mesh | obj
-    pub shape: Spanned<String>,
-    pub material: Option<Spanned<String>>,
-    /// LPE labels of every event on this object; defaults to the object's name.
+    /// The shape's name as written, for messages (`sphere shape needs …`).
+    pub shape_name: String,
+    pub shape: ShapeDesc,
+    /// Object to world.
+    pub transform: Affine3A,
+    pub material: Option<NameRef>,
+    /// LPE labels of every event on this object; None: the object's name.
     pub lpegroups: Option<Vec<String>>,
-    pub translate: Option<[f32; 3]>,
-    pub rotate: Option<[f32; 3]>,
-    pub scale: Option<ScaleDesc>,
-    pub matrix: Option<[f32; 16]>,
-    pub center: Option<[f32; 3]>,
-    pub radius: Option<f32>,
-    pub corners: Option<[[f32; 3]; 4]>,
-    pub positions: Option<Vec<[f32; 3]>>,
-    pub indices: Option<Vec<[u32; 3]>>,
-    pub normals: Option<Vec<[f32; 3]>>,
-    /// OBJ file, relative to the scene file.
-    pub file: Option<Spanned<String>>,
-    pub segments: Option<u32>,
     /// Radiance of a glowing (non-light) surface: seen as an `O` event.
     pub emission: Option<[f32; 3]>,
-    #[serde(default)]
     pub holdout: bool,
     /// Trace sets: which rays see this object.
-    #[serde(default = "yes")]
     pub visible_camera: bool,
-    #[serde(default = "yes")]
     pub visible_indirect: bool,
-    #[serde(default = "yes")]
     pub casts_shadows: bool,
+    pub origin: Origin,
 }
 
-#[derive(Debug, Deserialize)]
-#[serde(deny_unknown_fields)]
+#[derive(Clone, Debug)]
+pub enum LightKind {
+    /// Area lights, in the shape's local space (quad: world corners).
+    Rectangle,
+    Quad {
+        corners: [[f32; 3]; 4],
+    },
+    Disk {
+        segments: u32,
+    },
+    Sphere {
+        center: [f32; 3],
+        radius: f32,
+    },
+    Point {
+        position: [f32; 3],
+    },
+    /// Full cone angle and the width of its soft edge, in degrees.
+    Spot {
+        position: [f32; 3],
+        direction: [f32; 3],
+        cone_angle: f32,
+        cone_softness: f32,
+    },
+    Distant {
+        direction: [f32; 3],
+    },
+    /// An optional equirectangular EXR (resolved path, and where it was named).
+    Dome {
+        map: Option<(PathBuf, Origin)>,
+    },
+}
+
+#[derive(Clone, Debug)]
 pub struct LightDesc {
-    #[serde(rename = "type")]
-    pub kind: Spanned<String>,
+    pub kind: LightKind,
     pub name: Option<String>,
-    #[serde(default)]
     pub groups: Vec<String>,
-    pub radiance: Option<[f32; 3]>,
-    pub intensity: Option<[f32; 3]>,
-    pub irradiance: Option<[f32; 3]>,
-    /// Multiplies the colour.
-    #[serde(default = "one")]
+    /// Radiance, intensity or irradiance, as the kind needs; `strength` multiplies it.
+    pub color: [f32; 3],
     pub strength: f32,
-    #[serde(default = "yes")]
     pub camera_visible: bool,
-    #[serde(default)]
     pub two_sided: bool,
     /// The surface material of an area light (it can reflect too); none by default.
-    pub material: Option<Spanned<String>>,
-    pub translate: Option<[f32; 3]>,
-    pub rotate: Option<[f32; 3]>,
-    pub scale: Option<ScaleDesc>,
-    pub matrix: Option<[f32; 16]>,
-    pub corners: Option<[[f32; 3]; 4]>,
-    pub center: Option<[f32; 3]>,
-    pub radius: Option<f32>,
-    pub position: Option<[f32; 3]>,
-    pub direction: Option<[f32; 3]>,
-    /// Spot: full cone angle and the width of its soft edge, in degrees.
-    pub cone_angle: Option<f32>,
-    pub cone_softness: Option<f32>,
-    /// Dome: an equirectangular EXR, relative to the scene file.
-    pub map: Option<Spanned<String>>,
-    pub segments: Option<u32>,
-    /// Light linking: only objects in these lpegroups are lit (default: all) …
+    pub material: Option<NameRef>,
+    pub transform: Affine3A,
+    /// Light linking: only objects in these lpegroups are lit (None: all) …
     pub include: Option<Vec<String>>,
     /// … except objects in these.
-    #[serde(default)]
     pub exclude: Vec<String>,
-}
-
-fn one() -> f32 {
-    1.0
-}
-fn yes() -> bool {
-    true
+    pub origin: Origin,
 }

@@ -1,0 +1,183 @@
+//! The one owner of the event vocabulary: which LPE event each (object, lobe) pair, each
+//! data lobe, each light and each glowing surface emits. The scene's vocabulary is built
+//! once, compiled with the AOVs, and that same list is classified, so every event the
+//! integrator steps has a class by construction.
+
+use crate::light::Light;
+use crate::scene::{Material, Object};
+use glam::Vec3A;
+use lpe::{Automaton, ClassId, Event, EventType, Profile, Scatter};
+
+/// What Lightpath's paths contain: no volume (`V`) or background (`B`) events.
+pub fn profile() -> Profile {
+    use EventType::*;
+    Profile::new(&[Camera, Reflect, Transmit, Light, Emission])
+}
+
+/// What a user (data) lobe reports (LPE.md §1).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum DataLobe {
+    Albedo,
+    Position,
+    Normal,
+    UserColor,
+}
+
+impl DataLobe {
+    /// Its lobe: `U2` albedo, `U3` position, `U4` user colour, `U6` normal.
+    pub fn scatter(self) -> Scatter {
+        Scatter::user(match self {
+            DataLobe::Albedo => 2,
+            DataLobe::Position => 3,
+            DataLobe::UserColor => 4,
+            DataLobe::Normal => 6,
+        })
+    }
+}
+
+/// What in the scene emits an event of the vocabulary.
+#[derive(Clone, Copy, Debug)]
+enum Use {
+    Camera,
+    /// `L` with no labels: the unit light data lobes are evaluated under.
+    DataLight,
+    /// A BSDF lobe of an object (in the BSDF's lobe order).
+    Lobe {
+        object: u32,
+    },
+    Data {
+        object: u32,
+        lobe: DataLobe,
+    },
+    /// A glowing (non-light) surface, seen as `O`.
+    Glow {
+        object: u32,
+    },
+    /// A light reached: `L`.
+    Light {
+        light: u32,
+    },
+    /// A light seen without a scatter: `O`.
+    LightSeen {
+        light: u32,
+    },
+}
+
+/// Every event a scene can emit, each with what emits it.
+pub struct Vocabulary {
+    events: Vec<Event>,
+    uses: Vec<Use>,
+}
+
+/// The classes of the events that are not per object.
+pub struct Classes {
+    pub camera: ClassId,
+    pub data_light: ClassId,
+    /// Each light's `L` and `O` classes.
+    pub lights: Vec<(ClassId, ClassId)>,
+}
+
+impl Vocabulary {
+    pub fn of_scene(objects: &[Object], materials: &[Material], lights: &[Light]) -> Vocabulary {
+        let mut v = Vocabulary {
+            events: Vec::new(),
+            uses: Vec::new(),
+        };
+        v.push(Event::camera(), Use::Camera);
+        v.push(Event::bare(EventType::Light), Use::DataLight);
+        for (id, o) in objects.iter().enumerate() {
+            let object = id as u32;
+            if let Some(m) = o.material.map(|m| &materials[m as usize]) {
+                for t in m.bsdf.lobes() {
+                    let ty = if t.transmit {
+                        EventType::Transmit
+                    } else {
+                        EventType::Reflect
+                    };
+                    v.push(
+                        Event::new(ty, Some(t.scatter), o.groups.iter()),
+                        Use::Lobe { object },
+                    );
+                }
+                let mut kinds = vec![DataLobe::Albedo, DataLobe::Position, DataLobe::Normal];
+                if m.user_color.is_some() {
+                    kinds.push(DataLobe::UserColor);
+                }
+                for lobe in kinds {
+                    let e = Event::new(EventType::Reflect, Some(lobe.scatter()), o.groups.iter());
+                    v.push(e, Use::Data { object, lobe });
+                }
+            }
+            if o.emission != Vec3A::ZERO {
+                let e = Event::new(EventType::Emission, None, o.groups.iter());
+                v.push(e, Use::Glow { object });
+            }
+        }
+        for (id, l) in lights.iter().enumerate() {
+            let light = id as u32;
+            v.push(
+                Event::new(EventType::Light, None, l.groups.iter()),
+                Use::Light { light },
+            );
+            let e = Event::new(EventType::Emission, None, l.groups.iter());
+            v.push(e, Use::LightSeen { light });
+        }
+        v
+    }
+
+    fn push(&mut self, e: Event, u: Use) {
+        self.events.push(e);
+        self.uses.push(u);
+    }
+
+    pub fn events(&self) -> &[Event] {
+        &self.events
+    }
+
+    /// Stores each object's classes and returns the others; `automaton` must have been
+    /// compiled with exactly `events()` as its vocabulary.
+    pub fn classify(
+        &self,
+        automaton: &Automaton,
+        objects: &mut [Object],
+        lights: usize,
+    ) -> Classes {
+        let classes = automaton.vocabulary_classes();
+        let mut out = Classes {
+            camera: classes[0],
+            data_light: classes[1],
+            lights: vec![(classes[0], classes[0]); lights],
+        };
+        for o in objects.iter_mut() {
+            o.lobe_classes.clear();
+            o.data_lobes.clear();
+            o.glow_class = None;
+        }
+        for (u, &class) in self.uses.iter().zip(classes) {
+            match *u {
+                Use::Camera => out.camera = class,
+                Use::DataLight => out.data_light = class,
+                Use::Lobe { object } => objects[object as usize].lobe_classes.push(class),
+                Use::Data { object, lobe } => {
+                    objects[object as usize].data_lobes.push((lobe, class))
+                }
+                Use::Glow { object } => objects[object as usize].glow_class = Some(class),
+                Use::Light { light } => out.lights[light as usize].0 = class,
+                Use::LightSeen { light } => out.lights[light as usize].1 = class,
+            }
+        }
+        // Keep only data lobes some rule can accept: the others would cost two steps per
+        // vertex for nothing.
+        for o in objects.iter_mut() {
+            o.data_lobes.retain(|(_, class)| {
+                automaton.states().any(|s| {
+                    let after = automaton.step(s, *class);
+                    !automaton
+                        .accepting(automaton.step(after, out.data_light))
+                        .is_empty()
+                })
+            });
+        }
+        out
+    }
+}

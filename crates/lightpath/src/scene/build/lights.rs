@@ -1,0 +1,206 @@
+//! Lights: shapes, colours, environment maps, light linking and the light selection
+//! probabilities.
+
+use crate::geometry::shapes::{self, ShapePrims};
+use crate::geometry::{Accel, Prim};
+use crate::light::{EnvMap, Light, LightShape};
+use crate::sampling::Distribution1D;
+use crate::scene::desc::{LightDesc, LightKind, Origin};
+use crate::scene::{Object, SceneError};
+use glam::Vec3A;
+use std::ops::Range;
+use std::path::Path;
+
+/// A light's shape and colour, and for area lights the primitives it adds to the scene.
+pub fn light_shape(l: &LightDesc) -> Result<(LightShape, Option<ShapePrims>, Vec3A), SceneError> {
+    let v3 = Vec3A::from;
+    let xf = &l.transform;
+    let color = v3(l.color) * l.strength;
+    let area = |prims: ShapePrims| {
+        let areas: Vec<f32> = prims.prims.iter().map(Prim::area).collect();
+        let normals = prims.prims.iter().map(Prim::face_normal).collect();
+        let shape = LightShape::Triangles {
+            parallelogram: parallelogram(&prims.prims),
+            // Filled once the primitives are in the scene (`locate_prims`).
+            prims: Vec::new(),
+            normals,
+            by_area: Distribution1D::new(&areas),
+            area: areas.iter().sum(),
+            two_sided: l.two_sided,
+        };
+        (shape, Some(prims), color)
+    };
+    Ok(match &l.kind {
+        LightKind::Rectangle => area(shapes::rectangle(xf)),
+        LightKind::Quad { corners } => area(shapes::quad(corners.map(v3))),
+        LightKind::Disk { segments } => area(shapes::disk(xf, (*segments).max(3) as usize)),
+        LightKind::Sphere { center, radius } => {
+            let center = xf.transform_point3a(v3(*center));
+            let radius = *radius;
+            if !(radius > 0.0 && radius.is_finite()) {
+                return Err(l.origin.error(format!(
+                    "sphere light radius must be positive, got {radius}"
+                )));
+            }
+            let prims = shapes::sphere(center, radius);
+            (LightShape::Sphere { center, radius }, Some(prims), color)
+        }
+        LightKind::Point { position } => (
+            LightShape::Point {
+                position: v3(*position),
+            },
+            None,
+            color,
+        ),
+        LightKind::Spot {
+            position,
+            direction,
+            cone_angle,
+            cone_softness,
+        } => {
+            let half = cone_angle.to_radians() * 0.5;
+            let soft = cone_softness.to_radians();
+            let shape = LightShape::Spot {
+                position: v3(*position),
+                axis: v3(*direction).normalize_or(-Vec3A::Y),
+                cos_inner: (half - soft).max(0.0).cos(),
+                cos_outer: half.cos(),
+            };
+            (shape, None, color)
+        }
+        LightKind::Distant { direction } => (
+            LightShape::Distant {
+                dir: v3(*direction).normalize_or(-Vec3A::Y),
+            },
+            None,
+            color,
+        ),
+        LightKind::Dome { map } => {
+            let map = match map {
+                None => None,
+                Some((path, origin)) => Some(load_env(path, origin)?),
+            };
+            (LightShape::Dome { map }, None, color)
+        }
+    })
+}
+
+/// Points each area light at its triangles: `added` is where the scene's primitive list
+/// gave them (`GeometryBuilder::add`), the accelerator then reordered that list.
+pub fn locate_prims(lights: &mut [Light], added: &[Option<Range<u32>>], accel: &Accel) {
+    for (l, range) in lights.iter_mut().zip(added) {
+        if let (LightShape::Triangles { prims, .. }, Some(range)) = (&mut l.shape, range) {
+            *prims = range.clone().map(|i| accel.slot(i)).collect();
+        }
+    }
+}
+
+/// Two triangles `(c0, c1, c2)`, `(c0, c2, c3)` that form a parallelogram, as corner and
+/// edges.
+fn parallelogram(prims: &[Prim]) -> Option<[Vec3A; 3]> {
+    let [Prim::Triangle {
+        p0, e1: a1, e2: a2, ..
+    }, Prim::Triangle {
+        p0: q0,
+        e1: b1,
+        e2: b2,
+        ..
+    }] = prims
+    else {
+        return None;
+    };
+    let same_start = (*p0 - *q0).length() <= 1e-6 * (1.0 + p0.length());
+    let diagonal_shared = (*a2 - *b1).length() <= 1e-6 * (1.0 + a2.length());
+    // c1 + c3 = c0 + c2  ⇔  a1 + b2 = a2.
+    let closes = (*a1 + *b2 - *a2).length() <= 1e-5 * (1.0 + a2.length());
+    (same_start && diagonal_shared && closes).then_some([*p0, *a1, *b2])
+}
+
+fn load_env(path: &Path, origin: &Origin) -> Result<EnvMap, SceneError> {
+    use exr::prelude::*;
+    let image = read_first_rgba_layer_from_file(
+        path,
+        |res, _| (res.width(), vec![Vec3A::ZERO; res.width() * res.height()]),
+        |(w, px), pos, (r, g, b, _a): (f32, f32, f32, f32)| {
+            px[pos.y() * *w + pos.x()] = Vec3A::new(r, g, b)
+        },
+    )
+    .map_err(|e| {
+        origin.error(format!(
+            "cannot read environment map {}: {e}",
+            path.display()
+        ))
+    })?;
+    let size = image.layer_data.size;
+    let (_, texels) = image.layer_data.channel_data.pixels;
+    Ok(EnvMap::new(size.width(), size.height(), texels))
+}
+
+/// Light linking, resolved per object once: each object's `unlit_by`.
+pub fn link(descs: &[LightDesc], objects: &mut [Object]) {
+    for (light_id, l) in descs.iter().enumerate() {
+        let lit = |o: &Object| {
+            let any = |set: &[String]| o.groups.iter().any(|g| set.contains(g));
+            l.include.as_deref().is_none_or(any) && !any(&l.exclude)
+        };
+        let light_id = light_id as u32;
+        for o in objects.iter_mut().filter(|o| o.light != Some(light_id)) {
+            if !lit(o) {
+                o.unlit_by.push(light_id);
+            }
+        }
+    }
+}
+
+/// Lights are chosen in proportion to their power at unit colour, with a floor so small
+/// lights still get samples.
+pub fn selection(lights: &[Light], scene_radius: f32) -> Distribution1D {
+    let powers: Vec<f32> = lights
+        .iter()
+        .map(|l| l.sampling_weight(scene_radius))
+        .collect();
+    let total: f32 = powers.iter().sum();
+    let weights: Vec<f32> = powers
+        .iter()
+        .map(|p| {
+            if total > 0.0 {
+                p / total + 0.1 / lights.len() as f32
+            } else {
+                1.0
+            }
+        })
+        .collect();
+    Distribution1D::new(&weights)
+}
+
+/// Lights reached by rays that escape the scene.
+pub fn escape_lights(lights: &[Light]) -> Vec<u32> {
+    lights
+        .iter()
+        .enumerate()
+        .filter(|(_, l)| matches!(l.shape, LightShape::Dome { .. }))
+        .map(|(i, _)| i as u32)
+        .collect()
+}
+
+/// Light group names, sorted, and each light's part in split AOVs (its first group, or
+/// the default part after all groups).
+pub fn groups(lights: &[Light]) -> (Vec<String>, Vec<u32>) {
+    let mut light_groups: Vec<String> = lights
+        .iter()
+        .flat_map(|l| l.groups.iter().cloned())
+        .collect();
+    light_groups.sort();
+    light_groups.dedup();
+    let default_part = light_groups.len() as u32;
+    let light_parts = lights
+        .iter()
+        .map(|l| {
+            l.groups
+                .first()
+                .and_then(|g| light_groups.iter().position(|x| x == g))
+                .map_or(default_part, |p| p as u32)
+        })
+        .collect();
+    (light_groups, light_parts)
+}

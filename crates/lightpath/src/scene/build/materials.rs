@@ -1,0 +1,62 @@
+//! Materials: each description becomes a BSDF (a list of lobes) and a user colour.
+
+use crate::material::{roughness_to_alpha, Bsdf};
+use crate::scene::desc::{MaterialDesc, MaterialKind, NameRef, SceneDesc};
+use crate::scene::{Material, SceneError};
+use glam::Vec3A;
+use std::collections::HashMap;
+
+/// The scene's materials in name order, and each name's index.
+pub fn build(desc: &SceneDesc) -> Result<(Vec<Material>, HashMap<String, u32>), SceneError> {
+    let mut materials = Vec::new();
+    let mut ids = HashMap::new();
+    for (name, m) in &desc.materials {
+        ids.insert(name.clone(), materials.len() as u32);
+        materials.push(material(name, m)?);
+    }
+    Ok((materials, ids))
+}
+
+/// Resolves a material reference, pointing at it if the scene has no such material.
+pub fn find(
+    desc: &SceneDesc,
+    ids: &HashMap<String, u32>,
+    m: &Option<NameRef>,
+) -> Result<Option<u32>, SceneError> {
+    match m {
+        None => Ok(None),
+        Some(r) => ids.get(&r.name).copied().map(Some).ok_or_else(|| {
+            let known: Vec<&String> = desc.materials.keys().collect();
+            r.origin.error(format!(
+                "unknown material '{}': the scene defines {known:?}",
+                r.name
+            ))
+        }),
+    }
+}
+
+fn material(name: &str, m: &MaterialDesc) -> Result<Material, SceneError> {
+    let v3 = Vec3A::from;
+    let alpha = roughness_to_alpha(m.roughness);
+    let ior = |ior: Option<f32>| match ior.unwrap_or(1.5) {
+        eta if eta > 0.0 && eta.is_finite() => Ok(eta),
+        eta => Err(m.origin.error(format!(
+            "material '{name}': ior must be positive, got {eta}"
+        ))),
+    };
+    let bsdf = match &m.kind {
+        MaterialKind::Diffuse { albedo } => Bsdf::diffuse(v3(*albedo)),
+        MaterialKind::Translucent { reflect, transmit } => {
+            Bsdf::translucent(v3(*reflect), v3(*transmit))
+        }
+        MaterialKind::Conductor { f0 } => Bsdf::conductor(v3(*f0), alpha),
+        MaterialKind::Dielectric { ior: eta, tint } => {
+            Bsdf::dielectric(ior(*eta)?, alpha, tint.map(v3).unwrap_or(Vec3A::ONE))
+        }
+        MaterialKind::Plastic { albedo, ior: eta } => Bsdf::plastic(v3(*albedo), ior(*eta)?, alpha),
+    };
+    Ok(Material {
+        bsdf,
+        user_color: m.user_color.map(v3),
+    })
+}

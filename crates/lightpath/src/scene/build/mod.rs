@@ -1,0 +1,259 @@
+//! SceneDesc → Scene, in small steps: materials, geometry (objects and the surfaces of
+//! area lights), lights, the AOV automaton and every event's class, camera and settings.
+
+pub mod camera;
+pub mod geometry;
+pub mod lights;
+pub mod materials;
+
+use crate::aov::AovSpec;
+use crate::events::Vocabulary;
+use crate::geometry::Visibility;
+use crate::light::Light;
+use crate::scene::desc::{Origin, SceneDesc};
+use crate::scene::{Aov, Object, Scene, SceneError};
+use geometry::GeometryBuilder;
+use glam::Vec3A;
+use lpe::{Automaton, ClassId};
+use std::collections::HashMap;
+use std::ops::Range;
+
+impl Scene {
+    /// Builds a scene from its description and the AOVs to render (beauty first).
+    pub fn build(desc: &SceneDesc, aovs: &[AovSpec]) -> Result<Scene, SceneError> {
+        let (materials, material_ids) = materials::build(desc)?;
+        let mut geometry = GeometryBuilder::default();
+        let mut objects = add_objects(desc, &material_ids, &mut geometry)?;
+        let (mut lights, light_prims) =
+            add_lights(desc, &material_ids, &mut geometry, &mut objects)?;
+        let accel = geometry.build();
+        lights::locate_prims(&mut lights, &light_prims, &accel);
+        lights::link(&desc.lights, &mut objects);
+        let (scene_radius, epsilon) = geometry::scene_size(&accel);
+
+        let vocabulary = Vocabulary::of_scene(&objects, &materials, &lights);
+        let automaton = compile_aovs(desc, aovs, &vocabulary)?;
+        let classes = vocabulary.classify(&automaton, &mut objects, lights.len());
+
+        let camera = camera::camera(desc)?;
+        let (light_groups, light_parts) = lights::groups(&lights);
+        let aovs = output_aovs(&automaton, aovs, &light_groups);
+        let data_live = data_live(&automaton, &objects, classes.data_light);
+        let any_unoccluded = aovs.iter().any(|a| {
+            a.flags.contains(lpe::Prefix::Unoccluded) || a.flags.contains(lpe::Prefix::Shadows)
+        });
+        Ok(Scene {
+            accel,
+            objects,
+            materials,
+            light_classes: classes.lights,
+            light_select: lights::selection(&lights, scene_radius),
+            escape_lights: lights::escape_lights(&lights),
+            lights,
+            camera,
+            filter: camera::filter(desc),
+            settings: camera::settings(desc),
+            camera_class: classes.camera,
+            data_light_class: classes.data_light,
+            automaton,
+            aovs,
+            scene_radius,
+            epsilon,
+            light_groups,
+            light_parts,
+            any_unoccluded,
+            data_live,
+        })
+    }
+}
+
+fn new_object(name: String, groups: Vec<String>) -> Object {
+    Object {
+        name,
+        groups,
+        material: None,
+        emission: Vec3A::ZERO,
+        light: None,
+        holdout: false,
+        unlit_by: Vec::new(),
+        lobe_classes: Vec::new(),
+        data_lobes: Vec::new(),
+        glow_class: None,
+    }
+}
+
+/// The scene's objects, their primitives added to `geometry`.
+fn add_objects(
+    desc: &SceneDesc,
+    material_ids: &HashMap<String, u32>,
+    geometry: &mut GeometryBuilder,
+) -> Result<Vec<Object>, SceneError> {
+    let mut objects: Vec<Object> = Vec::new();
+    for o in &desc.objects {
+        let name = o
+            .name
+            .clone()
+            .unwrap_or_else(|| format!("object{}", objects.len()));
+        let shape = geometry::shape_prims(&o.shape, &o.transform, &o.origin)?;
+        let id = objects.len() as u32;
+        let visibility = (o.visible_camera as u8 * Visibility::CAMERA)
+            | (o.visible_indirect as u8 * Visibility::INDIRECT)
+            | (o.casts_shadows as u8 * Visibility::SHADOW);
+        geometry.add(id, shape, visibility);
+        let groups = o.lpegroups.clone().unwrap_or_else(|| vec![name.clone()]);
+        objects.push(Object {
+            material: materials::find(desc, material_ids, &o.material)?,
+            emission: o.emission.map(Vec3A::from).unwrap_or(Vec3A::ZERO),
+            holdout: o.holdout,
+            ..new_object(name, groups)
+        });
+    }
+    Ok(objects)
+}
+
+/// Where an area light's primitives were added to the scene's primitive list.
+type LightPrims = Option<Range<u32>>;
+
+/// The scene's lights; the surface of each area light becomes an object too, its
+/// primitives at the returned range of the primitive list.
+fn add_lights(
+    desc: &SceneDesc,
+    material_ids: &HashMap<String, u32>,
+    geometry: &mut GeometryBuilder,
+    objects: &mut Vec<Object>,
+) -> Result<(Vec<Light>, Vec<LightPrims>), SceneError> {
+    let mut lights = Vec::new();
+    let mut ranges = Vec::new();
+    for l in &desc.lights {
+        let (shape, surface, color) = lights::light_shape(l)?;
+        let light_id = lights.len() as u32;
+        let mut range = None;
+        let object = surface.map(|sp| {
+            let id = objects.len() as u32;
+            let camera = if l.camera_visible {
+                Visibility::CAMERA
+            } else {
+                0
+            };
+            range = Some(geometry.add(id, sp, camera | Visibility::INDIRECT | Visibility::SHADOW));
+            let name = l.name.clone().unwrap_or_else(|| format!("light{light_id}"));
+            let groups = if l.groups.is_empty() {
+                vec![name.clone()]
+            } else {
+                l.groups.clone()
+            };
+            objects.push(Object {
+                light: Some(light_id),
+                ..new_object(name, groups)
+            });
+            id
+        });
+        if let Some(id) = object {
+            objects[id as usize].material = materials::find(desc, material_ids, &l.material)?;
+        }
+        lights.push(Light {
+            shape,
+            color,
+            groups: l.groups.clone(),
+            camera_visible: l.camera_visible,
+            object,
+        });
+        ranges.push(range);
+    }
+    Ok((lights, ranges))
+}
+
+/// The output AOVs: one per rule, then the parts of those split per light group.
+fn output_aovs(automaton: &Automaton, aovs: &[AovSpec], light_groups: &[String]) -> Vec<Aov> {
+    let mut out: Vec<Aov> = automaton
+        .rules()
+        .iter()
+        .zip(aovs)
+        .map(|(rule, spec)| Aov {
+            name: spec.name.clone(),
+            definition: spec.definition.clone(),
+            expression: rule.expression.clone(),
+            flags: rule.flags,
+            split_base: None,
+            part_of: None,
+        })
+        .collect();
+    for (k, spec) in aovs.iter().enumerate() {
+        if !spec.split_light_groups {
+            continue;
+        }
+        out[k].split_base = Some(out.len() as u32);
+        let parts: Vec<Option<&str>> = light_groups
+            .iter()
+            .map(|g| Some(g.as_str()))
+            .chain([None])
+            .collect();
+        for g in parts {
+            let base = &out[k];
+            out.push(Aov {
+                name: crate::aov::split_name(&spec.name, g),
+                definition: format!(
+                    "{} ({})",
+                    spec.definition,
+                    g.map_or("lights without a group".to_string(), |g| format!(
+                        "light group '{g}'"
+                    ))
+                ),
+                expression: base.expression.clone(),
+                flags: base.flags,
+                split_base: None,
+                part_of: Some(k as u32),
+            });
+        }
+    }
+    out
+}
+
+/// Per automaton state: can some object's data lobe be accepted from there?
+fn data_live(automaton: &Automaton, objects: &[Object], data_light: ClassId) -> Vec<bool> {
+    let data_classes: Vec<ClassId> = objects
+        .iter()
+        .flat_map(|o| o.data_lobes.iter().map(|d| d.1))
+        .collect();
+    automaton
+        .states()
+        .map(|s| {
+            data_classes.iter().any(|c| {
+                !automaton
+                    .accepting(automaton.step(automaton.step(s, *c), data_light))
+                    .is_empty()
+            })
+        })
+        .collect()
+}
+
+/// Compiles the AOVs into one automaton whose alphabet is exactly the scene's events.
+fn compile_aovs(
+    desc: &SceneDesc,
+    aovs: &[AovSpec],
+    vocabulary: &Vocabulary,
+) -> Result<Automaton, SceneError> {
+    let mut compiler = lpe::Compiler::new()
+        .profile(crate::events::profile())
+        .default_alphabet(false);
+    for spec in aovs {
+        compiler.add(&spec.definition).map_err(|e| {
+            let origin = desc
+                .aovs
+                .get(&spec.name)
+                .map_or_else(|| Origin::file(&desc.source), |a| a.origin.clone());
+            origin.error(format!(
+                "AOV '{}': {}",
+                spec.name,
+                e.render(&spec.definition).trim_end()
+            ))
+        })?;
+    }
+    compiler.vocabulary(vocabulary.events().iter().cloned());
+    compiler.compile().map_err(|e| {
+        Origin::file(&desc.source).error(format!(
+            "the AOV expressions are too complex together: {}",
+            e.message
+        ))
+    })
+}

@@ -1,0 +1,26 @@
+//! Scenes shipped inside the binary (TOML sources, loaded like files).
+
+/// (name, TOML source) of every built-in scene; the first is the default.
+pub const BUILTIN: [(&str, &str); 2] = [
+    (
+        "cornell",
+        include_str!("../../../../../scenes/cornell.toml"),
+    ),
+    (
+        "cornell-classic",
+        include_str!("../../../../../scenes/cornell-classic.toml"),
+    ),
+];
+
+pub fn get(name: &str) -> Option<&'static str> {
+    BUILTIN.iter().find(|(n, _)| *n == name).map(|(_, s)| *s)
+}
+
+/// The source of a built-in scene, named `builtin:<name>`.
+pub fn source(name: &str) -> Option<super::Source> {
+    get(name).map(|text| super::Source {
+        name: format!("builtin:{name}"),
+        text: text.to_string(),
+        dir: std::path::PathBuf::new(),
+    })
+}

@@ -1,0 +1,555 @@
+//! The TOML scene format (`docs/scene-format.md`): the file as written, deserialised with
+//! spans, then converted to the neutral `SceneDesc` with an `Origin` on every entity.
+//! Kinds and required fields are checked here, where the spans are.
+
+use super::obj;
+use super::Source;
+use crate::camera::FovAxis;
+use crate::scene::desc::{self as d, NameRef};
+use crate::scene::SceneError;
+use serde::Deserialize;
+use std::collections::BTreeMap;
+use std::ops::Range;
+use toml::Spanned;
+
+#[derive(Debug, Deserialize, Default)]
+#[serde(deny_unknown_fields)]
+struct SceneFile {
+    #[serde(default)]
+    camera: Option<Spanned<CameraDesc>>,
+    #[serde(default)]
+    film: FilmDesc,
+    #[serde(default)]
+    render: RenderDesc,
+    #[serde(default)]
+    materials: BTreeMap<String, Spanned<MaterialDesc>>,
+    #[serde(default)]
+    objects: Vec<Spanned<ObjectDesc>>,
+    #[serde(default)]
+    lights: Vec<Spanned<LightDesc>>,
+    /// AOV name → definition (`lpe:…` or a standard name).
+    #[serde(default)]
+    aovs: BTreeMap<String, Spanned<String>>,
+    /// Split beauty per light group (`beauty_<group>`).
+    #[serde(default)]
+    light_groups: bool,
+    /// Also split these AOVs per light group.
+    #[serde(default)]
+    light_group_aovs: Vec<String>,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct CameraDesc {
+    #[serde(default = "default_position")]
+    position: [f32; 3],
+    #[serde(default)]
+    look_at: [f32; 3],
+    #[serde(default = "default_up")]
+    up: [f32; 3],
+    #[serde(default = "default_fov")]
+    fov: f32,
+    #[serde(default)]
+    fov_axis: Option<Spanned<String>>,
+    #[serde(default)]
+    aperture_radius: f32,
+    #[serde(default)]
+    focus_distance: Option<f32>,
+}
+
+fn default_position() -> [f32; 3] {
+    [0.0, 0.0, 5.0]
+}
+fn default_up() -> [f32; 3] {
+    [0.0, 1.0, 0.0]
+}
+fn default_fov() -> f32 {
+    40.0
+}
+
+impl Default for CameraDesc {
+    fn default() -> Self {
+        CameraDesc {
+            position: default_position(),
+            look_at: [0.0; 3],
+            up: default_up(),
+            fov: default_fov(),
+            fov_axis: None,
+            aperture_radius: 0.0,
+            focus_distance: None,
+        }
+    }
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct FilmDesc {
+    #[serde(default = "default_resolution")]
+    resolution: [u32; 2],
+    /// `box` or `gaussian`.
+    #[serde(default)]
+    filter: Option<Spanned<String>>,
+    /// Standard deviation of the Gaussian filter, in pixels.
+    #[serde(default = "default_stddev")]
+    filter_stddev: f32,
+}
+
+fn default_resolution() -> [u32; 2] {
+    [256, 256]
+}
+fn default_stddev() -> f32 {
+    0.5
+}
+
+impl Default for FilmDesc {
+    fn default() -> Self {
+        FilmDesc {
+            resolution: default_resolution(),
+            filter: None,
+            filter_stddev: default_stddev(),
+        }
+    }
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RenderDesc {
+    #[serde(default = "default_spp")]
+    spp: u32,
+    /// Path segments, as Mitsuba counts them: 1 = emitters seen directly.
+    #[serde(default = "default_max_depth")]
+    max_depth: u32,
+    #[serde(default)]
+    max_diffuse_depth: Option<u32>,
+    #[serde(default)]
+    max_specular_depth: Option<u32>,
+    #[serde(default = "default_rr_depth")]
+    rr_depth: u32,
+    /// Maximum luminance of one contribution (0: off), for direct and indirect light.
+    #[serde(default)]
+    clamp_direct: f32,
+    #[serde(default)]
+    clamp_indirect: f32,
+    #[serde(default)]
+    seed: u64,
+}
+
+fn default_spp() -> u32 {
+    16
+}
+fn default_max_depth() -> u32 {
+    8
+}
+fn default_rr_depth() -> u32 {
+    5
+}
+
+impl Default for RenderDesc {
+    fn default() -> Self {
+        RenderDesc {
+            spp: default_spp(),
+            max_depth: default_max_depth(),
+            max_diffuse_depth: None,
+            max_specular_depth: None,
+            rr_depth: default_rr_depth(),
+            clamp_direct: 0.0,
+            clamp_indirect: 0.0,
+            seed: 0,
+        }
+    }
+}
+
+#[derive(Debug, Deserialize, Clone)]
+#[serde(deny_unknown_fields)]
+struct MaterialDesc {
+    #[serde(rename = "type")]
+    kind: Spanned<String>,
+    albedo: Option<[f32; 3]>,
+    /// Translucent: reflected and transmitted albedo.
+    reflect: Option<[f32; 3]>,
+    transmit: Option<[f32; 3]>,
+    /// Conductor: reflectance at normal incidence.
+    f0: Option<[f32; 3]>,
+    #[serde(default)]
+    roughness: f32,
+    ior: Option<f32>,
+    tint: Option<[f32; 3]>,
+    /// Colour reported by the `U4` user lobe.
+    user_color: Option<[f32; 3]>,
+}
+
+/// Object-to-world placement: scale, then rotate (degrees about X, then Y, then Z), then
+/// translate; or a row-major 4×4 `matrix`.
+fn placement(
+    translate: Option<[f32; 3]>,
+    rotate: Option<[f32; 3]>,
+    scale: Option<ScaleDesc>,
+    matrix: Option<[f32; 16]>,
+) -> glam::Affine3A {
+    use glam::{Affine3A, Mat4, Quat, Vec3};
+    if let Some(m) = matrix {
+        return Affine3A::from_mat4(Mat4::from_cols_array(&m).transpose());
+    }
+    let s = match scale {
+        None => Vec3::ONE,
+        Some(ScaleDesc::Uniform(k)) => Vec3::splat(k),
+        Some(ScaleDesc::PerAxis(v)) => Vec3::from(v),
+    };
+    let r = rotate.unwrap_or([0.0; 3]);
+    let q = Quat::from_rotation_z(r[2].to_radians())
+        * Quat::from_rotation_y(r[1].to_radians())
+        * Quat::from_rotation_x(r[0].to_radians());
+    Affine3A::from_scale_rotation_translation(s, q, Vec3::from(translate.unwrap_or([0.0; 3])))
+}
+
+#[derive(Debug, Deserialize, Clone, Copy)]
+#[serde(untagged)]
+enum ScaleDesc {
+    Uniform(f32),
+    PerAxis([f32; 3]),
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct ObjectDesc {
+    name: Option<String>,
+    /// rectangle | quad | cube | disk | sphere | mesh | obj
+    shape: Spanned<String>,
+    material: Option<Spanned<String>>,
+    /// LPE labels of every event on this object; defaults to the object's name.
+    lpegroups: Option<Vec<String>>,
+    translate: Option<[f32; 3]>,
+    rotate: Option<[f32; 3]>,
+    scale: Option<ScaleDesc>,
+    matrix: Option<[f32; 16]>,
+    center: Option<[f32; 3]>,
+    radius: Option<f32>,
+    corners: Option<[[f32; 3]; 4]>,
+    positions: Option<Vec<[f32; 3]>>,
+    indices: Option<Vec<[u32; 3]>>,
+    normals: Option<Vec<[f32; 3]>>,
+    /// OBJ file, relative to the scene file.
+    file: Option<Spanned<String>>,
+    segments: Option<u32>,
+    /// Radiance of a glowing (non-light) surface: seen as an `O` event.
+    emission: Option<[f32; 3]>,
+    #[serde(default)]
+    holdout: bool,
+    /// Trace sets: which rays see this object.
+    #[serde(default = "yes")]
+    visible_camera: bool,
+    #[serde(default = "yes")]
+    visible_indirect: bool,
+    #[serde(default = "yes")]
+    casts_shadows: bool,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct LightDesc {
+    #[serde(rename = "type")]
+    kind: Spanned<String>,
+    name: Option<String>,
+    #[serde(default)]
+    groups: Vec<String>,
+    radiance: Option<[f32; 3]>,
+    intensity: Option<[f32; 3]>,
+    irradiance: Option<[f32; 3]>,
+    /// Multiplies the colour.
+    #[serde(default = "one")]
+    strength: f32,
+    #[serde(default = "yes")]
+    camera_visible: bool,
+    #[serde(default)]
+    two_sided: bool,
+    /// The surface material of an area light (it can reflect too); none by default.
+    material: Option<Spanned<String>>,
+    translate: Option<[f32; 3]>,
+    rotate: Option<[f32; 3]>,
+    scale: Option<ScaleDesc>,
+    matrix: Option<[f32; 16]>,
+    corners: Option<[[f32; 3]; 4]>,
+    center: Option<[f32; 3]>,
+    radius: Option<f32>,
+    position: Option<[f32; 3]>,
+    direction: Option<[f32; 3]>,
+    /// Spot: full cone angle and the width of its soft edge, in degrees.
+    cone_angle: Option<f32>,
+    cone_softness: Option<f32>,
+    /// Dome: an equirectangular EXR, relative to the scene file.
+    map: Option<Spanned<String>>,
+    segments: Option<u32>,
+    /// Light linking: only objects in these lpegroups are lit (default: all) …
+    include: Option<Vec<String>>,
+    /// … except objects in these.
+    #[serde(default)]
+    exclude: Vec<String>,
+}
+
+fn one() -> f32 {
+    1.0
+}
+fn yes() -> bool {
+    true
+}
+
+/// Parses a TOML scene into the neutral description; OBJ files it names are loaded too.
+pub fn load(src: &Source) -> Result<d::SceneDesc, SceneError> {
+    let file: SceneFile =
+        toml::from_str(&src.text).map_err(|e| src.error(e.span(), e.message().to_string()))?;
+    let at = |span: Range<usize>| src.origin(Some(span));
+    let mut materials = BTreeMap::new();
+    for (name, m) in &file.materials {
+        materials.insert(name.clone(), material(src, name, m)?);
+    }
+    let objects = file
+        .objects
+        .iter()
+        .map(|o| object(src, o))
+        .collect::<Result<_, _>>()?;
+    let lights = file
+        .lights
+        .iter()
+        .map(|l| light(src, l))
+        .collect::<Result<_, _>>()?;
+    let camera = file.camera.as_ref().map(|c| camera(src, c)).transpose()?;
+    let filter = match file.film.filter.as_ref().map(|s| s.get_ref().as_str()) {
+        None | Some("box") => d::FilterDesc::Box,
+        Some("gaussian") => d::FilterDesc::Gaussian {
+            stddev: file.film.filter_stddev,
+        },
+        Some(other) => {
+            return Err(src.error(
+                file.film.filter.as_ref().map(|s| s.span()),
+                format!("unknown filter '{other}': expected box or gaussian"),
+            ))
+        }
+    };
+    let r = file.render;
+    Ok(d::SceneDesc {
+        source: src.name.clone(),
+        camera,
+        film: d::FilmDesc {
+            resolution: file.film.resolution,
+            filter,
+        },
+        render: d::RenderDesc {
+            spp: r.spp,
+            max_depth: r.max_depth,
+            max_diffuse_depth: r.max_diffuse_depth,
+            max_specular_depth: r.max_specular_depth,
+            rr_depth: r.rr_depth,
+            clamp_direct: r.clamp_direct,
+            clamp_indirect: r.clamp_indirect,
+            seed: r.seed,
+        },
+        materials,
+        objects,
+        lights,
+        aovs: file
+            .aovs
+            .iter()
+            .map(|(n, s)| {
+                let aov = d::AovDesc {
+                    definition: s.get_ref().clone(),
+                    origin: at(s.span()),
+                };
+                (n.clone(), aov)
+            })
+            .collect(),
+        light_groups: file.light_groups,
+        light_group_aovs: file.light_group_aovs,
+    })
+}
+
+fn name_ref(src: &Source, s: &Option<Spanned<String>>) -> Option<NameRef> {
+    s.as_ref().map(|s| NameRef {
+        name: s.get_ref().clone(),
+        origin: src.origin(Some(s.span())),
+    })
+}
+
+fn camera(src: &Source, c: &Spanned<CameraDesc>) -> Result<d::CameraDesc, SceneError> {
+    let origin = src.origin(Some(c.span()));
+    let c = c.get_ref();
+    let fov_axis = match c.fov_axis.as_ref().map(|s| s.get_ref().as_str()) {
+        None | Some("smaller") => FovAxis::Smaller,
+        Some("larger") => FovAxis::Larger,
+        Some("x") => FovAxis::X,
+        Some("y") => FovAxis::Y,
+        Some(other) => {
+            return Err(src.error(
+                c.fov_axis.as_ref().map(|s| s.span()),
+                format!("unknown fov_axis '{other}': expected x, y, smaller or larger"),
+            ))
+        }
+    };
+    Ok(d::CameraDesc {
+        position: c.position,
+        look_at: c.look_at,
+        up: c.up,
+        fov: c.fov,
+        fov_axis,
+        aperture_radius: c.aperture_radius,
+        focus_distance: c.focus_distance,
+        origin,
+    })
+}
+
+fn material(
+    src: &Source,
+    name: &str,
+    m: &Spanned<MaterialDesc>,
+) -> Result<d::MaterialDesc, SceneError> {
+    let span = m.span();
+    let m = m.get_ref();
+    let need = |v: Option<[f32; 3]>, what: &str| -> Result<[f32; 3], SceneError> {
+        v.ok_or_else(|| {
+            src.error(
+                Some(span.clone()),
+                format!("material '{name}': expected '{what}' = [r, g, b]"),
+            )
+        })
+    };
+    let kind = match m.kind.get_ref().as_str() {
+        "diffuse" => d::MaterialKind::Diffuse { albedo: need(m.albedo, "albedo")? },
+        "translucent" => d::MaterialKind::Translucent { reflect: need(m.reflect, "reflect")?, transmit: need(m.transmit, "transmit")? },
+        "conductor" => d::MaterialKind::Conductor { f0: need(m.f0, "f0")? },
+        "dielectric" => d::MaterialKind::Dielectric { ior: m.ior, tint: m.tint },
+        "plastic" => d::MaterialKind::Plastic { albedo: need(m.albedo, "albedo")?, ior: m.ior },
+        other => {
+            return Err(src.error(
+                Some(m.kind.span()),
+                format!("unknown material type '{other}': expected diffuse, translucent, conductor, dielectric or plastic"),
+            ))
+        }
+    };
+    Ok(d::MaterialDesc {
+        kind,
+        roughness: m.roughness,
+        user_color: m.user_color,
+        origin: src.origin(Some(span)),
+    })
+}
+
+fn object(src: &Source, o: &Spanned<ObjectDesc>) -> Result<d::ObjectDesc, SceneError> {
+    let span = o.span();
+    let o = o.get_ref();
+    let missing = |what: &str| {
+        src.error(
+            Some(span.clone()),
+            format!("{} shape needs '{what}'", o.shape.get_ref()),
+        )
+    };
+    let shape = match o.shape.get_ref().as_str() {
+        "rectangle" | "rect" => d::ShapeDesc::Rectangle,
+        "cube" | "box" => d::ShapeDesc::Cube,
+        "disk" => d::ShapeDesc::Disk { segments: o.segments.unwrap_or(64) },
+        "quad" => d::ShapeDesc::Quad { corners: o.corners.ok_or_else(|| missing("corners"))? },
+        "sphere" => d::ShapeDesc::Sphere {
+            center: o.center.unwrap_or([0.0; 3]),
+            radius: o.radius.ok_or_else(|| missing("radius"))?,
+        },
+        "mesh" => {
+            let positions = o.positions.clone().ok_or_else(|| missing("positions"))?;
+            let indices = o.indices.clone().ok_or_else(|| missing("indices"))?;
+            let mesh = d::MeshData { positions, indices, normals: o.normals.clone(), uvs: None };
+            d::ShapeDesc::Mesh { parts: vec![mesh] }
+        }
+        "obj" => {
+            let file = o.file.as_ref().ok_or_else(|| missing("file"))?;
+            let path = src.dir.join(file.get_ref());
+            let parts = obj::load(&path).map_err(|message| src.error(Some(file.span()), message))?;
+            d::ShapeDesc::Mesh { parts }
+        }
+        other => {
+            return Err(src.error(
+                Some(o.shape.span()),
+                format!("unknown shape '{other}': expected rectangle, quad, cube, disk, sphere, mesh or obj"),
+            ))
+        }
+    };
+    Ok(d::ObjectDesc {
+        name: o.name.clone(),
+        shape_name: o.shape.get_ref().clone(),
+        shape,
+        transform: placement(o.translate, o.rotate, o.scale, o.matrix),
+        material: name_ref(src, &o.material),
+        lpegroups: o.lpegroups.clone(),
+        emission: o.emission,
+        holdout: o.holdout,
+        visible_camera: o.visible_camera,
+        visible_indirect: o.visible_indirect,
+        casts_shadows: o.casts_shadows,
+        origin: src.origin(Some(span)),
+    })
+}
+
+fn light(src: &Source, l: &Spanned<LightDesc>) -> Result<d::LightDesc, SceneError> {
+    let span = l.span();
+    let l = l.get_ref();
+    let kind = l.kind.get_ref().as_str();
+    let need = |v: Option<[f32; 3]>, what: &str| -> Result<[f32; 3], SceneError> {
+        v.ok_or_else(|| src.error(Some(span.clone()), format!("{kind} light needs '{what}'")))
+    };
+    let color = |v: Option<[f32; 3]>, what: &str| -> Result<[f32; 3], SceneError> {
+        v.ok_or_else(|| {
+            src.error(
+                Some(span.clone()),
+                format!("{kind} light needs '{what}' = [r, g, b]"),
+            )
+        })
+    };
+    let (shape, color) = match kind {
+        "rect" | "rectangle" => (d::LightKind::Rectangle, color(l.radiance, "radiance")?),
+        "quad" => {
+            let corners = l.corners.ok_or_else(|| src.error(Some(span.clone()), "quad light needs 'corners'"))?;
+            (d::LightKind::Quad { corners }, color(l.radiance, "radiance")?)
+        }
+        "disk" => (d::LightKind::Disk { segments: l.segments.unwrap_or(64) }, color(l.radiance, "radiance")?),
+        "sphere" => {
+            let radius = l.radius.ok_or_else(|| src.error(Some(span.clone()), "sphere light needs 'radius'"))?;
+            (d::LightKind::Sphere { center: l.center.unwrap_or([0.0; 3]), radius }, color(l.radiance, "radiance")?)
+        }
+        "point" => {
+            let position = need(l.position, "position")?;
+            (d::LightKind::Point { position }, color(l.intensity, "intensity")?)
+        }
+        "spot" => {
+            let position = need(l.position, "position")?;
+            let direction = need(l.direction, "direction")?;
+            let cone_angle = l.cone_angle.unwrap_or(60.0);
+            let cone_softness = l.cone_softness.unwrap_or(10.0);
+            (d::LightKind::Spot { position, direction, cone_angle, cone_softness }, color(l.intensity, "intensity")?)
+        }
+        "distant" => {
+            let direction = need(l.direction, "direction")?;
+            (d::LightKind::Distant { direction }, color(l.irradiance, "irradiance")?)
+        }
+        "dome" => {
+            let map = l.map.as_ref().map(|f| (src.dir.join(f.get_ref()), src.origin(Some(f.span()))));
+            // Without a colour the dome is white: strength alone.
+            (d::LightKind::Dome { map }, l.radiance.unwrap_or([1.0; 3]))
+        }
+        other => {
+            return Err(src.error(
+                Some(l.kind.span()),
+                format!("unknown light type '{other}': expected rect, quad, disk, sphere, point, spot, distant or dome"),
+            ))
+        }
+    };
+    Ok(d::LightDesc {
+        kind: shape,
+        name: l.name.clone(),
+        groups: l.groups.clone(),
+        color,
+        strength: l.strength,
+        camera_visible: l.camera_visible,
+        two_sided: l.two_sided,
+        material: name_ref(src, &l.material),
+        transform: placement(l.translate, l.rotate, l.scale, l.matrix),
+        include: l.include.clone(),
+        exclude: l.exclude.clone(),
+        origin: src.origin(Some(span)),
+    })
+}
