@@ -6,13 +6,13 @@
 
 pub mod aov;
 pub mod camera;
-pub mod comp;
 pub mod film;
 pub mod geometry;
 pub mod integrator;
 pub mod light;
 pub mod material;
 pub mod output;
+pub mod post;
 pub mod progress;
 pub mod sampling;
 pub mod scene;
