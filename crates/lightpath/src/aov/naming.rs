@@ -193,6 +193,25 @@ pub struct PartOf {
     pub group: Option<Option<String>>,
 }
 
+/// The order parts of a partition are listed in: the standard set as LPE.md §7 lists it,
+/// bounces by count (`plus` last), light groups by name with the default group last.
+pub fn part_order(part: &PartOf) -> (usize, u32, bool, String) {
+    match part.kind {
+        PartitionKind::Standard => {
+            let i = lpe::BEAUTY_PARTITION.iter().position(|n| *n == part.name);
+            (i.unwrap_or(usize::MAX), 0, false, part.name.clone())
+        }
+        PartitionKind::Bounces => {
+            let (i, plus) = parse_bounce(&part.name).unwrap_or((u32::MAX, true));
+            (0, i, plus, part.name.clone())
+        }
+        PartitionKind::LightGroups => {
+            let default = matches!(part.group, Some(None));
+            (0, 0, default, part.name.clone())
+        }
+    }
+}
+
 /// Reads the partition attributes back from a header's attributes, in name order.
 pub fn parts_from_attributes(attributes: &[(String, String)]) -> Vec<PartOf> {
     let get = |key: String| attributes.iter().find(|(k, _)| *k == key).map(|(_, v)| v);

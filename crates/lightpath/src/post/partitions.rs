@@ -18,19 +18,18 @@ pub struct PartitionCheck {
 /// Finds the partitions an EXR's header declares (the standard set, light-group splits,
 /// bounce AOVs) and measures each.
 pub fn check_partitions(exr: &ExrContents) -> Vec<PartitionCheck> {
-    // One candidate per (whole, partition kind), parts in name order.
+    // One candidate per (whole, partition kind), parts in their natural order.
+    let mut parts = naming::parts_from_attributes(&exr.attributes);
+    parts.sort_by_key(|p| (p.whole.clone(), p.kind, naming::part_order(p)));
     let mut candidates: Vec<(String, Vec<String>)> = Vec::new();
-    let mut keyed: Vec<((String, PartitionKind), Vec<String>)> = Vec::new();
-    for p in naming::parts_from_attributes(&exr.attributes) {
-        let key = (p.whole, p.kind);
-        match keyed.iter_mut().find(|(k, _)| *k == key) {
-            Some((_, parts)) => parts.push(p.name),
-            None => keyed.push((key, vec![p.name])),
+    let mut last: Option<(String, PartitionKind)> = None;
+    for p in parts {
+        let key = Some((p.whole.clone(), p.kind));
+        match candidates.last_mut() {
+            Some((_, names)) if key == last => names.push(p.name),
+            _ => candidates.push((p.whole.clone(), vec![p.name])),
         }
-    }
-    keyed.sort_by(|a, b| (&a.0 .0, a.0 .1).cmp(&(&b.0 .0, b.0 .1)));
-    for ((whole, _), parts) in keyed {
-        candidates.push((whole, parts));
+        last = key;
     }
     candidates
         .into_iter()
