@@ -6,7 +6,6 @@
 
 pub mod aov;
 pub mod camera;
-pub mod comp;
 pub mod error;
 pub mod events;
 pub mod film;
@@ -15,6 +14,7 @@ pub mod integrator;
 pub mod light;
 pub mod material;
 pub mod output;
+pub mod post;
 pub mod progress;
 pub mod sampling;
 pub mod scene;

@@ -3,7 +3,8 @@
 use clap::{Parser, Subcommand};
 use lightpath::aov::{self, AovSpec};
 use lightpath::output;
-use std::io::{BufRead, Write};
+use lightpath::progress::{PeriodicLines, Progress, Silent};
+use std::io::{BufRead, IsTerminal, Write};
 use std::path::PathBuf;
 use std::process::ExitCode;
 
@@ -178,7 +179,7 @@ fn main() -> ExitCode {
         Command::Lpe(cmd) => lpe_command(cmd),
         Command::Aovs { exr, tolerance } => aovs_command(&exr, tolerance),
         Command::Comp(args) => comp_command(args),
-        Command::Merge { inputs, output } => match lightpath::comp::merge(&inputs, &output) {
+        Command::Merge { inputs, output } => match lightpath::post::merge(&inputs, &output) {
             Ok(spp) => {
                 say!("wrote {} ({} samples per pixel)", output.display(), spp);
                 ExitCode::SUCCESS
@@ -211,7 +212,7 @@ fn aovs_command(path: &std::path::Path, tolerance: f32) -> ExitCode {
     for (name, def) in &aovs {
         say!("  {name:<24} {def}");
     }
-    let checks = lightpath::comp::check_partitions(&exr);
+    let checks = lightpath::post::check_partitions(&exr);
     if checks.is_empty() {
         say!("no known partitions (standard set, light groups, bounces) to check");
     }
@@ -234,74 +235,17 @@ fn aovs_command(path: &std::path::Path, tolerance: f32) -> ExitCode {
     }
 }
 
-fn parse_gain(arg: &str) -> Result<(String, glam::Vec3A), String> {
-    let (group, value) = arg.split_once('=').ok_or("expected GROUP=GAIN")?;
-    let nums: Result<Vec<f32>, _> = value.split(',').map(|v| v.trim().parse::<f32>()).collect();
-    match nums.map_err(|_| format!("bad gain '{value}'"))?.as_slice() {
-        [g] => Ok((group.trim().to_string(), glam::Vec3A::splat(*g))),
-        [r, g, b] => Ok((group.trim().to_string(), glam::Vec3A::new(*r, *g, *b))),
-        _ => Err("a gain is one number or R,G,B".into()),
-    }
-}
-
 fn comp_command(args: CompArgs) -> ExitCode {
+    let job = lightpath::post::comp::CompJob {
+        exr: args.exr.clone(),
+        expression: args.expression.clone(),
+        gains: args.gains.clone(),
+        base: args.base.clone(),
+        output: args.output.clone(),
+        exposure: args.exposure,
+    };
     let run = || -> Result<(), String> {
-        let exr = output::read_exr(&args.exr)?;
-        let mut terms = match &args.expression {
-            Some(e) => {
-                lightpath::comp::parse(e).map_err(|m| format!("in the expression {e:?}: {m}"))?
-            }
-            None => vec![],
-        };
-        let gains: Vec<(String, glam::Vec3A)> = args
-            .gains
-            .iter()
-            .map(|g| parse_gain(g))
-            .collect::<Result<_, _>>()?;
-        if terms.is_empty() {
-            terms = lightpath::comp::gain_terms(&args.base, &gains);
-        } else if !gains.is_empty() {
-            terms.extend(
-                lightpath::comp::gain_terms(&args.base, &gains)
-                    .into_iter()
-                    .skip(1),
-            );
-        }
-        let rgb = lightpath::comp::evaluate(&exr, &terms)?;
-        let mut channels: Vec<(String, Vec<f32>)> = ["R", "G", "B"]
-            .iter()
-            .map(|c| c.to_string())
-            .zip(rgb.iter().cloned())
-            .collect();
-        if let Some(a) = exr.channel("A") {
-            channels.push(("A".into(), a.to_vec()));
-        }
-        let description = args.expression.clone().unwrap_or_default()
-            + &args
-                .gains
-                .iter()
-                .map(|g| format!(" --gain {g}"))
-                .collect::<String>();
-        let attributes = vec![(
-            format!("{}beauty", output::AOV_ATTRIBUTE_PREFIX),
-            format!("comp of {}: {}", args.exr.display(), description.trim()),
-        )];
-        output::write_channels(
-            &args.output,
-            exr.width,
-            exr.height,
-            channels,
-            &attributes,
-            Default::default(),
-        )?;
-        let png = args.output.with_extension("png");
-        output::write_png_rgb(
-            &png,
-            exr.width as u32,
-            exr.height as u32,
-            &rgb,
-            args.exposure,
-        )?;
+        let png = lightpath::post::comp::run(&job)?;
         say!("wrote {} and {}", args.output.display(), png.display());
         Ok(())
     };
@@ -312,6 +256,88 @@ fn comp_command(args: CompArgs) -> ExitCode {
             ExitCode::FAILURE
         }
     }
+}
+
+/// How a render reports progress.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum ProgressChoice {
+    /// An `indicatif` bar: stderr is a terminal.
+    Bar,
+    /// A plain line every 10 s: stderr is a log (a farm's), where a bar shows nothing.
+    Lines,
+    /// `--quiet`.
+    Silent,
+}
+
+/// The reporter for `--quiet` and whether stderr is a terminal (a pure function: tested).
+fn choose_progress(quiet: bool, stderr_is_terminal: bool) -> ProgressChoice {
+    match (quiet, stderr_is_terminal) {
+        (true, _) => ProgressChoice::Silent,
+        (false, true) => ProgressChoice::Bar,
+        (false, false) => ProgressChoice::Lines,
+    }
+}
+
+fn progress_reporter(choice: ProgressChoice) -> Box<dyn Progress> {
+    match choice {
+        ProgressChoice::Bar => Box::new(Bar(indicatif::ProgressBar::hidden())),
+        ProgressChoice::Lines => Box::new(PeriodicLines::new(std::time::Duration::from_secs(10))),
+        ProgressChoice::Silent => Box::new(Silent),
+    }
+}
+
+/// `Progress` as an `indicatif` bar; hidden until `start` knows the total.
+struct Bar(indicatif::ProgressBar);
+
+impl Progress for Bar {
+    fn start(&self, total: u64, _samples: u64) {
+        self.0.set_length(total);
+        self.0.set_style(
+            indicatif::ProgressStyle::with_template(
+                "{spinner} rendering [{bar:40}] {pos}/{len} {elapsed_precise} (eta {eta})",
+            )
+            .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar())
+            .progress_chars("=> "),
+        );
+        self.0
+            .set_draw_target(indicatif::ProgressDrawTarget::stderr());
+    }
+    fn advance(&self, units: u64) {
+        self.0.inc(units);
+    }
+    fn finish(&self) {
+        self.0.finish_and_clear();
+    }
+}
+
+/// The AOV plan from the command line and the scene description.
+fn plan_aovs(
+    args: &RenderArgs,
+    desc: &lightpath::scene::desc::SceneDesc,
+) -> Result<Vec<AovSpec>, String> {
+    let request = aov::plan::PlanRequest {
+        standard: args.aov_set == "standard",
+        scene_aovs: desc
+            .aovs
+            .iter()
+            .map(|(n, d)| (n.clone(), d.definition.clone()))
+            .collect(),
+        extra: aov::plan::parse_aov_args(&args.aovs).map_err(|e| e.to_string())?,
+        bounces: args.bounces,
+        split: args.light_group_aovs.clone(),
+        scene_split: desc.light_group_aovs.clone(),
+        light_groups: args.light_groups || desc.light_groups,
+        scene_light_groups: desc
+            .lights
+            .iter()
+            .flat_map(|l| l.groups.iter().cloned())
+            .collect(),
+    };
+    let plan = aov::plan::AovPlan::build(&request).map_err(|e| e.to_string())?;
+    for w in &plan.warnings {
+        tell!("warning: {w}");
+    }
+    Ok(plan.specs)
 }
 
 fn render(args: RenderArgs) -> ExitCode {
@@ -349,60 +375,13 @@ fn render(args: RenderArgs) -> ExitCode {
     if let Some(s) = args.seed {
         desc.render.seed = s;
     }
-    let mut specs = Vec::new();
-    if args.aov_set == "standard" {
-        specs.extend(aov::standard());
-    }
-    specs.extend(
-        desc.aovs
-            .iter()
-            .map(|(n, d)| AovSpec::new(n.clone(), d.definition.clone())),
-    );
-    for a in &args.aovs {
-        match AovSpec::parse(a) {
-            Ok(s) => specs.push(s),
-            Err(e) => {
-                tell!("error: --aov {a}: {e}");
-                return ExitCode::FAILURE;
-            }
+    let specs = match plan_aovs(&args, &desc) {
+        Ok(s) => s,
+        Err(e) => {
+            tell!("error: {e}");
+            return ExitCode::FAILURE;
         }
-    }
-    if let Some(k) = args.bounces {
-        specs.extend(aov::bounces(k));
-    }
-    let mut specs = aov::assemble(specs);
-    let mut split: Vec<String> = args.light_group_aovs.clone();
-    split.extend(
-        desc.light_group_aovs
-            .iter()
-            .filter(|n| !args.light_group_aovs.contains(n))
-            .cloned(),
-    );
-    if args.light_groups || desc.light_groups {
-        split.push("beauty".into());
-    }
-    split.sort();
-    split.dedup();
-    for name in &split {
-        match specs.iter_mut().find(|s| &s.name == name) {
-            Some(s) => s.split_light_groups = true,
-            None => {
-                tell!(
-                    "error: --light-group-aovs names '{name}', which is not an AOV of this render"
-                );
-                return ExitCode::FAILURE;
-            }
-        }
-    }
-    if !split.is_empty() {
-        let mut groups: Vec<&String> = desc.lights.iter().flat_map(|l| &l.groups).collect();
-        groups.sort();
-        groups.dedup();
-        let total = specs.len() + split.len() * (groups.len() + 1);
-        if total > 64 {
-            tell!("warning: the light-group split makes {total} AOVs");
-        }
-    }
+    };
     let scene = match lightpath::Scene::build(&desc, &specs) {
         Ok(s) => s,
         Err(e) => {
@@ -419,38 +398,23 @@ fn render(args: RenderArgs) -> ExitCode {
             w.message
         );
     }
-    let stem = match args.output.as_ref() {
-        Some(p) => p.with_extension(""),
-        None => PathBuf::from(
-            std::path::Path::new(&args.scene)
-                .file_stem()
-                .map(|s| s.to_os_string())
-                .unwrap_or_else(|| "render".into()),
-        ),
-    };
-    let exr_path = args
-        .output
-        .clone()
-        .unwrap_or_else(|| stem.with_extension("exr"));
-    let png_path = stem.with_extension("png");
+    let paths = output::naming::output_paths(&args.scene, args.output.as_deref());
+    let (exr_path, png_path) = (paths.exr, paths.png);
     let options = lightpath::RenderOptions {
         spp: scene.settings.spp,
         first_sample: args.first_sample,
         progress: !args.quiet,
     };
+    // wired to render_with_progress at merge
+    let _progress = progress_reporter(choose_progress(args.quiet, std::io::stderr().is_terminal()));
     let (film, stats) = lightpath::render(&scene, &options);
-    let extra = vec![
-        ("lightpath/scene".to_string(), src.name.clone()),
-        ("lightpath/spp".to_string(), scene.settings.spp.to_string()),
-        (
-            "lightpath/first_sample".to_string(),
-            args.first_sample.to_string(),
-        ),
-        (
-            "lightpath/seed".to_string(),
-            scene.settings.seed.to_string(),
-        ),
-    ];
+    let extra = output::naming::RenderMetadata {
+        scene: src.name.clone(),
+        spp: scene.settings.spp,
+        first_sample: args.first_sample,
+        seed: scene.settings.seed,
+    }
+    .attributes();
     let derived = output::derived_aovs(&film, &scene.aovs);
     if let Err(e) = output::write_png(&png_path, &film, 0, args.exposure) {
         tell!("error: {e}");
@@ -665,5 +629,18 @@ fn answer_case(line: &str) -> serde_json::Value {
     match compiler.compile() {
         Ok(a) => json!({ "match": !a.run(&path).unwrap_or(&[]).is_empty() }),
         Err(e) => json!({ "error": e.message, "span": [e.span.start, e.span.end] }),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn progress_is_a_bar_in_a_terminal_lines_in_a_log_and_nothing_when_quiet() {
+        assert_eq!(choose_progress(false, true), ProgressChoice::Bar);
+        assert_eq!(choose_progress(false, false), ProgressChoice::Lines);
+        assert_eq!(choose_progress(true, true), ProgressChoice::Silent);
+        assert_eq!(choose_progress(true, false), ProgressChoice::Silent);
     }
 }

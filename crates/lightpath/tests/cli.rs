@@ -430,3 +430,106 @@ fn a_scene_can_ask_for_light_group_splits() {
         assert!(exr.channel(name).is_some(), "missing {name}");
     }
 }
+
+#[test]
+fn comp_and_aovs_read_parts_from_structured_attributes_not_prose() {
+    let dir = Scratch::new("prose");
+    let exr = dir.join("c.exr");
+    succeed(
+        lightpath()
+            .args([
+                "render",
+                "cornell",
+                "--quiet",
+                "--spp",
+                "2",
+                "--resolution",
+                "8x8",
+                "--light-groups",
+                "--bounces",
+                "2",
+                "-o",
+            ])
+            .arg(&exr),
+    );
+    // Every definition becomes prose that names no group and no partition.
+    let src = lightpath::output::read_exr(&exr).unwrap();
+    let attributes: Vec<(String, String)> = src
+        .attributes
+        .iter()
+        .map(
+            |(k, v)| match k.strip_prefix(lightpath::output::AOV_ATTRIBUTE_PREFIX) {
+                Some(_) => (k.clone(), "some words a user wrote".to_string()),
+                None => (k.clone(), v.clone()),
+            },
+        )
+        .collect();
+    assert!(attributes
+        .iter()
+        .any(|(k, v)| k == "lightpath/lightgroup/beauty_key" && v == "key"));
+    let prose = dir.join("prose.exr");
+    lightpath::output::write_channels(
+        &prose,
+        src.width,
+        src.height,
+        src.channels.clone(),
+        &attributes,
+        Default::default(),
+    )
+    .unwrap();
+    let report = succeed(lightpath().arg("aovs").arg(&prose));
+    let text = String::from_utf8(report.stdout).unwrap();
+    assert_eq!(text.matches("ok   beauty =").count(), 3, "{text}");
+    assert!(
+        text.contains("beauty = beauty_fill + beauty_key + beauty__default"),
+        "{text}"
+    );
+
+    let (by_gain, by_sum) = (dir.join("g.exr"), dir.join("s.exr"));
+    succeed(
+        lightpath()
+            .arg("comp")
+            .arg(&prose)
+            .args(["--gain", "key=2", "--gain", "_default=0.5", "-o"])
+            .arg(&by_gain),
+    );
+    succeed(
+        lightpath()
+            .arg("comp")
+            .arg(&prose)
+            .args(["beauty + beauty_key - 0.5*beauty__default", "-o"])
+            .arg(&by_sum),
+    );
+    let (g, s) = (
+        lightpath::output::read_exr(&by_gain).unwrap(),
+        lightpath::output::read_exr(&by_sum).unwrap(),
+    );
+    assert_eq!(g.channel("G").unwrap(), s.channel("G").unwrap());
+
+    // Without the structured attributes, a gain has no part to find.
+    let bare: Vec<(String, String)> = attributes
+        .into_iter()
+        .filter(|(k, _)| !k.starts_with("lightpath/part/"))
+        .collect();
+    let stripped = dir.join("stripped.exr");
+    lightpath::output::write_channels(
+        &stripped,
+        src.width,
+        src.height,
+        src.channels,
+        &bare,
+        Default::default(),
+    )
+    .unwrap();
+    let refused = refuse(
+        lightpath()
+            .arg("comp")
+            .arg(&stripped)
+            .args(["--gain", "key=2", "-o"])
+            .arg(dir.join("x.exr")),
+    );
+    assert!(
+        refused.contains("no light-group part of 'beauty'"),
+        "{refused}"
+    );
+}

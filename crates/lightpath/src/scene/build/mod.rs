@@ -191,14 +191,8 @@ fn output_aovs(automaton: &Automaton, aovs: &[AovSpec], light_groups: &[String])
         for g in parts {
             let base = &out[k];
             out.push(Aov {
-                name: crate::aov::split_name(&spec.name, g),
-                definition: format!(
-                    "{} ({})",
-                    spec.definition,
-                    g.map_or("lights without a group".to_string(), |g| format!(
-                        "light group '{g}'"
-                    ))
-                ),
+                name: crate::aov::naming::split_name(&spec.name, g),
+                definition: crate::aov::naming::split_definition(&spec.definition, g),
                 expression: base.expression.clone(),
                 flags: base.flags,
                 split_base: None,

@@ -1,12 +1,11 @@
-//! Writing renders: one single-part EXR with every AOV (beauty as R, G, B, A and each AOV
-//! as `<name>.R/.G/.B`, the expressions in the header) and a PNG preview of the beauty.
-//! Both are written to a temporary file beside the target, then renamed into place, so a
-//! crash never leaves a half-written image under the real name.
+//! The single-part EXR: writing a film with its AOVs and header, reading one back.
 
+use super::atomically;
+use crate::aov::naming::{self, channel_names, AOV_ATTRIBUTE_PREFIX};
 use crate::film::Film;
 use crate::scene::Aov;
-use exr::prelude::*;
-use std::path::{Path, PathBuf};
+use ::exr::prelude::*;
+use std::path::Path;
 
 /// How EXR channels are stored.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
@@ -60,49 +59,6 @@ impl ExrCompression {
         Encoding {
             compression,
             ..Encoding::SMALL_LOSSLESS
-        }
-    }
-}
-
-/// Header attribute holding an AOV's definition: `lightpath/aov/<name>`.
-pub const AOV_ATTRIBUTE_PREFIX: &str = "lightpath/aov/";
-
-/// The channel names of AOV `name`: beauty is plain R, G, B.
-pub fn channel_names(name: &str) -> [String; 3] {
-    if name == "beauty" {
-        ["R".into(), "G".into(), "B".into()]
-    } else {
-        [
-            format!("{name}.R"),
-            format!("{name}.G"),
-            format!("{name}.B"),
-        ]
-    }
-}
-
-fn temp_path(path: &Path) -> PathBuf {
-    let mut name = path
-        .file_name()
-        .map(|n| n.to_os_string())
-        .unwrap_or_default();
-    name.push(format!(".tmp-{}", std::process::id()));
-    path.with_file_name(name)
-}
-
-/// Runs `write` on a temporary path, then renames it to `path`.
-fn atomically(
-    path: &Path,
-    write: impl FnOnce(&Path) -> std::result::Result<(), String>,
-) -> std::result::Result<(), String> {
-    let tmp = temp_path(path);
-    match write(&tmp) {
-        Ok(()) => std::fs::rename(&tmp, path).map_err(|e| {
-            let _ = std::fs::remove_file(&tmp);
-            format!("cannot move {} into place: {e}", path.display())
-        }),
-        Err(e) => {
-            let _ = std::fs::remove_file(&tmp);
-            Err(e)
         }
     }
 }
@@ -162,17 +118,25 @@ pub fn write_exr(
         for name in channel_names(&aov.name) {
             channels.push((name, planes.next().unwrap_or_default()));
         }
-        attributes.push((
-            format!("{AOV_ATTRIBUTE_PREFIX}{}", aov.name),
-            aov.definition.clone(),
-        ));
+        attributes.push((naming::aov_attribute(&aov.name), aov.definition.clone()));
     }
-    channels.push(("A".into(), planes.next().unwrap_or_default()));
+    let parts: Vec<naming::PartInfo> = aovs
+        .iter()
+        .map(|a| naming::PartInfo {
+            name: &a.name,
+            split_of: a
+                .part_of
+                .and_then(|k| aovs.get(k as usize))
+                .map(|w| w.name.as_str()),
+        })
+        .collect();
+    attributes.extend(naming::partition_attributes(&parts));
+    channels.push((naming::ALPHA.into(), planes.next().unwrap_or_default()));
     for d in derived {
         for (name, values) in channel_names(&d.name).into_iter().zip(d.rgb) {
             channels.push((name, values));
         }
-        attributes.push((format!("{AOV_ATTRIBUTE_PREFIX}{}", d.name), d.definition));
+        attributes.push((naming::aov_attribute(&d.name), d.definition));
     }
     attributes.extend(extra.iter().cloned());
     write_channels(path, width, height, channels, &attributes, options)
@@ -331,52 +295,5 @@ pub fn read_exr(path: &Path) -> std::result::Result<ExrContents, String> {
         height: layer.size.height(),
         channels,
         attributes,
-    })
-}
-
-fn srgb(linear: f32) -> u8 {
-    let c = linear.max(0.0);
-    let s = if c <= 0.003_130_8 {
-        12.92 * c
-    } else {
-        1.055 * c.powf(1.0 / 2.4) - 0.055
-    };
-    (s.clamp(0.0, 1.0) * 255.0 + 0.5) as u8
-}
-
-/// A PNG of AOV `k` in sRGB, scaled by 2^`exposure`.
-pub fn write_png(
-    path: &Path,
-    film: &Film,
-    k: usize,
-    exposure: f32,
-) -> std::result::Result<(), String> {
-    let rgb = [film.channel(k, 0), film.channel(k, 1), film.channel(k, 2)];
-    write_png_rgb(path, film.width, film.height, &rgb, exposure)
-}
-
-/// A PNG of three linear planes in sRGB, scaled by 2^`exposure`.
-pub fn write_png_rgb(
-    path: &Path,
-    width: u32,
-    height: u32,
-    rgb: &[Vec<f32>; 3],
-    exposure: f32,
-) -> std::result::Result<(), String> {
-    let scale = 2f32.powf(exposure);
-    let mut bytes = Vec::with_capacity(rgb[0].len() * 3);
-    for ((r, g), b) in rgb[0].iter().zip(&rgb[1]).zip(&rgb[2]) {
-        bytes.extend_from_slice(&[srgb(r * scale), srgb(g * scale), srgb(b * scale)]);
-    }
-    atomically(path, |tmp| {
-        image::save_buffer_with_format(
-            tmp,
-            &bytes,
-            width,
-            height,
-            image::ColorType::Rgb8,
-            image::ImageFormat::Png,
-        )
-        .map_err(|e| format!("cannot write {}: {e}", path.display()))
     })
 }

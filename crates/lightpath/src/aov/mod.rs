@@ -1,7 +1,11 @@
 //! Which AOVs a render produces: beauty first, then the standard set, the scene's own,
 //! the command line's, and light-group splits. One owner for AOV names.
 
+pub mod naming;
+pub mod plan;
+
 use lpe::STANDARD_NAMES;
+use naming::{bounce_name, bounce_plus_name, BEAUTY};
 
 /// An AOV to render: its channel name and its LPE definition.
 #[derive(Clone, Debug, PartialEq, Eq)]
@@ -52,7 +56,7 @@ impl AovSpec {
 pub fn standard() -> Vec<AovSpec> {
     STANDARD_NAMES
         .iter()
-        .filter(|(n, _)| *n != "beauty")
+        .filter(|(n, _)| *n != BEAUTY)
         .map(|(n, _)| AovSpec::new(*n, format!("lpe:{n}")))
         .collect()
 }
@@ -60,7 +64,7 @@ pub fn standard() -> Vec<AovSpec> {
 /// Beauty plus the given AOVs, in order, without duplicate names (a later definition
 /// replaces an earlier one; an AOV named `beauty` replaces the default beauty).
 pub fn assemble(extra: impl IntoIterator<Item = AovSpec>) -> Vec<AovSpec> {
-    let mut out = vec![AovSpec::new("beauty", "lpe:beauty")];
+    let mut out = vec![AovSpec::new(BEAUTY, format!("lpe:{BEAUTY}"))];
     for a in extra {
         match out.iter_mut().find(|o| o.name == a.name) {
             Some(existing) => *existing = a,
@@ -74,10 +78,10 @@ pub fn assemble(extra: impl IntoIterator<Item = AovSpec>) -> Vec<AovSpec> {
 /// (exactly i scattering events) up to `bounce<k-1>`, and `bounce<k>plus`.
 pub fn bounces(k: u32) -> Vec<AovSpec> {
     let k = k.clamp(1, 63);
-    let mut out = vec![AovSpec::new("bounce0", "C[<L.>O]")];
-    out.extend((1..k).map(|i| AovSpec::new(format!("bounce{i}"), format!("C[DS]{{{i}}}[<L.>O]"))));
+    let mut out = vec![AovSpec::new(bounce_name(0), "C[<L.>O]")];
+    out.extend((1..k).map(|i| AovSpec::new(bounce_name(i), format!("C[DS]{{{i}}}[<L.>O]"))));
     out.push(AovSpec::new(
-        format!("bounce{k}plus"),
+        bounce_plus_name(k),
         format!("C[DS]{{{k},}}[<L.>O]"),
     ));
     out
@@ -86,10 +90,7 @@ pub fn bounces(k: u32) -> Vec<AovSpec> {
 /// The name of AOV `aov`'s part for light group `group` (`None`: the default group of
 /// lights without a group, and glowing objects).
 pub fn split_name(aov: &str, group: Option<&str>) -> String {
-    match group {
-        Some(g) => format!("{aov}_{g}"),
-        None => format!("{aov}__default"),
-    }
+    naming::split_name(aov, group)
 }
 
 /// Beauty split per light group as LPEs: `beauty_<group>` for each group, and
@@ -99,7 +100,12 @@ pub fn split_name(aov: &str, group: Option<&str>) -> String {
 pub fn light_group_split(groups: &[String]) -> Vec<AovSpec> {
     let mut out: Vec<AovSpec> = groups
         .iter()
-        .map(|g| AovSpec::new(format!("beauty_{g}"), format!("C[DS]*[<L.'{g}'><O'{g}'>]")))
+        .map(|g| {
+            AovSpec::new(
+                split_name(BEAUTY, Some(g)),
+                format!("C[DS]*[<L.'{g}'><O'{g}'>]"),
+            )
+        })
         .collect();
     let all: String = groups
         .iter()
@@ -111,7 +117,7 @@ pub fn light_group_split(groups: &[String]) -> Vec<AovSpec> {
     } else {
         format!("C[DS]*[<L.[^{all}]><O[^{all}]>]")
     };
-    out.push(AovSpec::new("beauty__default", default));
+    out.push(AovSpec::new(split_name(BEAUTY, None), default));
     out
 }
 

@@ -1,0 +1,300 @@
+//! Every channel, part and header name Lightpath writes or reads: the one owner, so the
+//! renderer, the EXR writer and the post-processing commands cannot drift apart.
+//!
+//! Header schema (all text attributes, written in name order):
+//! - `lightpath/aov/<name>`: the AOV's definition (prose for people; never parsed).
+//! - `lightpath/part/<name>`: the AOV `<name>` is a part of (its whole).
+//! - `lightpath/partition/<name>`: which partition of that whole it belongs to:
+//!   `standard` (LPE.md §7 set), `bounces` or `lightgroups`.
+//! - `lightpath/lightgroup/<name>`: for a `lightgroups` part, its light group, or
+//!   `__default` for lights without a group (and glowing objects).
+//! - `lightpath/scene`, `lightpath/spp`, `lightpath/first_sample`, `lightpath/seed`.
+
+/// The beauty AOV, stored as the plain `R, G, B` channels (plus `A`).
+pub const BEAUTY: &str = "beauty";
+/// The alpha channel.
+pub const ALPHA: &str = "A";
+/// The group of lights without a group, as a split's suffix and an attribute value.
+pub const DEFAULT_GROUP: &str = "__default";
+/// How `--gain` names the default group (`_default`: `beauty` + `_` + `_default`).
+pub const DEFAULT_GROUP_ARG: &str = "_default";
+
+/// Header attribute prefixes.
+pub const AOV_ATTRIBUTE_PREFIX: &str = "lightpath/aov/";
+pub const PART_ATTRIBUTE_PREFIX: &str = "lightpath/part/";
+pub const PARTITION_ATTRIBUTE_PREFIX: &str = "lightpath/partition/";
+pub const LIGHTGROUP_ATTRIBUTE_PREFIX: &str = "lightpath/lightgroup/";
+/// Render metadata attributes.
+pub const SCENE_ATTRIBUTE: &str = "lightpath/scene";
+pub const SPP_ATTRIBUTE: &str = "lightpath/spp";
+pub const FIRST_SAMPLE_ATTRIBUTE: &str = "lightpath/first_sample";
+pub const SEED_ATTRIBUTE: &str = "lightpath/seed";
+
+/// A kind of partition an AOV can be a part of.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub enum PartitionKind {
+    Standard,
+    Bounces,
+    LightGroups,
+}
+
+impl PartitionKind {
+    pub fn as_str(self) -> &'static str {
+        match self {
+            PartitionKind::Standard => "standard",
+            PartitionKind::Bounces => "bounces",
+            PartitionKind::LightGroups => "lightgroups",
+        }
+    }
+    pub fn parse(s: &str) -> Option<PartitionKind> {
+        [
+            PartitionKind::Standard,
+            PartitionKind::Bounces,
+            PartitionKind::LightGroups,
+        ]
+        .into_iter()
+        .find(|k| k.as_str() == s)
+    }
+}
+
+/// The channel names of AOV `name`: beauty is plain R, G, B.
+pub fn channel_names(name: &str) -> [String; 3] {
+    if name == BEAUTY {
+        ["R".into(), "G".into(), "B".into()]
+    } else {
+        ["R", "G", "B"].map(|c| format!("{name}.{c}"))
+    }
+}
+
+/// The name of AOV `aov`'s part for light group `group` (`None`: the default group).
+pub fn split_name(aov: &str, group: Option<&str>) -> String {
+    match group {
+        Some(g) => format!("{aov}_{g}"),
+        None => format!("{aov}{DEFAULT_GROUP}"),
+    }
+}
+
+/// The light group of part `part` of split AOV `whole` (`Some(None)`: the default group);
+/// `None` if `part` is not named as a part of `whole`.
+pub fn split_group<'a>(whole: &str, part: &'a str) -> Option<Option<&'a str>> {
+    let rest = part.strip_prefix(whole)?;
+    if rest == DEFAULT_GROUP {
+        return Some(None);
+    }
+    rest.strip_prefix('_').filter(|g| !g.is_empty()).map(Some)
+}
+
+/// The human-readable definition of a light-group part (prose: nothing parses it).
+pub fn split_definition(definition: &str, group: Option<&str>) -> String {
+    match group {
+        Some(g) => format!("{definition} (light group '{g}')"),
+        None => format!("{definition} (lights without a group)"),
+    }
+}
+
+/// The part named by `--gain GROUP=…` for split AOV `base`.
+pub fn gain_part(base: &str, group: &str) -> String {
+    if group == DEFAULT_GROUP_ARG {
+        split_name(base, None)
+    } else {
+        split_name(base, Some(group))
+    }
+}
+
+/// Bounce AOV `bounce<i>`.
+pub fn bounce_name(i: u32) -> String {
+    format!("bounce{i}")
+}
+
+/// The last bounce AOV, `bounce<k>plus`: k or more scattering events.
+pub fn bounce_plus_name(k: u32) -> String {
+    format!("bounce{k}plus")
+}
+
+/// A bounce AOV's name parsed back: `(i, false)` for `bounce<i>`, `(k, true)` for
+/// `bounce<k>plus`.
+pub fn parse_bounce(name: &str) -> Option<(u32, bool)> {
+    let rest = name.strip_prefix("bounce")?;
+    let (digits, plus) = match rest.strip_suffix("plus") {
+        Some(d) => (d, true),
+        None => (rest, false),
+    };
+    if digits.is_empty() || !digits.bytes().all(|b| b.is_ascii_digit()) {
+        return None;
+    }
+    digits.parse().ok().map(|n| (n, plus))
+}
+
+/// Attribute name holding AOV `name`'s definition.
+pub fn aov_attribute(name: &str) -> String {
+    format!("{AOV_ATTRIBUTE_PREFIX}{name}")
+}
+
+/// An AOV as the partition attributes see it: its name and, for a light-group part, the
+/// AOV it is a part of.
+pub struct PartInfo<'a> {
+    pub name: &'a str,
+    pub split_of: Option<&'a str>,
+}
+
+/// The structured partition attributes for a render's AOVs: light-group parts always;
+/// the standard set and the bounce AOVs when all their members are present (as
+/// `check_partitions` needs every part to sum them).
+pub fn partition_attributes(aovs: &[PartInfo]) -> Vec<(String, String)> {
+    let has = |n: &str| aovs.iter().any(|a| a.name == n);
+    let mut out = Vec::new();
+    let mut mark = |name: &str, whole: &str, kind: PartitionKind, group: Option<&str>| {
+        out.push((format!("{PART_ATTRIBUTE_PREFIX}{name}"), whole.to_string()));
+        out.push((
+            format!("{PARTITION_ATTRIBUTE_PREFIX}{name}"),
+            kind.as_str().to_string(),
+        ));
+        if kind == PartitionKind::LightGroups {
+            out.push((
+                format!("{LIGHTGROUP_ATTRIBUTE_PREFIX}{name}"),
+                group.unwrap_or(DEFAULT_GROUP).to_string(),
+            ));
+        }
+    };
+    if has(BEAUTY) && lpe::BEAUTY_PARTITION.iter().all(|n| has(n)) {
+        for n in lpe::BEAUTY_PARTITION {
+            mark(n, BEAUTY, PartitionKind::Standard, None);
+        }
+    }
+    if let Some(k) = aovs
+        .iter()
+        .find_map(|a| parse_bounce(a.name).filter(|b| b.1).map(|b| b.0))
+    {
+        let mut parts: Vec<String> = (0..k).map(bounce_name).collect();
+        parts.push(bounce_plus_name(k));
+        if has(BEAUTY) && parts.iter().all(|p| has(p)) {
+            for p in &parts {
+                mark(p, BEAUTY, PartitionKind::Bounces, None);
+            }
+        }
+    }
+    for a in aovs {
+        if let Some(whole) = a.split_of {
+            if let Some(group) = split_group(whole, a.name) {
+                mark(a.name, whole, PartitionKind::LightGroups, group);
+            }
+        }
+    }
+    out
+}
+
+/// One part as read back from a header.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct PartOf {
+    pub name: String,
+    pub whole: String,
+    pub kind: PartitionKind,
+    /// For a light-group part: its group, `None` for the default group.
+    pub group: Option<Option<String>>,
+}
+
+/// The order parts of a partition are listed in: the standard set as LPE.md §7 lists it,
+/// bounces by count (`plus` last), light groups by name with the default group last.
+pub fn part_order(part: &PartOf) -> (usize, u32, bool, String) {
+    match part.kind {
+        PartitionKind::Standard => {
+            let i = lpe::BEAUTY_PARTITION.iter().position(|n| *n == part.name);
+            (i.unwrap_or(usize::MAX), 0, false, part.name.clone())
+        }
+        PartitionKind::Bounces => {
+            let (i, plus) = parse_bounce(&part.name).unwrap_or((u32::MAX, true));
+            (0, i, plus, part.name.clone())
+        }
+        PartitionKind::LightGroups => {
+            let default = matches!(part.group, Some(None));
+            (0, 0, default, part.name.clone())
+        }
+    }
+}
+
+/// Reads the partition attributes back from a header's attributes, in name order.
+pub fn parts_from_attributes(attributes: &[(String, String)]) -> Vec<PartOf> {
+    let get = |key: String| attributes.iter().find(|(k, _)| *k == key).map(|(_, v)| v);
+    let mut out: Vec<PartOf> = attributes
+        .iter()
+        .filter_map(|(k, whole)| {
+            let name = k.strip_prefix(PART_ATTRIBUTE_PREFIX)?;
+            let kind = PartitionKind::parse(get(format!("{PARTITION_ATTRIBUTE_PREFIX}{name}"))?)?;
+            let group = get(format!("{LIGHTGROUP_ATTRIBUTE_PREFIX}{name}"))
+                .map(|g| (g != DEFAULT_GROUP).then(|| g.clone()));
+            Some(PartOf {
+                name: name.to_string(),
+                whole: whole.clone(),
+                kind,
+                group,
+            })
+        })
+        .collect();
+    out.sort_by(|a, b| a.name.cmp(&b.name));
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn split_names_parse_back_to_whole_and_group() {
+        for (whole, group) in [
+            ("beauty", Some("key")),
+            ("beauty", None),
+            ("diffuse", Some("a_b")),
+        ] {
+            let part = split_name(whole, group);
+            assert_eq!(split_group(whole, &part), Some(group), "{part}");
+        }
+        assert_eq!(split_group("beauty", "diffuse_key"), None);
+        assert_eq!(split_group("beauty", "beauty_"), None);
+        assert_eq!(gain_part("beauty", "_default"), "beauty__default");
+        assert_eq!(gain_part("beauty", "key"), "beauty_key");
+    }
+
+    #[test]
+    fn bounce_names_parse_back() {
+        assert_eq!(parse_bounce(&bounce_name(3)), Some((3, false)));
+        assert_eq!(parse_bounce(&bounce_plus_name(4)), Some((4, true)));
+        assert_eq!(parse_bounce("bounceplus"), None);
+        assert_eq!(parse_bounce("bounce1x"), None);
+    }
+
+    #[test]
+    fn partition_attributes_round_trip() {
+        let aovs = [
+            PartInfo {
+                name: "beauty",
+                split_of: None,
+            },
+            PartInfo {
+                name: "bounce0",
+                split_of: None,
+            },
+            PartInfo {
+                name: "bounce1plus",
+                split_of: None,
+            },
+            PartInfo {
+                name: "beauty_key",
+                split_of: Some("beauty"),
+            },
+            PartInfo {
+                name: "beauty__default",
+                split_of: Some("beauty"),
+            },
+        ];
+        let attrs = partition_attributes(&aovs);
+        let parts = parts_from_attributes(&attrs);
+        let find = |n: &str| parts.iter().find(|p| p.name == n).unwrap();
+        assert_eq!(find("bounce0").kind, PartitionKind::Bounces);
+        assert_eq!(find("bounce1plus").whole, "beauty");
+        assert_eq!(find("beauty_key").group, Some(Some("key".into())));
+        assert_eq!(find("beauty__default").group, Some(None));
+        assert_eq!(parts.len(), 4);
+        // Without beauty's full standard set, no standard partition is claimed.
+        assert!(parts.iter().all(|p| p.kind != PartitionKind::Standard));
+    }
+}

@@ -1,0 +1,314 @@
+//! Additive compositing from an EXR's AOVs (`lightpath comp`): relighting by addition
+//! and subtraction, never a re-render.
+
+use crate::aov::naming::{self, channel_names};
+use crate::output::{read_exr, write_channels, write_png_rgb, ExrContents};
+use glam::Vec3A;
+use std::path::PathBuf;
+
+/// One term of a compositing expression: `scale * aov`.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Term {
+    pub scale: Vec3A,
+    pub aov: String,
+}
+
+/// Parses `beauty + 0.5*beauty_key - indirectSpecular + (1,0.4,0.4)*caustics`.
+pub fn parse(expr: &str) -> Result<Vec<Term>, String> {
+    let mut p = Cursor {
+        s: expr.as_bytes(),
+        i: 0,
+    };
+    let mut terms = Vec::new();
+    let mut sign = 1.0;
+    p.ws();
+    if p.eat(b'-') {
+        sign = -1.0;
+    } else {
+        p.eat(b'+');
+    }
+    loop {
+        p.ws();
+        let mut scale = Vec3A::ONE;
+        if p.peek()
+            .is_some_and(|c| c.is_ascii_digit() || c == b'.' || c == b'(')
+        {
+            scale = p.factor()?;
+            p.ws();
+            if !p.eat(b'*') {
+                return Err(p.error("'*' after the factor"));
+            }
+            p.ws();
+        }
+        let aov = p.name()?;
+        p.ws();
+        // A factor may also follow the name: `key*2`.
+        if p.eat(b'*') {
+            p.ws();
+            scale *= p.factor()?;
+            p.ws();
+        }
+        terms.push(Term {
+            scale: scale * sign,
+            aov,
+        });
+        match p.peek() {
+            None => break,
+            Some(b'+') => sign = 1.0,
+            Some(b'-') => sign = -1.0,
+            Some(_) => return Err(p.error("'+', '-' or the end")),
+        }
+        p.i += 1;
+    }
+    Ok(terms)
+}
+
+struct Cursor<'a> {
+    s: &'a [u8],
+    i: usize,
+}
+
+impl Cursor<'_> {
+    fn peek(&self) -> Option<u8> {
+        self.s.get(self.i).copied()
+    }
+    fn ws(&mut self) {
+        while self.peek().is_some_and(|c| c.is_ascii_whitespace()) {
+            self.i += 1;
+        }
+    }
+    fn eat(&mut self, c: u8) -> bool {
+        if self.peek() == Some(c) {
+            self.i += 1;
+            true
+        } else {
+            false
+        }
+    }
+    fn error(&self, expected: &str) -> String {
+        format!("at {}: expected {expected}", self.i)
+    }
+    fn number(&mut self) -> Result<f32, String> {
+        let start = self.i;
+        while self
+            .peek()
+            .is_some_and(|c| c.is_ascii_digit() || matches!(c, b'.' | b'e' | b'E' | b'-' | b'+'))
+        {
+            // A sign is part of the number only right after an exponent or at its start.
+            let c = self.s[self.i];
+            if matches!(c, b'-' | b'+')
+                && self.i > start
+                && !matches!(self.s[self.i - 1], b'e' | b'E')
+            {
+                break;
+            }
+            self.i += 1;
+        }
+        std::str::from_utf8(&self.s[start..self.i])
+            .ok()
+            .and_then(|t| t.parse::<f32>().ok())
+            .ok_or_else(|| self.error("a number"))
+    }
+    fn factor(&mut self) -> Result<Vec3A, String> {
+        if self.eat(b'(') {
+            let mut v = [0.0; 3];
+            for (k, slot) in v.iter_mut().enumerate() {
+                self.ws();
+                *slot = self.number()?;
+                self.ws();
+                if k < 2 && !self.eat(b',') {
+                    return Err(self.error("',' in an (r,g,b) factor"));
+                }
+            }
+            if !self.eat(b')') {
+                return Err(self.error("')' closing the (r,g,b) factor"));
+            }
+            Ok(Vec3A::from(v))
+        } else {
+            Ok(Vec3A::splat(self.number()?))
+        }
+    }
+    fn name(&mut self) -> Result<String, String> {
+        let start = self.i;
+        while self
+            .peek()
+            .is_some_and(|c| c.is_ascii_alphanumeric() || c == b'_')
+        {
+            self.i += 1;
+        }
+        if self.i == start || self.s[start].is_ascii_digit() {
+            return Err(self.error("an AOV name"));
+        }
+        Ok(String::from_utf8_lossy(&self.s[start..self.i]).into_owned())
+    }
+}
+
+/// The RGB planes of an AOV in an EXR.
+pub fn aov_planes<'a>(exr: &'a ExrContents, aov: &str) -> Result<[&'a [f32]; 3], String> {
+    let names = channel_names(aov);
+    let mut out: [&[f32]; 3] = [&[], &[], &[]];
+    for (slot, name) in out.iter_mut().zip(&names) {
+        *slot = exr.channel(name).ok_or_else(|| {
+            let known: Vec<String> = exr.aovs().into_iter().map(|(n, _)| n).collect();
+            format!("the EXR has no AOV '{aov}' (channel {name}); it has {known:?}")
+        })?;
+    }
+    Ok(out)
+}
+
+/// Evaluates a sum of scaled AOVs, pixel by pixel.
+pub fn evaluate(exr: &ExrContents, terms: &[Term]) -> Result<[Vec<f32>; 3], String> {
+    let n = exr.width * exr.height;
+    let mut out = [vec![0.0f32; n], vec![0.0f32; n], vec![0.0f32; n]];
+    for t in terms {
+        let planes = aov_planes(exr, &t.aov)?;
+        for c in 0..3 {
+            let s = t.scale[c];
+            for (o, v) in out[c].iter_mut().zip(planes[c]) {
+                *o += s * v;
+            }
+        }
+    }
+    Ok(out)
+}
+
+/// Terms that rebalance light groups of a split AOV: `base + Σ (gain − 1) · base_group`.
+/// The part of each group is looked up in the header's structured partition attributes
+/// (`lightpath/part/…`, `lightpath/lightgroup/…`), never in the definitions' prose.
+pub fn gain_terms(
+    exr: &ExrContents,
+    base: &str,
+    gains: &[(String, Vec3A)],
+) -> Result<Vec<Term>, String> {
+    let parts: Vec<naming::PartOf> = naming::parts_from_attributes(&exr.attributes)
+        .into_iter()
+        .filter(|p| p.whole == base && p.kind == naming::PartitionKind::LightGroups)
+        .collect();
+    let mut terms = vec![Term {
+        scale: Vec3A::ONE,
+        aov: base.to_string(),
+    }];
+    for (group, gain) in gains {
+        let wanted = (group != naming::DEFAULT_GROUP_ARG).then_some(group.as_str());
+        let part = parts
+            .iter()
+            .find(|p| p.group.as_ref().map(|g| g.as_deref()) == Some(wanted))
+            .ok_or_else(|| {
+                let known: Vec<String> = parts
+                    .iter()
+                    .map(|p| match &p.group {
+                        Some(Some(g)) => g.clone(),
+                        _ => naming::DEFAULT_GROUP_ARG.to_string(),
+                    })
+                    .collect();
+                format!(
+                    "the EXR has no light-group part of '{base}' for group '{group}' \
+                     (its light groups of '{base}': {known:?})"
+                )
+            })?;
+        terms.push(Term {
+            scale: *gain - Vec3A::ONE,
+            aov: part.name.clone(),
+        });
+    }
+    Ok(terms)
+}
+
+/// Parses `--gain GROUP=GAIN` (one number or `R,G,B`).
+pub fn parse_gain(arg: &str) -> Result<(String, Vec3A), String> {
+    let (group, value) = arg.split_once('=').ok_or("expected GROUP=GAIN")?;
+    let nums: Result<Vec<f32>, _> = value.split(',').map(|v| v.trim().parse::<f32>()).collect();
+    match nums.map_err(|_| format!("bad gain '{value}'"))?.as_slice() {
+        [g] => Ok((group.trim().to_string(), Vec3A::splat(*g))),
+        [r, g, b] => Ok((group.trim().to_string(), Vec3A::new(*r, *g, *b))),
+        _ => Err("a gain is one number or R,G,B".into()),
+    }
+}
+
+/// One `lightpath comp` run: an expression and/or light-group gains on an EXR.
+#[derive(Clone, Debug)]
+pub struct CompJob {
+    pub exr: PathBuf,
+    pub expression: Option<String>,
+    /// `GROUP=GAIN` arguments, as given.
+    pub gains: Vec<String>,
+    /// The split AOV the gains rebalance.
+    pub base: String,
+    pub output: PathBuf,
+    pub exposure: f32,
+}
+
+/// Runs a comp: writes the output EXR (R, G, B and the input's A) and a PNG beside it,
+/// whose path it returns.
+pub fn run(job: &CompJob) -> Result<PathBuf, String> {
+    let exr = read_exr(&job.exr)?;
+    let mut terms = match &job.expression {
+        Some(e) => parse(e).map_err(|m| format!("in the expression {e:?}: {m}"))?,
+        None => vec![],
+    };
+    let gains: Vec<(String, Vec3A)> = job
+        .gains
+        .iter()
+        .map(|g| parse_gain(g))
+        .collect::<Result<_, _>>()?;
+    if terms.is_empty() {
+        terms = gain_terms(&exr, &job.base, &gains)?;
+    } else if !gains.is_empty() {
+        terms.extend(gain_terms(&exr, &job.base, &gains)?.into_iter().skip(1));
+    }
+    let rgb = evaluate(&exr, &terms)?;
+    let mut channels: Vec<(String, Vec<f32>)> = channel_names(naming::BEAUTY)
+        .into_iter()
+        .zip(rgb.iter().cloned())
+        .collect();
+    if let Some(a) = exr.channel(naming::ALPHA) {
+        channels.push((naming::ALPHA.into(), a.to_vec()));
+    }
+    let description = job.expression.clone().unwrap_or_default()
+        + &job
+            .gains
+            .iter()
+            .map(|g| format!(" --gain {g}"))
+            .collect::<String>();
+    let attributes = vec![(
+        naming::aov_attribute(naming::BEAUTY),
+        format!("comp of {}: {}", job.exr.display(), description.trim()),
+    )];
+    write_channels(
+        &job.output,
+        exr.width,
+        exr.height,
+        channels,
+        &attributes,
+        Default::default(),
+    )?;
+    // Beside the output, its extension replaced (unlike a render's preview, see
+    // `output::naming::preview_path`).
+    let png = job.output.with_extension("png");
+    write_png_rgb(
+        &png,
+        exr.width as u32,
+        exr.height as u32,
+        &rgb,
+        job.exposure,
+    )?;
+    Ok(png)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn parses_the_guides_compositing_expressions() {
+        let t = parse("beauty - caustics + (1,0.4,0.4)*caustics").unwrap();
+        assert_eq!(t.len(), 3);
+        assert_eq!(t[1].scale, Vec3A::splat(-1.0));
+        assert_eq!(t[2].scale, Vec3A::new(1.0, 0.4, 0.4));
+        let t = parse("-0.5*beauty_key + key*2e0").unwrap();
+        assert_eq!(t[0].scale, Vec3A::splat(-0.5));
+        assert_eq!(t[1].scale, Vec3A::splat(2.0));
+        assert!(parse("beauty +").is_err());
+        assert!(parse("beauty ^ 2").is_err());
+    }
+}

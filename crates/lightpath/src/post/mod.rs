@@ -1,0 +1,11 @@
+//! Post-processing of rendered EXRs: additive compositing (`comp`), merging sample
+//! ranges (`merge`) and checking that partitions sum to their whole (`partitions`).
+//! Each reads the structured header attributes of `aov::naming`, never definitions' prose.
+
+pub mod comp;
+pub mod merge;
+pub mod partitions;
+
+pub use comp::{aov_planes, evaluate, gain_terms, parse, Term};
+pub use merge::merge;
+pub use partitions::{check_partitions, PartitionCheck};

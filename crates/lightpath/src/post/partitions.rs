@@ -1,0 +1,59 @@
+//! The partition checks of `lightpath aovs`: which AOVs an EXR says sum to which, read
+//! from its structured header attributes, and how far they are from summing.
+
+use crate::aov::naming::{self, PartitionKind};
+use crate::output::ExrContents;
+use crate::post::comp::{aov_planes, evaluate, Term};
+use glam::Vec3A;
+
+/// A partition of an AOV that the EXR holds, and how far its parts are from summing to it.
+#[derive(Clone, Debug)]
+pub struct PartitionCheck {
+    pub whole: String,
+    pub parts: Vec<String>,
+    /// max over pixels and channels of |Σ parts − whole| / max(|whole|, 1e-3).
+    pub max_relative_error: f32,
+}
+
+/// Finds the partitions an EXR's header declares (the standard set, light-group splits,
+/// bounce AOVs) and measures each.
+pub fn check_partitions(exr: &ExrContents) -> Vec<PartitionCheck> {
+    // One candidate per (whole, partition kind), parts in their natural order.
+    let mut parts = naming::parts_from_attributes(&exr.attributes);
+    parts.sort_by_key(|p| (p.whole.clone(), p.kind, naming::part_order(p)));
+    let mut candidates: Vec<(String, Vec<String>)> = Vec::new();
+    let mut last: Option<(String, PartitionKind)> = None;
+    for p in parts {
+        let key = Some((p.whole.clone(), p.kind));
+        match candidates.last_mut() {
+            Some((_, names)) if key == last => names.push(p.name),
+            _ => candidates.push((p.whole.clone(), vec![p.name])),
+        }
+        last = key;
+    }
+    candidates
+        .into_iter()
+        .filter_map(|(whole, parts)| {
+            let w = aov_planes(exr, &whole).ok()?;
+            let terms: Vec<Term> = parts
+                .iter()
+                .map(|p| Term {
+                    scale: Vec3A::ONE,
+                    aov: p.clone(),
+                })
+                .collect();
+            let sum = evaluate(exr, &terms).ok()?;
+            let mut worst = 0.0f32;
+            for c in 0..3 {
+                for (s, v) in sum[c].iter().zip(w[c]) {
+                    worst = worst.max((s - v).abs() / v.abs().max(1e-3));
+                }
+            }
+            Some(PartitionCheck {
+                whole,
+                parts,
+                max_relative_error: worst,
+            })
+        })
+        .collect()
+}
