@@ -14,10 +14,11 @@ pub mod light;
 pub mod material;
 pub mod output;
 pub mod progress;
+pub mod sampler;
 pub mod sampling;
 pub mod scene;
 
-pub use integrator::{render, RenderOptions, RenderStats};
+pub use integrator::{render, render_with_progress, RenderOptions, RenderStats};
 pub use scene::{Scene, SceneError, Source};
 
 /// Loads a built-in scene by name or a scene file by path.

@@ -3,6 +3,7 @@
 use clap::{Parser, Subcommand};
 use lightpath::aov::{self, AovSpec};
 use lightpath::output;
+use lightpath::progress::{Progress, Silent};
 use std::io::{BufRead, Write};
 use std::path::PathBuf;
 use std::process::ExitCode;
@@ -440,9 +441,13 @@ fn render(args: RenderArgs) -> ExitCode {
     let options = lightpath::RenderOptions {
         spp: scene.settings.spp,
         first_sample: args.first_sample,
-        progress: !args.quiet,
     };
-    let (film, stats) = lightpath::render(&scene, &options);
+    let progress: Box<dyn Progress> = if args.quiet {
+        Box::new(Silent)
+    } else {
+        Box::new(Bar(indicatif::ProgressBar::hidden()))
+    };
+    let (film, stats) = lightpath::render_with_progress(&scene, &options, progress.as_ref());
     let extra = vec![
         ("lightpath/scene".to_string(), src.name.clone()),
         ("lightpath/spp".to_string(), scene.settings.spp.to_string()),
@@ -669,5 +674,29 @@ fn answer_case(line: &str) -> serde_json::Value {
     match compiler.compile() {
         Ok(a) => json!({ "match": !a.run(&path).unwrap_or(&[]).is_empty() }),
         Err(e) => json!({ "error": e.message, "span": [e.span.start, e.span.end] }),
+    }
+}
+
+/// The render's progress as an `indicatif` bar of rows (the library only knows the trait).
+struct Bar(indicatif::ProgressBar);
+
+impl Progress for Bar {
+    fn start(&self, total: u64, _samples: u64) {
+        self.0.set_length(total);
+        self.0.set_style(
+            indicatif::ProgressStyle::with_template(
+                "{spinner} rendering [{bar:40}] {pos}/{len} rows {elapsed_precise} (eta {eta})",
+            )
+            .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar())
+            .progress_chars("=> "),
+        );
+        self.0
+            .set_draw_target(indicatif::ProgressDrawTarget::stderr());
+    }
+    fn advance(&self, units: u64) {
+        self.0.inc(units);
+    }
+    fn finish(&self) {
+        self.0.finish_and_clear();
     }
 }

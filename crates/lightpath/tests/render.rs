@@ -35,7 +35,6 @@ fn render_aovs(
         &RenderOptions {
             spp,
             first_sample: 0,
-            progress: false,
         },
     );
     (scene, film)
@@ -273,7 +272,6 @@ fn sample_ranges_merge_into_the_whole_render() {
         &RenderOptions {
             spp: 4,
             first_sample: 0,
-            progress: false,
         },
     );
     let (mut a, _) = render(
@@ -281,7 +279,6 @@ fn sample_ranges_merge_into_the_whole_render() {
         &RenderOptions {
             spp: 2,
             first_sample: 0,
-            progress: false,
         },
     );
     let (b, _) = render(
@@ -289,7 +286,6 @@ fn sample_ranges_merge_into_the_whole_render() {
         &RenderOptions {
             spp: 2,
             first_sample: 2,
-            progress: false,
         },
     );
     a.merge(&b).unwrap();
