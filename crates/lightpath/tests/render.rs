@@ -583,3 +583,46 @@ fn obj_meshes_load_relative_to_the_scene_file() {
     );
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+/// Max over pixels and channels of |plain + shadows − unoccluded|, relative to the peak
+/// of `unoccluded`.
+fn shadow_identity_error(scene: &Scene, film: &Film, expr: &str) -> f32 {
+    let (p, s, u) = (
+        index(scene, "plain"),
+        index(scene, "shadows"),
+        index(scene, "unoccluded"),
+    );
+    let (mut worst, mut peak) = (0.0f32, 0.0f32);
+    for y in 0..film.height {
+        for x in 0..film.width {
+            let un = film.pixel(u, x, y);
+            let sum = film.pixel(p, x, y) + film.pixel(s, x, y);
+            worst = worst.max((sum - un).abs().max_element());
+            peak = peak.max(un.max_element());
+        }
+    }
+    assert!(peak > 0.0, "{expr}: unoccluded is black");
+    worst / peak
+}
+
+fn shadow_aovs(expr: &str) -> Vec<AovSpec> {
+    vec![
+        AovSpec::new("plain", expr),
+        AovSpec::new("shadows", format!("shadows;{expr}")),
+        AovSpec::new("unoccluded", format!("unoccluded;{expr}")),
+    ]
+}
+
+#[test]
+fn plain_and_shadows_sum_to_unoccluded_pixel_by_pixel() {
+    // One estimator for the three: every light sample and every BSDF ray's light lands in
+    // exactly one of plain and shadows, and in unoccluded, with the same MIS weight, so
+    // only float rounding of the sums separates them.
+    for expr in ["C<RD>[<L.>O]", "C.*<L.>"] {
+        let (scene, film) = render_aovs(&cornell(), 16, 2, None, shadow_aovs(expr));
+        let err = shadow_identity_error(&scene, &film, expr);
+        assert!(err <= 1e-5, "{expr}: off by {err} of the peak");
+        let shadows: f32 = film.channel(index(&scene, "shadows"), 0).iter().sum();
+        assert!(shadows > 0.0, "{expr}: cornell has shadows");
+    }
+}

@@ -6,7 +6,7 @@
 use super::path::{PathState, Vertex};
 use super::routing::{Origin, Via};
 use super::{Sink, Tracer};
-use crate::geometry::{Prim, Ray};
+use crate::geometry::{Hit, Prim, Ray};
 use crate::light::{Light, LightShape};
 use crate::sampler::{dim, Sampler};
 use glam::Vec3A;
@@ -177,22 +177,21 @@ impl Tracer<'_> {
 
     /// The nearest light surface along `ray`, ignoring everything else: (light, t,
     /// normal).
-    pub(super) fn nearest_light(&self, ray: &Ray) -> Option<(usize, f32, Vec3A)> {
+    fn nearest_light(&self, ray: &Ray) -> Option<(usize, f32, Vec3A)> {
         let mut best: Option<(usize, f32, Vec3A)> = None;
         for (li, light) in self.scene.lights.iter().enumerate() {
-            let tmax = best.map_or(f32::INFINITY, |b| b.1);
             match &light.shape {
-                LightShape::Triangles { prims, .. } => {
-                    for p in prims {
+                LightShape::Triangles { prims, normals, .. } => {
+                    for (p, n) in prims.iter().zip(normals) {
+                        let tmax = best.map_or(f32::INFINITY, |b| b.1);
                         let t = p.intersect(ray.origin, ray.dir, 0.0, tmax);
-                        if t < best.map_or(f32::INFINITY, |b| b.1) {
-                            if let Prim::Triangle { e1, e2, .. } = p {
-                                best = Some((li, t, e1.cross(*e2).normalize()));
-                            }
+                        if t < tmax {
+                            best = Some((li, t, *n));
                         }
                     }
                 }
                 LightShape::Sphere { center, radius } => {
+                    let tmax = best.map_or(f32::INFINITY, |b| b.1);
                     let sphere = Prim::Sphere {
                         center: *center,
                         radius: *radius,
@@ -208,32 +207,66 @@ impl Tracer<'_> {
         best
     }
 
-    /// Behind a delta lobe, `unoccluded` AOVs see the lights as if nothing else were
-    /// there (LPE.md §6).
-    pub(super) fn lights_only(&self, out: &mut Sink, path: &PathState, ray: &Ray) {
+    /// The BSDF-sampled `ray` of `path` tested against the lights alone, for
+    /// `unoccluded` and `shadows` AOVs (LPE.md §6): the nearest light surface along it,
+    /// or the escape lights if there is none, with the same MIS weight as the light the
+    /// real ray would find. `hit` is what the real ray found: the light counts as
+    /// occluded unless it is that, so `plain + shadows = unoccluded` sample by sample.
+    pub(super) fn lights_only(
+        &self,
+        out: &mut Sink,
+        path: &PathState,
+        ray: &Ray,
+        hit: Option<&Hit>,
+    ) {
         let scene = self.scene;
-        let Some((li, t, n)) = self.nearest_light(ray) else {
-            return;
-        };
-        let light = &scene.lights[li];
-        let le = light.emitted_at(n, ray.dir);
-        if le == Vec3A::ZERO || !self.lit(path.prev_object, li as u32) {
-            return;
+        match self.nearest_light(ray) {
+            Some((li, t, n)) => {
+                let light = &scene.lights[li];
+                let le = light.emitted_at(n, ray.dir);
+                if le == Vec3A::ZERO || !self.lit(path.prev_object, li as u32) {
+                    return;
+                }
+                let reached =
+                    hit.is_some_and(|h| scene.objects[h.object as usize].light == Some(li as u32));
+                let w = self.bsdf_weight(path, li as u32, |light| {
+                    light.pdf_hit(path.prev_p, ray.dir, t, n)
+                });
+                self.light_only_seen(out, path, li as u32, le, w, !reached);
+            }
+            None => {
+                for &li in &scene.escape_lights {
+                    let le = scene.lights[li as usize].emitted_escaped(ray.dir);
+                    if le == Vec3A::ZERO || !self.lit(path.prev_object, li) {
+                        continue;
+                    }
+                    let w = self.bsdf_weight(path, li, |light| {
+                        light.pdf_hit(path.prev_p, ray.dir, f32::INFINITY, Vec3A::ZERO)
+                    });
+                    self.light_only_seen(out, path, li, le, w, hit.is_some());
+                }
+            }
         }
-        out.rays += 1;
-        let blocked = Ray {
-            tmax: t - 2.0 * scene.epsilon,
-            ..*ray
-        };
-        let occluded = scene
-            .accel
-            .occluded(&blocked, 0.0, light.object.unwrap_or(u32::MAX));
-        let s = scene.automaton.step(path.state, scene.light_classes[li].0);
+    }
+
+    fn light_only_seen(
+        &self,
+        out: &mut Sink,
+        path: &PathState,
+        li: u32,
+        le: Vec3A,
+        weight: f32,
+        occluded: bool,
+    ) {
+        let scene = self.scene;
+        let s = scene
+            .automaton
+            .step(path.state, scene.light_classes[li as usize].0);
         let origin = Origin {
             via: Via::LightsOnly { occluded },
             scatters: path.depth,
-            part: scene.light_parts[li],
+            part: scene.light_parts[li as usize],
         };
-        self.contribute(out, s, path.throughput, le, 1.0, origin);
+        self.contribute(out, s, path.throughput, le, weight, origin);
     }
 }

@@ -65,15 +65,24 @@ impl Tracer<'_> {
             } else {
                 Visibility::INDIRECT
             };
-            let Some(hit) = scene.accel.intersect(&ray, 0.0, mask) else {
+            let found = scene.accel.intersect(&ray, 0.0, mask);
+            if let Some(hit) = &found {
+                let holdout = scene.objects[hit.object as usize].holdout;
+                if path.depth == 0 {
+                    alpha = if holdout { 0.0 } else { 1.0 };
+                }
+                out.holdout |= holdout;
+            }
+            // Here, after the roulette and with the real ray's result, so that the
+            // lights-only estimate is the beauty's own, sample by sample.
+            if path.depth > 0 && scene.any_unoccluded {
+                self.lights_only(out, &path, &ray, found.as_ref());
+            }
+            let Some(hit) = found else {
                 self.escaped(out, &path, &ray);
                 break;
             };
             let obj = &scene.objects[hit.object as usize];
-            if path.depth == 0 {
-                alpha = if obj.holdout { 0.0 } else { 1.0 };
-            }
-            out.holdout |= obj.holdout;
             self.emission_at_hit(out, &path, &ray, &hit, obj);
 
             // Mitsuba's convention: `max_depth` counts segments; scattering here adds one.
@@ -99,9 +108,6 @@ impl Tracer<'_> {
                 break;
             };
             ray = next;
-            if path.prev_delta && scene.any_unoccluded {
-                self.lights_only(out, &path, &ray);
-            }
             if !self.roulette(&mut path, sampler) {
                 break;
             }

@@ -13,15 +13,14 @@ use lpe::{Prefix, StateId};
 pub(super) enum Via {
     /// Emission found by a ray. `light_sampled`: light sampling covers it too (so it
     /// carries an MIS weight); `light_after_scatter`: a light reached after a scatter,
-    /// which `unoccluded` and `shadows` AOVs take from light samples (or, behind a delta
-    /// lobe, from the lights-only test) instead.
+    /// which `unoccluded` and `shadows` AOVs take from the lights-only test instead.
     Hit {
         light_sampled: bool,
         light_after_scatter: bool,
     },
     /// A light sample, with its shadow-ray result.
     LightSample { visible: bool },
-    /// A delta lobe's direction tested against the lights alone (for `unoccluded` and
+    /// A BSDF-sampled direction tested against the lights alone (for `unoccluded` and
     /// `shadows` AOVs only), and whether the real ray was blocked before the light.
     LightsOnly { occluded: bool },
     /// A user (data) lobe.
@@ -97,24 +96,19 @@ pub(super) fn take(unoccluded: bool, shadows: bool, via: Via) -> Take {
                 Take::Weighted
             }
         }
+        // Light samples keep their MIS weight whatever the shadow ray says: `unoccluded`
+        // takes them all, `shadows` the blocked ones, so plain + shadows = unoccluded.
         Via::LightSample { visible } => {
-            if shadows {
-                if visible {
-                    Take::Skip
-                } else {
-                    Take::Whole
-                }
-            } else if unoccluded {
-                Take::Whole
-            } else if visible {
+            if unoccluded || (shadows && !visible) || (!shadows && visible) {
                 Take::Weighted
             } else {
                 Take::Skip
             }
         }
+        // BSDF rays against the lights alone, with the weight the real hit would have.
         Via::LightsOnly { occluded } => {
             if unoccluded || (shadows && occluded) {
-                Take::Whole
+                Take::Weighted
             } else {
                 Take::Skip
             }
@@ -258,21 +252,32 @@ mod tests {
     }
 
     /// Spot checks of the prefix rules (docs/lpe.md): plain AOVs take visible light
-    /// samples weighted, `shadows` only blocked ones, `unoccluded` all of them whole.
+    /// samples weighted, `shadows` only blocked ones, `unoccluded` all of them, weighted
+    /// too (one estimator, so plain + shadows = unoccluded); the lights-only test of a
+    /// BSDF ray goes weighted to `unoccluded`, and to `shadows` when the ray was blocked.
     #[test]
     fn prefixes_take_what_the_docs_say() {
         let sample = |visible| Via::LightSample { visible };
         assert_eq!(take(false, false, sample(true)), Take::Weighted);
         assert_eq!(take(false, false, sample(false)), Take::Skip);
-        assert_eq!(take(false, true, sample(false)), Take::Whole);
+        assert_eq!(take(false, true, sample(false)), Take::Weighted);
         assert_eq!(take(false, true, sample(true)), Take::Skip);
-        assert_eq!(take(true, false, sample(false)), Take::Whole);
+        assert_eq!(take(true, false, sample(false)), Take::Weighted);
+        assert_eq!(take(true, false, sample(true)), Take::Weighted);
         let emitter_after_scatter = Via::Hit {
             light_sampled: true,
             light_after_scatter: true,
         };
         assert_eq!(take(false, false, emitter_after_scatter), Take::Weighted);
         assert_eq!(take(true, false, emitter_after_scatter), Take::Skip);
+        assert_eq!(take(false, true, emitter_after_scatter), Take::Skip);
+        let lights_only = |occluded| Via::LightsOnly { occluded };
+        assert_eq!(take(false, false, lights_only(false)), Take::Skip);
+        assert_eq!(take(false, false, lights_only(true)), Take::Skip);
+        assert_eq!(take(true, false, lights_only(true)), Take::Weighted);
+        assert_eq!(take(true, false, lights_only(false)), Take::Weighted);
+        assert_eq!(take(false, true, lights_only(true)), Take::Weighted);
+        assert_eq!(take(false, true, lights_only(false)), Take::Skip);
         assert_eq!(take(false, false, Via::Data), Take::Whole);
     }
 }
