@@ -71,7 +71,6 @@ fn samples(c: &mut Criterion) {
     let options = RenderOptions {
         spp: 4,
         first_sample: 0,
-        progress: false,
     };
     g.bench_function(format!("{} AOV", beauty.aovs.len()), |b| {
         b.iter(|| black_box(render(&beauty, &options)))

@@ -22,6 +22,12 @@ impl Film {
         3 * aovs + 1
     }
 
+    /// Where alpha sits in a pixel's run of `stride` values (after every AOV's RGB).
+    #[inline(always)]
+    pub fn alpha_slot(stride: usize) -> usize {
+        stride - 1
+    }
+
     /// An empty film (planes are allocated zeroed, so untouched pages cost nothing).
     pub fn new(width: u32, height: u32, aovs: usize, spp: u32) -> Film {
         let n = width as usize * height as usize;

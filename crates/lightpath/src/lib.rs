@@ -16,11 +16,12 @@ pub mod material;
 pub mod output;
 pub mod post;
 pub mod progress;
+pub mod sampler;
 pub mod sampling;
 pub mod scene;
 
 pub use error::Error;
-pub use integrator::{render, RenderOptions, RenderStats};
+pub use integrator::{render, render_with_progress, RenderOptions, RenderStats};
 pub use scene::{Scene, SceneError, Source};
 
 /// Loads a built-in scene by name or a scene file by path.

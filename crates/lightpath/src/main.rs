@@ -403,11 +403,9 @@ fn render(args: RenderArgs) -> ExitCode {
     let options = lightpath::RenderOptions {
         spp: scene.settings.spp,
         first_sample: args.first_sample,
-        progress: !args.quiet,
     };
-    // wired to render_with_progress at merge
-    let _progress = progress_reporter(choose_progress(args.quiet, std::io::stderr().is_terminal()));
-    let (film, stats) = lightpath::render(&scene, &options);
+    let progress = progress_reporter(choose_progress(args.quiet, std::io::stderr().is_terminal()));
+    let (film, stats) = lightpath::render_with_progress(&scene, &options, progress.as_ref());
     let extra = output::naming::RenderMetadata {
         scene: src.name.clone(),
         spp: scene.settings.spp,

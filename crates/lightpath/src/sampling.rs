@@ -172,19 +172,6 @@ pub fn uniform_triangle(u: Vec2) -> (f32, f32) {
     (1.0 - su, u.y * su)
 }
 
-/// The power heuristic with β = 2 (Veach 1997), for the strategy with pdf `a` against `b`.
-#[inline]
-pub fn power_heuristic(a: f32, b: f32) -> f32 {
-    let (a2, b2) = (a * a, b * b);
-    if a2 + b2 == 0.0 {
-        0.0
-    } else if a2.is_infinite() {
-        1.0
-    } else {
-        a2 / (a2 + b2)
-    }
-}
-
 /// A discrete distribution over items by weight, sampled by binary search.
 #[derive(Clone, Debug, Default)]
 pub struct Distribution1D {

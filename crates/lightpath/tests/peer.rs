@@ -14,7 +14,6 @@ fn render_classic(spp: u32, seed: u64) -> [Vec<f32>; 3] {
         &RenderOptions {
             spp,
             first_sample: 0,
-            progress: false,
         },
     );
     [film.channel(0, 0), film.channel(0, 1), film.channel(0, 2)]

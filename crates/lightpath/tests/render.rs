@@ -35,7 +35,6 @@ fn render_aovs(
         &RenderOptions {
             spp,
             first_sample: 0,
-            progress: false,
         },
     );
     (scene, film)
@@ -273,7 +272,6 @@ fn sample_ranges_merge_into_the_whole_render() {
         &RenderOptions {
             spp: 4,
             first_sample: 0,
-            progress: false,
         },
     );
     let (mut a, _) = render(
@@ -281,7 +279,6 @@ fn sample_ranges_merge_into_the_whole_render() {
         &RenderOptions {
             spp: 2,
             first_sample: 0,
-            progress: false,
         },
     );
     let (b, _) = render(
@@ -289,7 +286,6 @@ fn sample_ranges_merge_into_the_whole_render() {
         &RenderOptions {
             spp: 2,
             first_sample: 2,
-            progress: false,
         },
     );
     a.merge(&b).unwrap();
@@ -583,4 +579,47 @@ fn obj_meshes_load_relative_to_the_scene_file() {
         "{err}"
     );
     std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// Max over pixels and channels of |plain + shadows − unoccluded|, relative to the peak
+/// of `unoccluded`.
+fn shadow_identity_error(scene: &Scene, film: &Film, expr: &str) -> f32 {
+    let (p, s, u) = (
+        index(scene, "plain"),
+        index(scene, "shadows"),
+        index(scene, "unoccluded"),
+    );
+    let (mut worst, mut peak) = (0.0f32, 0.0f32);
+    for y in 0..film.height {
+        for x in 0..film.width {
+            let un = film.pixel(u, x, y);
+            let sum = film.pixel(p, x, y) + film.pixel(s, x, y);
+            worst = worst.max((sum - un).abs().max_element());
+            peak = peak.max(un.max_element());
+        }
+    }
+    assert!(peak > 0.0, "{expr}: unoccluded is black");
+    worst / peak
+}
+
+fn shadow_aovs(expr: &str) -> Vec<AovSpec> {
+    vec![
+        AovSpec::new("plain", expr),
+        AovSpec::new("shadows", format!("shadows;{expr}")),
+        AovSpec::new("unoccluded", format!("unoccluded;{expr}")),
+    ]
+}
+
+#[test]
+fn plain_and_shadows_sum_to_unoccluded_pixel_by_pixel() {
+    // One estimator for the three: every light sample and every BSDF ray's light lands in
+    // exactly one of plain and shadows, and in unoccluded, with the same MIS weight, so
+    // only float rounding of the sums separates them.
+    for expr in ["C<RD>[<L.>O]", "C.*<L.>"] {
+        let (scene, film) = render_aovs(&cornell(), 16, 2, None, shadow_aovs(expr));
+        let err = shadow_identity_error(&scene, &film, expr);
+        assert!(err <= 1e-5, "{expr}: off by {err} of the peak");
+        let shadows: f32 = film.channel(index(&scene, "shadows"), 0).iter().sum();
+        assert!(shadows > 0.0, "{expr}: cornell has shadows");
+    }
 }

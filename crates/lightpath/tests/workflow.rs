@@ -29,7 +29,6 @@ fn run(
         &RenderOptions {
             spp: desc.render.spp,
             first_sample: 0,
-            progress: false,
         },
     );
     (scene, film, stats)

@@ -1,0 +1,273 @@
+//! Direct light with multiple importance sampling: light samples at each scattering
+//! vertex (every non-delta lobe through its own event, then `L`), lights found by BSDF
+//! rays with the complementary weight, and the lights-only test that `unoccluded` and
+//! `shadows` AOVs see. The one power heuristic of the renderer lives here (DESIGN.md).
+
+use super::path::{PathState, Vertex};
+use super::routing::{Origin, Via};
+use super::{Sink, Tracer};
+use crate::geometry::{Hit, Prim, Ray};
+use crate::light::{Light, LightShape};
+use crate::sampler::{dim, Sampler};
+use glam::Vec3A;
+
+/// The power heuristic with β = 2 (Veach 1997), for the strategy with pdf `a` against `b`.
+#[inline]
+pub(super) fn power_heuristic(a: f32, b: f32) -> f32 {
+    let (a2, b2) = (a * a, b * b);
+    if a2 + b2 == 0.0 {
+        0.0
+    } else if a2.is_infinite() {
+        1.0
+    } else {
+        a2 / (a2 + b2)
+    }
+}
+
+impl Tracer<'_> {
+    /// Whether light `light` lights surfaces of `object` (`u32::MAX`: the camera).
+    #[inline]
+    pub(super) fn lit(&self, object: u32, light: u32) -> bool {
+        object == u32::MAX
+            || !self.scene.objects[object as usize]
+                .unlit_by
+                .contains(&light)
+    }
+
+    /// The MIS weight of a BSDF-sampled ray of `path` that found light `li`
+    /// (`light_pdf`: the solid-angle pdf light sampling would have had for it).
+    #[inline]
+    pub(super) fn bsdf_weight(
+        &self,
+        path: &PathState,
+        li: u32,
+        light_pdf: impl FnOnce(&Light) -> f32,
+    ) -> f32 {
+        if path.prev_delta {
+            1.0
+        } else {
+            let scene = self.scene;
+            power_heuristic(
+                path.prev_pdf,
+                scene.light_select.pmf(li as usize) * light_pdf(&scene.lights[li as usize]),
+            )
+        }
+    }
+
+    /// Light `li` found by a ray with radiance `le`: an `O` event seen from the camera,
+    /// else an `L` event weighted against light sampling.
+    pub(super) fn light_seen(
+        &self,
+        out: &mut Sink,
+        path: &PathState,
+        li: u32,
+        le: Vec3A,
+        light_pdf: impl FnOnce(&Light) -> f32,
+    ) {
+        let scene = self.scene;
+        let light = &scene.lights[li as usize];
+        let (l_class, o_class) = scene.light_classes[li as usize];
+        let part = scene.light_parts[li as usize];
+        let (class, weight, origin) = if path.depth == 0 {
+            if !light.camera_visible {
+                return;
+            }
+            let via = Via::Hit {
+                light_sampled: false,
+                light_after_scatter: false,
+            };
+            let origin = Origin {
+                via,
+                scatters: 0,
+                part,
+            };
+            (o_class, 1.0, origin)
+        } else {
+            let via = Via::Hit {
+                light_sampled: !path.prev_delta,
+                light_after_scatter: true,
+            };
+            let origin = Origin {
+                via,
+                scatters: path.depth,
+                part,
+            };
+            (l_class, self.bsdf_weight(path, li, light_pdf), origin)
+        };
+        let s = scene.automaton.step(path.state, class);
+        self.contribute(out, s, path.throughput, le, weight, origin);
+    }
+
+    /// Light sampling at a scattering vertex: one light, one point on it, and every
+    /// non-delta lobe through its own event, then `L`, weighted against BSDF sampling.
+    pub(super) fn direct_light<S: Sampler>(
+        &self,
+        out: &mut Sink,
+        path: &PathState,
+        v: &Vertex,
+        sampler: &mut S,
+    ) {
+        let scene = self.scene;
+        let a = &scene.automaton;
+        let bounce = dim::bounce(path.depth);
+        let u_light = sampler.get_1d(bounce + dim::LIGHT_CHOICE);
+        let u_point = sampler.get_2d(bounce + dim::LIGHT_POINT);
+        let bsdf = &v.material.bsdf;
+        let lobes = bsdf.lobes();
+        if scene.lights.is_empty() || lobes.iter().all(|l| l.delta) {
+            return;
+        }
+        let (li, select_pmf, _) = scene.light_select.sample(u_light);
+        let light = &scene.lights[li];
+        if !self.lit(v.hit.object, li as u32) {
+            return;
+        }
+        let Some(ls) = light.sample(v.hit.p, u_point, scene.accel.prims()) else {
+            return;
+        };
+        let wi = v.sh.frame.to_local(ls.wi);
+        let l_class = scene.light_classes[li].0;
+        let part = scene.light_parts[li];
+        let light_pdf = select_pmf * ls.pdf;
+        // The shadow ray is traced once, and only if some lobe's contribution counts.
+        let mut visible: Option<bool> = None;
+        for (k, tag) in lobes.iter().enumerate() {
+            if tag.delta {
+                continue;
+            }
+            let s_lobe = a.step(path.state, v.obj.lobe_classes[k]);
+            if a.is_dead(s_lobe) {
+                continue;
+            }
+            let s_light = a.step(s_lobe, l_class);
+            if a.accepting(s_light).is_empty() {
+                continue;
+            }
+            let (f, lobe_pdf) = bsdf.eval_lobe(k, &v.sh, wi);
+            if f == Vec3A::ZERO {
+                continue;
+            }
+            let w = if ls.delta {
+                1.0
+            } else {
+                power_heuristic(light_pdf, lobe_pdf)
+            };
+            let vis = *visible.get_or_insert_with(|| {
+                out.rays += 1;
+                let tmax = if ls.dist.is_finite() {
+                    ls.dist - 2.0 * scene.epsilon
+                } else {
+                    f32::INFINITY
+                };
+                let ignore = light.object.unwrap_or(u32::MAX);
+                tmax <= 0.0
+                    || !scene
+                        .accel
+                        .occluded(&self.spawn(v.hit, ls.wi, tmax), 0.0, ignore)
+            });
+            let origin = Origin {
+                via: Via::LightSample { visible: vis },
+                scatters: path.depth + 1,
+                part,
+            };
+            let value = f * ls.radiance / light_pdf;
+            self.contribute(out, s_light, path.throughput, value, w, origin);
+        }
+    }
+
+    /// The nearest light surface along `ray`, ignoring everything else: (light, t,
+    /// normal).
+    fn nearest_light(&self, ray: &Ray) -> Option<(usize, f32, Vec3A)> {
+        let mut best: Option<(usize, f32, Vec3A)> = None;
+        for (li, light) in self.scene.lights.iter().enumerate() {
+            match &light.shape {
+                LightShape::Triangles { prims, normals, .. } => {
+                    for (&i, n) in prims.iter().zip(normals) {
+                        let p = &self.scene.accel.prims()[i as usize];
+                        let tmax = best.map_or(f32::INFINITY, |b| b.1);
+                        let t = p.intersect(ray.origin, ray.dir, 0.0, tmax);
+                        if t < tmax {
+                            best = Some((li, t, *n));
+                        }
+                    }
+                }
+                LightShape::Sphere { center, radius } => {
+                    let tmax = best.map_or(f32::INFINITY, |b| b.1);
+                    let sphere = Prim::Sphere {
+                        center: *center,
+                        radius: *radius,
+                    };
+                    let t = sphere.intersect(ray.origin, ray.dir, 0.0, tmax);
+                    if t.is_finite() {
+                        best = Some((li, t, (ray.origin + ray.dir * t - *center) / *radius));
+                    }
+                }
+                _ => {}
+            }
+        }
+        best
+    }
+
+    /// The BSDF-sampled `ray` of `path` tested against the lights alone, for
+    /// `unoccluded` and `shadows` AOVs (LPE.md §6): the nearest light surface along it,
+    /// or the escape lights if there is none, with the same MIS weight as the light the
+    /// real ray would find. `hit` is what the real ray found: the light counts as
+    /// occluded unless it is that, so `plain + shadows = unoccluded` sample by sample.
+    pub(super) fn lights_only(
+        &self,
+        out: &mut Sink,
+        path: &PathState,
+        ray: &Ray,
+        hit: Option<&Hit>,
+    ) {
+        let scene = self.scene;
+        match self.nearest_light(ray) {
+            Some((li, t, n)) => {
+                let light = &scene.lights[li];
+                let le = light.emitted_at(n, ray.dir);
+                if le == Vec3A::ZERO || !self.lit(path.prev_object, li as u32) {
+                    return;
+                }
+                let reached =
+                    hit.is_some_and(|h| scene.objects[h.object as usize].light == Some(li as u32));
+                let w = self.bsdf_weight(path, li as u32, |light| {
+                    light.pdf_hit(path.prev_p, ray.dir, t, n)
+                });
+                self.light_only_seen(out, path, li as u32, le, w, !reached);
+            }
+            None => {
+                for &li in &scene.escape_lights {
+                    let le = scene.lights[li as usize].emitted_escaped(ray.dir);
+                    if le == Vec3A::ZERO || !self.lit(path.prev_object, li) {
+                        continue;
+                    }
+                    let w = self.bsdf_weight(path, li, |light| {
+                        light.pdf_hit(path.prev_p, ray.dir, f32::INFINITY, Vec3A::ZERO)
+                    });
+                    self.light_only_seen(out, path, li, le, w, hit.is_some());
+                }
+            }
+        }
+    }
+
+    fn light_only_seen(
+        &self,
+        out: &mut Sink,
+        path: &PathState,
+        li: u32,
+        le: Vec3A,
+        weight: f32,
+        occluded: bool,
+    ) {
+        let scene = self.scene;
+        let s = scene
+            .automaton
+            .step(path.state, scene.light_classes[li as usize].0);
+        let origin = Origin {
+            via: Via::LightsOnly { occluded },
+            scatters: path.depth,
+            part: scene.light_parts[li as usize],
+        };
+        self.contribute(out, s, path.throughput, le, weight, origin);
+    }
+}

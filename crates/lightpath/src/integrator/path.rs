@@ -1,0 +1,257 @@
+//! One camera path as named steps over a [`PathState`]: emission where the ray lands,
+//! data lobes, direct light (direct.rs), BSDF sampling and continuation, and Russian
+//! roulette. Each step reads the path state; only `scatter` and `roulette` change it.
+
+use super::routing::{Origin, Via};
+use super::{Sink, Tracer};
+use crate::geometry::{Hit, Ray, Visibility};
+use crate::material::Shading;
+use crate::sampler::{dim, Sampler};
+use crate::scene::{DataLobe, Material, Object};
+use glam::Vec3A;
+use lpe::{ScatterClass, StateId};
+
+/// Where a path is between two vertices.
+pub(super) struct PathState {
+    /// The automaton state after the last event.
+    pub state: StateId,
+    pub throughput: Vec3A,
+    /// Product of the relative indices of refraction crossed (for Russian roulette).
+    pub eta_scale: f32,
+    /// The last scattering point, the pdf of the direction sampled there and whether it
+    /// came from a delta lobe (for MIS when the ray finds a light).
+    pub prev_p: Vec3A,
+    pub prev_pdf: f32,
+    pub prev_delta: bool,
+    /// The object scattered from last (`u32::MAX`: the camera), for light linking.
+    pub prev_object: u32,
+    pub diffuse: u32,
+    pub specular: u32,
+    /// Scattering vertices so far.
+    pub depth: u32,
+}
+
+/// A scattering vertex: the hit and what is there.
+pub(super) struct Vertex<'a> {
+    pub hit: &'a Hit,
+    pub obj: &'a Object,
+    pub material: &'a Material,
+    pub sh: Shading,
+}
+
+impl Tracer<'_> {
+    /// Traces one camera path; returns its alpha.
+    pub(super) fn trace<S: Sampler>(&self, mut ray: Ray, sampler: &mut S, out: &mut Sink) -> f32 {
+        let scene = self.scene;
+        let a = &scene.automaton;
+        let mut path = PathState {
+            state: a.step(a.start(), scene.camera_class),
+            throughput: Vec3A::ONE,
+            eta_scale: 1.0,
+            prev_p: ray.origin,
+            prev_pdf: 0.0,
+            prev_delta: true,
+            prev_object: u32::MAX,
+            diffuse: 0,
+            specular: 0,
+            depth: 0,
+        };
+        let mut alpha = 0.0;
+        out.holdout = false;
+        loop {
+            out.rays += 1;
+            let mask = if path.depth == 0 {
+                Visibility::CAMERA
+            } else {
+                Visibility::INDIRECT
+            };
+            let found = scene.accel.intersect(&ray, 0.0, mask);
+            if let Some(hit) = &found {
+                let holdout = scene.objects[hit.object as usize].holdout;
+                if path.depth == 0 {
+                    alpha = if holdout { 0.0 } else { 1.0 };
+                }
+                out.holdout |= holdout;
+            }
+            // Here, after the roulette and with the real ray's result, so that the
+            // lights-only estimate is the beauty's own, sample by sample.
+            if path.depth > 0 && scene.any_unoccluded {
+                self.lights_only(out, &path, &ray, found.as_ref());
+            }
+            let Some(hit) = found else {
+                self.escaped(out, &path, &ray);
+                break;
+            };
+            let obj = &scene.objects[hit.object as usize];
+            self.emission_at_hit(out, &path, &ray, &hit, obj);
+
+            // Mitsuba's convention: `max_depth` counts segments; scattering here adds one.
+            if path.depth + 1 >= scene.settings.max_depth {
+                break;
+            }
+            let Some(material) = obj.material.map(|m| &scene.materials[m as usize]) else {
+                break;
+            };
+            let sh = Shading::new(&material.bsdf, hit.ns, hit.ng, -ray.dir);
+            if sh.wo.z == 0.0 {
+                break;
+            }
+            let v = Vertex {
+                hit: &hit,
+                obj,
+                material,
+                sh,
+            };
+            self.data_lobes(out, &path, &v);
+            self.direct_light(out, &path, &v, sampler);
+            let Some(next) = self.scatter(&mut path, &v, sampler) else {
+                break;
+            };
+            ray = next;
+            if !self.roulette(&mut path, sampler) {
+                break;
+            }
+        }
+        alpha
+    }
+
+    /// The ray left the scene: the escape lights (domes, distant lights' sky) it sees.
+    fn escaped(&self, out: &mut Sink, path: &PathState, ray: &Ray) {
+        let scene = self.scene;
+        for &li in &scene.escape_lights {
+            let le = scene.lights[li as usize].emitted_escaped(ray.dir);
+            if le != Vec3A::ZERO && self.lit(path.prev_object, li) {
+                self.light_seen(out, path, li, le, |light| {
+                    light.pdf_hit(path.prev_p, ray.dir, f32::INFINITY, Vec3A::ZERO)
+                });
+            }
+        }
+    }
+
+    /// Emission arriving along the ray at `hit`: a light's surface, or a glowing object
+    /// that is not a light (`O`, no MIS: nothing samples it).
+    fn emission_at_hit(
+        &self,
+        out: &mut Sink,
+        path: &PathState,
+        ray: &Ray,
+        hit: &Hit,
+        obj: &Object,
+    ) {
+        let scene = self.scene;
+        if let Some(li) = obj.light {
+            let light = &scene.lights[li as usize];
+            let le = light.emitted_at(hit.ng, ray.dir);
+            if le != Vec3A::ZERO && self.lit(path.prev_object, li) {
+                self.light_seen(out, path, li, le, |light| {
+                    light.pdf_hit(path.prev_p, ray.dir, hit.t, hit.ng)
+                });
+            }
+        } else if let Some(glow) = obj.glow_class {
+            let s = scene.automaton.step(path.state, glow);
+            let via = Via::Hit {
+                light_sampled: false,
+                light_after_scatter: false,
+            };
+            let origin = Origin {
+                via,
+                scatters: path.depth,
+                part: self.default_part,
+            };
+            self.contribute(out, s, path.throughput, obj.emission, 1.0, origin);
+        }
+    }
+
+    /// Data lobes, each as if lit by a unit light (LPE.md §1).
+    fn data_lobes(&self, out: &mut Sink, path: &PathState, v: &Vertex) {
+        let scene = self.scene;
+        let a = &scene.automaton;
+        if !scene.data_live[a.state_index(path.state)] {
+            return;
+        }
+        for &(kind, class) in &v.obj.data_lobes {
+            let s1 = a.step(path.state, class);
+            if a.is_dead(s1) {
+                continue;
+            }
+            let s2 = a.step(s1, scene.data_light_class);
+            if a.accepting(s2).is_empty() {
+                continue;
+            }
+            let value = match kind {
+                DataLobe::Albedo => v.material.bsdf.albedo(),
+                DataLobe::Position => v.hit.p,
+                DataLobe::Normal => v.sh.frame.n,
+                DataLobe::UserColor => v.material.user_color.unwrap_or(Vec3A::ZERO),
+            };
+            let origin = Origin {
+                via: Via::Data,
+                scatters: path.depth + 1,
+                part: self.default_part,
+            };
+            self.contribute(out, s2, path.throughput, value, 1.0, origin);
+        }
+    }
+
+    /// Samples one lobe and a direction and steps the path through them; the ray to
+    /// trace next, or `None` where the path ends (no sample, depth limits, dead state).
+    fn scatter<S: Sampler>(
+        &self,
+        path: &mut PathState,
+        v: &Vertex,
+        sampler: &mut S,
+    ) -> Option<Ray> {
+        let scene = self.scene;
+        let settings = &scene.settings;
+        let bounce = dim::bounce(path.depth);
+        let u_lobe = sampler.get_1d(bounce + dim::LOBE_CHOICE);
+        let u_dir = sampler.get_2d(bounce + dim::DIRECTION);
+        let bs = v.material.bsdf.sample(&v.sh, u_lobe, u_dir)?;
+        match v.material.bsdf.lobes()[bs.lobe].scatter.class {
+            ScatterClass::Diffuse => {
+                path.diffuse += 1;
+                if path.diffuse > settings.max_diffuse_depth {
+                    return None;
+                }
+            }
+            _ => {
+                path.specular += 1;
+                if path.specular > settings.max_specular_depth {
+                    return None;
+                }
+            }
+        }
+        path.state = scene
+            .automaton
+            .step(path.state, v.obj.lobe_classes[bs.lobe]);
+        if scene.automaton.is_dead(path.state) {
+            return None;
+        }
+        path.throughput *= bs.weight;
+        path.eta_scale *= bs.eta;
+        path.prev_p = v.hit.p;
+        path.prev_pdf = bs.pdf;
+        path.prev_delta = bs.delta;
+        path.prev_object = v.hit.object;
+        path.depth += 1;
+        Some(self.spawn(v.hit, bs.wi, f32::INFINITY))
+    }
+
+    /// Russian roulette as Mitsuba does it: from `rr_depth` on, continue with
+    /// probability max(throughput)·η², at most 0.95. `false`: the path ends.
+    fn roulette<S: Sampler>(&self, path: &mut PathState, sampler: &mut S) -> bool {
+        let t_max = path.throughput.max_element();
+        if t_max <= 0.0 || !t_max.is_finite() {
+            return false;
+        }
+        if path.depth >= self.scene.settings.rr_depth {
+            let q = (t_max * path.eta_scale * path.eta_scale).min(0.95);
+            // The roulette of the vertex just scattered from (`depth` already counts it).
+            if sampler.get_1d(dim::bounce(path.depth - 1) + dim::ROULETTE) >= q {
+                return false;
+            }
+            path.throughput /= q;
+        }
+        true
+    }
+}
