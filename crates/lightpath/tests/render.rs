@@ -623,3 +623,65 @@ fn plain_and_shadows_sum_to_unoccluded_pixel_by_pixel() {
         assert!(shadows > 0.0, "{expr}: cornell has shadows");
     }
 }
+
+/// Behind a delta lobe with nothing in the way, `unoccluded` sees exactly what the plain
+/// AOV sees, whatever the light: a dome (which no surface carries), a sphere and a
+/// rectangle light, seen in a mirror and through glass.
+#[test]
+fn unoccluded_behind_mirror_and_glass_equals_plain_for_every_light() {
+    let lights = [
+        "[[lights]]\ntype = \"dome\"\nradiance = [0.7, 0.7, 0.7]",
+        "[[lights]]\ntype = \"sphere\"\ncenter = [0, 0, 6]\nradius = 2\nradiance = [3, 3, 3]",
+        "[[lights]]\ntype = \"rect\"\ntranslate = [0, 0, 6]\nscale = 4\nrotate = [180, 0, 0]\ntwo_sided = true\nradiance = [3, 3, 3]",
+    ];
+    // The camera looks down -z at a surface filling the view; lights sit behind the
+    // camera (+z), where the mirror sends its rays, or beyond the glass (-z).
+    let surfaces = [
+        (
+            "mirror",
+            "type = \"conductor\"\nf0 = [0.9, 0.9, 0.9]",
+            "C<RS>[<L.>O]",
+        ),
+        (
+            "glass",
+            "type = \"dielectric\"\nior = 1.5",
+            "C<TS><TS>[<L.>O]",
+        ),
+    ];
+    for (kind, material, expr) in surfaces {
+        for light in lights {
+            let light = if kind == "glass" {
+                light
+                    .replace("[0, 0, 6]", "[0, 0, -6]")
+                    .replace("[180, 0, 0]", "[0, 0, 0]")
+            } else {
+                light.to_string()
+            };
+            let text = format!(
+                "[camera]\nposition = [0, 0, 3]\nlook_at = [0, 0, 0]\nfov = 30\n\n\
+                 [materials.m]\n{material}\n\n\
+                 [[objects]]\nshape = \"cube\"\nscale = [4, 4, 0.2]\nmaterial = \"m\"\n\n{light}\n"
+            );
+            let extra = vec![
+                AovSpec::new("plain", expr),
+                AovSpec::new("unocc", format!("unoccluded;{expr}")),
+            ];
+            let (scene, film) = render_aovs(&source(kind, &text), 8, 2, None, extra);
+            let (plain, unocc) = (index(&scene, "plain"), index(&scene, "unocc"));
+            let total: f32 = film.channel(plain, 1).iter().sum();
+            assert!(
+                total > 0.0,
+                "{kind} with {light}: the plain AOV sees the light"
+            );
+            for c in 0..3 {
+                let (a, b) = (film.channel(plain, c), film.channel(unocc, c));
+                for (p, u) in a.iter().zip(b) {
+                    assert!(
+                        (p - u).abs() <= 1e-6 * p.abs().max(1.0),
+                        "{kind} with {light}: unoccluded {u} vs plain {p}"
+                    );
+                }
+            }
+        }
+    }
+}
