@@ -12,6 +12,7 @@ pub mod film;
 pub mod geometry;
 pub mod integrator;
 pub mod light;
+pub mod lpe_tools;
 pub mod material;
 pub mod output;
 pub mod post;

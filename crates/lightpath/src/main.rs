@@ -2,6 +2,7 @@
 
 use clap::{Parser, Subcommand};
 use lightpath::aov::{self, AovSpec};
+use lightpath::lpe_tools;
 use lightpath::output;
 use lightpath::progress::{PeriodicLines, Progress, Silent};
 use std::io::{BufRead, IsTerminal, Write};
@@ -453,40 +454,8 @@ fn render(args: RenderArgs) -> ExitCode {
 }
 
 fn lpe_command(cmd: LpeCommand) -> ExitCode {
-    match cmd {
-        LpeCommand::Check { definitions } => {
-            let mut ok = true;
-            let mut compiler = lpe::Compiler::new();
-            for d in &definitions {
-                match compiler.add(d) {
-                    Ok(_) => {}
-                    Err(e) => {
-                        ok = false;
-                        tell_raw!("{}", e.render(d));
-                    }
-                }
-            }
-            if !ok {
-                return ExitCode::FAILURE;
-            }
-            match compiler.compile() {
-                Ok(a) => {
-                    for w in a.warnings() {
-                        tell!("warning: {}: {}", definitions[w.rule.0 as usize], w.message);
-                    }
-                    say!(
-                        "{} definition{} valid",
-                        definitions.len(),
-                        if definitions.len() == 1 { "" } else { "s" }
-                    );
-                    ExitCode::SUCCESS
-                }
-                Err(e) => {
-                    tell!("error[{}]: {}", e.kind.name(), e.message);
-                    ExitCode::FAILURE
-                }
-            }
-        }
+    let report = match cmd {
+        LpeCommand::Check { definitions } => lpe_tools::check(&definitions),
         LpeCommand::Match {
             definitions,
             path,
@@ -495,85 +464,21 @@ fn lpe_command(cmd: LpeCommand) -> ExitCode {
             if jsonl {
                 return match_jsonl();
             }
-            let Some(path_text) = path else {
+            let Some(path) = path else {
                 tell!("error: give --path PATH, or --jsonl to read cases on stdin");
                 return ExitCode::FAILURE;
             };
-            let path = match lpe::parse_path(&path_text) {
-                Ok(p) => p,
-                Err(e) => {
-                    tell_raw!("{}", e.render(&path_text));
-                    return ExitCode::FAILURE;
-                }
-            };
-            let mut status = ExitCode::SUCCESS;
-            for d in &definitions {
-                match lpe::matches(d, &path) {
-                    Ok(true) => say!("match"),
-                    Ok(false) => say!("no match"),
-                    Err(e) => {
-                        tell_raw!("{}", e.render(d));
-                        status = ExitCode::FAILURE;
-                    }
-                }
-            }
-            status
+            lpe_tools::match_path(&definitions, &path)
         }
-        LpeCommand::Explain { definitions } => {
-            let mut compiler = lpe::Compiler::new();
-            let mut ok = true;
-            for d in &definitions {
-                match lpe::Rule::parse(d) {
-                    Ok(rule) => {
-                        let name = rule
-                            .name
-                            .clone()
-                            .map(|n| format!("{n}: "))
-                            .unwrap_or_default();
-                        say!("{name}{d}\n  {}", lpe::explain::explain(&rule));
-                        if let Ok(alone) = lpe::compile(&[d]) {
-                            let s = alone.stats();
-                            say!(
-                                "  automaton: {} NFA states, {} DFA states before minimisation, {} after, {} event classes",
-                                s.nfa_states, s.dfa_states, s.min_dfa_states, s.classes
-                            );
-                        }
-                        compiler.add_rule(rule);
-                    }
-                    Err(e) => {
-                        ok = false;
-                        tell_raw!("{}", e.render(d));
-                    }
-                }
-            }
-            if definitions.len() > 1 && ok {
-                match compiler.compile() {
-                    Ok(a) => {
-                        let s = a.stats();
-                        say!(
-                            "all {} rules together: {} NFA states, {} DFA states before minimisation, {} after, {} event classes",
-                            definitions.len(),
-                            s.nfa_states,
-                            s.dfa_states,
-                            s.min_dfa_states,
-                            s.classes
-                        );
-                    }
-                    Err(e) => tell!("error[{}]: {}", e.kind.name(), e.message),
-                }
-            }
-            if ok {
-                ExitCode::SUCCESS
-            } else {
-                ExitCode::FAILURE
-            }
-        }
-        LpeCommand::Names => {
-            for (name, expr) in lpe::STANDARD_NAMES {
-                say!("{name:<18} {expr}");
-            }
-            ExitCode::SUCCESS
-        }
+        LpeCommand::Explain { definitions } => lpe_tools::explain(&definitions),
+        LpeCommand::Names => lpe_tools::names(),
+    };
+    let _ = write!(std::io::stdout(), "{}", report.stdout);
+    tell_raw!("{}", report.stderr);
+    if report.success {
+        ExitCode::SUCCESS
+    } else {
+        ExitCode::FAILURE
     }
 }
 
@@ -587,47 +492,13 @@ fn match_jsonl() -> ExitCode {
         if line.trim().is_empty() {
             continue;
         }
-        let answer = answer_case(&line);
+        let answer = lpe_tools::answer_case(&line);
         if writeln!(out, "{answer}").is_err() {
             break;
         }
     }
     let _ = out.flush();
     ExitCode::SUCCESS
-}
-
-fn answer_case(line: &str) -> serde_json::Value {
-    use serde_json::json;
-    let case: serde_json::Value = match serde_json::from_str(line) {
-        Ok(v) => v,
-        Err(e) => return json!({ "input_error": format!("invalid JSON: {e}") }),
-    };
-    let Some(expr) = case.get("expr").and_then(|v| v.as_str()) else {
-        return json!({ "input_error": "expected a string field \"expr\"" });
-    };
-    let rule = match lpe::Rule::parse(expr) {
-        Ok(r) => r,
-        Err(e) => return json!({ "error": e.message, "span": [e.span.start, e.span.end] }),
-    };
-    let path_text = case.get("path").and_then(|v| v.as_str());
-    let Some(path_text) = path_text else {
-        // A valid expression without a path: compile it, report a compile error if any.
-        return match lpe::compile(&[expr]) {
-            Ok(_) => json!({ "valid": true }),
-            Err(e) => json!({ "error": e.message, "span": [e.span.start, e.span.end] }),
-        };
-    };
-    let path = match lpe::parse_path(path_text) {
-        Ok(p) => p,
-        Err(e) => return json!({ "path_error": e.message }),
-    };
-    let mut compiler = lpe::Compiler::new();
-    compiler.add_rule(rule);
-    compiler.vocabulary(path.iter().cloned());
-    match compiler.compile() {
-        Ok(a) => json!({ "match": !a.run(&path).unwrap_or(&[]).is_empty() }),
-        Err(e) => json!({ "error": e.message, "span": [e.span.start, e.span.end] }),
-    }
 }
 
 #[cfg(test)]
