@@ -181,6 +181,16 @@ pub struct LightSample {
     pub delta: bool,
 }
 
+/// The fields of a triangle light that sampling reads, borrowed from its `LightShape`.
+struct TriangleLight<'a> {
+    ids: &'a [u32],
+    normals: &'a [Vec3A],
+    parallelogram: &'a Option<[Vec3A; 3]>,
+    by_area: &'a Distribution1D,
+    area: f32,
+    two_sided: bool,
+}
+
 impl Light {
     pub fn is_delta(&self) -> bool {
         matches!(
@@ -232,57 +242,17 @@ impl Light {
                 area,
                 two_sided,
             } => {
-                let (q, n) = match parallelogram {
-                    Some([p0, e1, e2]) => (*p0 + *e1 * u.x + *e2 * u.y, normals[0]),
-                    None => {
-                        let (i, _, ux) = by_area.sample(u.x);
-                        let Prim::Triangle { p0, e1, e2, .. } = prims[ids[i] as usize] else {
-                            return None;
-                        };
-                        let (b1, b2) = uniform_triangle(Vec2::new(ux, u.y));
-                        (p0 + e1 * b1 + e2 * b2, normals[i])
-                    }
+                let shape = TriangleLight {
+                    ids,
+                    normals,
+                    parallelogram,
+                    by_area,
+                    area: *area,
+                    two_sided: *two_sided,
                 };
-                let d = q - p;
-                let dist2 = d.length_squared();
-                let dist = dist2.sqrt();
-                let wi = d / dist;
-                let cos_l = -wi.dot(n);
-                if cos_l <= 0.0 && !two_sided || cos_l == 0.0 {
-                    return None;
-                }
-                Some(LightSample {
-                    wi,
-                    dist,
-                    radiance: self.color,
-                    pdf: dist2 / (cos_l.abs() * area),
-                    delta: false,
-                })
+                self.sample_triangles(&shape, p, u, prims)
             }
-            LightShape::Sphere { center, radius } => {
-                let to_c = *center - p;
-                let d2 = to_c.length_squared();
-                if d2 <= radius * radius {
-                    return None;
-                }
-                let cos_max = (1.0 - radius * radius / d2).max(0.0).sqrt();
-                let frame = Frame::new(to_c / d2.sqrt());
-                let wi = frame.to_world(uniform_cone(u, cos_max));
-                let dist = crate::geometry::Prim::Sphere {
-                    center: *center,
-                    radius: *radius,
-                }
-                .intersect(p, wi, 0.0, f32::INFINITY)
-                // A grazing direction may miss in floating point: use its closest approach.
-                .min(to_c.dot(wi));
-                Some(LightSample {
-                    wi,
-                    dist,
-                    radiance: self.color,
-                    pdf: uniform_cone_pdf(cos_max),
-                    delta: false,
-                })
-            }
+            LightShape::Sphere { center, radius } => self.sample_sphere(*center, *radius, p, u),
             LightShape::Point { position } => {
                 let d = *position - p;
                 let dist2 = d.length_squared();
@@ -351,6 +321,74 @@ impl Light {
                 }
             },
         }
+    }
+
+    /// A point on a triangle light (directly on its parallelogram when it is one), in
+    /// solid angle.
+    fn sample_triangles(
+        &self,
+        t: &TriangleLight,
+        p: Vec3A,
+        u: Vec2,
+        prims: &[Prim],
+    ) -> Option<LightSample> {
+        let TriangleLight {
+            ids,
+            normals,
+            parallelogram,
+            by_area,
+            area,
+            two_sided,
+        } = *t;
+        let (q, n) = match parallelogram {
+            Some([p0, e1, e2]) => (*p0 + *e1 * u.x + *e2 * u.y, normals[0]),
+            None => {
+                let (i, _, ux) = by_area.sample(u.x);
+                let Prim::Triangle { p0, e1, e2, .. } = prims[ids[i] as usize] else {
+                    return None;
+                };
+                let (b1, b2) = uniform_triangle(Vec2::new(ux, u.y));
+                (p0 + e1 * b1 + e2 * b2, normals[i])
+            }
+        };
+        let d = q - p;
+        let dist2 = d.length_squared();
+        let dist = dist2.sqrt();
+        let wi = d / dist;
+        let cos_l = -wi.dot(n);
+        if cos_l <= 0.0 && !two_sided || cos_l == 0.0 {
+            return None;
+        }
+        Some(LightSample {
+            wi,
+            dist,
+            radiance: self.color,
+            pdf: dist2 / (cos_l.abs() * area),
+            delta: false,
+        })
+    }
+
+    /// A direction in the cone the sphere subtends from `p`, uniformly.
+    fn sample_sphere(&self, center: Vec3A, radius: f32, p: Vec3A, u: Vec2) -> Option<LightSample> {
+        let to_c = center - p;
+        let d2 = to_c.length_squared();
+        if d2 <= radius * radius {
+            return None;
+        }
+        let cos_max = (1.0 - radius * radius / d2).max(0.0).sqrt();
+        let frame = Frame::new(to_c / d2.sqrt());
+        let wi = frame.to_world(uniform_cone(u, cos_max));
+        let dist = crate::geometry::Prim::Sphere { center, radius }
+            .intersect(p, wi, 0.0, f32::INFINITY)
+            // A grazing direction may miss in floating point: use its closest approach.
+            .min(to_c.dot(wi));
+        Some(LightSample {
+            wi,
+            dist,
+            radiance: self.color,
+            pdf: uniform_cone_pdf(cos_max),
+            delta: false,
+        })
     }
 
     /// Radiance leaving a point of the light's surface with normal `ng` towards `-dir`
