@@ -685,3 +685,33 @@ fn unoccluded_behind_mirror_and_glass_equals_plain_for_every_light() {
         }
     }
 }
+
+/// Where nothing can cast a shadow — a flat floor under one rectangle light, nothing
+/// else — the shadow matte is exactly clear and `unoccluded` equals the plain AOV: the
+/// three are one estimator, not two that agree on average.
+#[test]
+fn shadows_are_exactly_zero_where_nothing_occludes() {
+    let text = "[camera]\nposition = [0, 3, 3]\nlook_at = [0, 0, 0]\nfov = 40\n\n\
+        [materials.white]\ntype = \"diffuse\"\nalbedo = [0.8, 0.8, 0.8]\n\n\
+        [[objects]]\nshape = \"rectangle\"\nrotate = [-90, 0, 0]\nscale = 10\nmaterial = \"white\"\n\n\
+        [[lights]]\ntype = \"rect\"\ntranslate = [0, 2, 0]\nrotate = [90, 0, 0]\ntwo_sided = true\nradiance = [5, 5, 5]\n";
+    for expr in ["C<RD>[<L.>O]", "C<RD>+[<L.>O]"] {
+        let (scene, film) = render_aovs(&source("floor", text), 12, 4, None, shadow_aovs(expr));
+        let (plain, shadows, unocc) = (
+            index(&scene, "plain"),
+            index(&scene, "shadows"),
+            index(&scene, "unoccluded"),
+        );
+        assert!(
+            film.channel(plain, 1).iter().sum::<f32>() > 0.0,
+            "{expr}: the floor is lit"
+        );
+        for c in 0..3 {
+            assert!(
+                film.channel(shadows, c).iter().all(|&v| v == 0.0),
+                "{expr}: a shadow where nothing occludes"
+            );
+            assert_eq!(film.channel(plain, c), film.channel(unocc, c), "{expr}");
+        }
+    }
+}
