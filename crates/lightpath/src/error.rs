@@ -48,12 +48,17 @@ pub enum Error {
     /// A scene that cannot be read, parsed or built; AOV expressions included (their
     /// message shows the expression and where in it).
     Scene(SceneError),
+    /// An AOV plan that cannot be made (a malformed `--aov`, a split of an unknown AOV).
+    Plan(String),
+    /// An output that cannot be written; the message names the file and the OS reason.
+    Output(String),
 }
 
 impl fmt::Display for Error {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match self {
             Error::Scene(e) => e.fmt(f),
+            Error::Plan(m) | Error::Output(m) => f.write_str(m),
         }
     }
 }
@@ -62,6 +67,7 @@ impl std::error::Error for Error {
     fn source(&self) -> Option<&(dyn std::error::Error + 'static)> {
         match self {
             Error::Scene(e) => Some(e),
+            Error::Plan(_) | Error::Output(_) => None,
         }
     }
 }

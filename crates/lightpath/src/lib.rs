@@ -11,6 +11,7 @@ pub mod events;
 pub mod film;
 pub mod geometry;
 pub mod integrator;
+pub mod job;
 pub mod light;
 pub mod lpe_tools;
 pub mod material;
@@ -23,6 +24,7 @@ pub mod scene;
 
 pub use error::Error;
 pub use integrator::{render, render_with_progress, RenderOptions, RenderStats};
+pub use job::RenderJob;
 pub use scene::{Scene, SceneError, Source};
 
 /// Loads a built-in scene by name or a scene file by path.

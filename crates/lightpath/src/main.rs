@@ -1,7 +1,7 @@
 //! The `lightpath` command: render scenes and work with Light Path Expressions.
 
 use clap::{Parser, Subcommand};
-use lightpath::aov::{self, AovSpec};
+use lightpath::job::{AovRequest, RenderJob, SettingOverrides};
 use lightpath::lpe_tools;
 use lightpath::output;
 use lightpath::progress::{PeriodicLines, Progress, Silent};
@@ -194,45 +194,19 @@ fn main() -> ExitCode {
 }
 
 fn aovs_command(path: &std::path::Path, tolerance: f32) -> ExitCode {
-    let exr = match output::read_exr(path) {
-        Ok(e) => e,
+    match lightpath::post::partitions::report(path, tolerance) {
+        Ok((text, ok)) => {
+            let _ = write!(std::io::stdout(), "{text}");
+            if ok {
+                ExitCode::SUCCESS
+            } else {
+                ExitCode::FAILURE
+            }
+        }
         Err(e) => {
             tell!("error: {e}");
-            return ExitCode::FAILURE;
+            ExitCode::FAILURE
         }
-    };
-    let mut aovs = exr.aovs();
-    aovs.sort();
-    say!(
-        "{}: {}x{}, {} AOVs",
-        path.display(),
-        exr.width,
-        exr.height,
-        aovs.len()
-    );
-    for (name, def) in &aovs {
-        say!("  {name:<24} {def}");
-    }
-    let checks = lightpath::post::check_partitions(&exr);
-    if checks.is_empty() {
-        say!("no known partitions (standard set, light groups, bounces) to check");
-    }
-    let mut ok = true;
-    for c in &checks {
-        let pass = c.max_relative_error <= tolerance;
-        ok &= pass;
-        say!(
-            "{} {} = {}: max relative error {:.2e}",
-            if pass { "ok  " } else { "FAIL" },
-            c.whole,
-            c.parts.join(" + "),
-            c.max_relative_error
-        );
-    }
-    if ok {
-        ExitCode::SUCCESS
-    } else {
-        ExitCode::FAILURE
     }
 }
 
@@ -311,36 +285,6 @@ impl Progress for Bar {
     }
 }
 
-/// The AOV plan from the command line and the scene description.
-fn plan_aovs(
-    args: &RenderArgs,
-    desc: &lightpath::scene::desc::SceneDesc,
-) -> Result<Vec<AovSpec>, String> {
-    let request = aov::plan::PlanRequest {
-        standard: args.aov_set == "standard",
-        scene_aovs: desc
-            .aovs
-            .iter()
-            .map(|(n, d)| (n.clone(), d.definition.clone()))
-            .collect(),
-        extra: aov::plan::parse_aov_args(&args.aovs).map_err(|e| e.to_string())?,
-        bounces: args.bounces,
-        split: args.light_group_aovs.clone(),
-        scene_split: desc.light_group_aovs.clone(),
-        light_groups: args.light_groups || desc.light_groups,
-        scene_light_groups: desc
-            .lights
-            .iter()
-            .flat_map(|l| l.groups.iter().cloned())
-            .collect(),
-    };
-    let plan = aov::plan::AovPlan::build(&request).map_err(|e| e.to_string())?;
-    for w in &plan.warnings {
-        tell!("warning: {w}");
-    }
-    Ok(plan.specs)
-}
-
 fn render(args: RenderArgs) -> ExitCode {
     if let Some(n) = args.threads {
         if let Err(e) = rayon::ThreadPoolBuilder::new()
@@ -350,107 +294,55 @@ fn render(args: RenderArgs) -> ExitCode {
             tell!("warning: cannot set the thread count: {e}");
         }
     }
-    let src = match lightpath::load_source(&args.scene) {
-        Ok(s) => s,
-        Err(e) => {
-            tell!("error: {e}");
-            return ExitCode::FAILURE;
-        }
-    };
-    let mut desc = match src.parse() {
-        Ok(d) => d,
-        Err(e) => {
-            tell!("error: {e}");
-            return ExitCode::FAILURE;
-        }
-    };
-    if let Some(spp) = args.spp {
-        desc.render.spp = spp;
-    }
-    if let Some(d) = args.max_depth {
-        desc.render.max_depth = d;
-    }
-    if let Some(r) = args.resolution {
-        desc.film.resolution = r;
-    }
-    if let Some(s) = args.seed {
-        desc.render.seed = s;
-    }
-    let specs = match plan_aovs(&args, &desc) {
-        Ok(s) => s,
-        Err(e) => {
-            tell!("error: {e}");
-            return ExitCode::FAILURE;
-        }
-    };
-    let scene = match lightpath::Scene::build(&desc, &specs) {
-        Ok(s) => s,
-        Err(e) => {
-            tell!("error: {e}");
-            return ExitCode::FAILURE;
-        }
-    };
-    for w in scene.automaton.warnings() {
-        let aov = &scene.aovs[w.rule.0 as usize];
-        tell!(
-            "warning: AOV '{}' ({}): {}",
-            aov.name,
-            aov.definition,
-            w.message
-        );
-    }
-    let paths = output::naming::output_paths(&args.scene, args.output.as_deref());
-    let (exr_path, png_path) = (paths.exr, paths.png);
-    let options = lightpath::RenderOptions {
-        spp: scene.settings.spp,
+    let job = RenderJob {
+        scene: args.scene,
+        output: args.output,
+        overrides: SettingOverrides {
+            spp: args.spp,
+            max_depth: args.max_depth,
+            resolution: args.resolution,
+            seed: args.seed,
+        },
+        aovs: AovRequest {
+            standard: args.aov_set == "standard",
+            extra: args.aovs,
+            bounces: args.bounces,
+            light_groups: args.light_groups,
+            light_group_aovs: args.light_group_aovs,
+        },
         first_sample: args.first_sample,
-    };
-    let progress = progress_reporter(choose_progress(args.quiet, std::io::stderr().is_terminal()));
-    let (film, stats) = lightpath::render_with_progress(&scene, &options, progress.as_ref());
-    let extra = output::naming::RenderMetadata {
-        scene: src.name.clone(),
-        spp: scene.settings.spp,
-        first_sample: args.first_sample,
-        seed: scene.settings.seed,
-    }
-    .attributes();
-    let derived = output::derived_aovs(&film, &scene.aovs);
-    if let Err(e) = output::write_png(&png_path, &film, 0, args.exposure) {
-        tell!("error: {e}");
-        return ExitCode::FAILURE;
-    }
-    let (width, height, spp) = (film.width, film.height, film.spp);
-    if let Err(e) = output::write_exr(
-        &exr_path,
-        film,
-        &scene.aovs,
-        derived,
-        output::ExrOptions {
+        exr: output::ExrOptions {
             half: args.half,
             compression: args.compression,
         },
-        &extra,
-    ) {
-        tell!("error: {e}");
-        return ExitCode::FAILURE;
-    }
-    say!(
-        "{}x{} at {} spp, {} AOVs: {:.2} s, {:.2} M samples/s, {:.2} M rays/s{}",
-        width,
-        height,
-        spp,
-        scene.aovs.len(),
-        stats.seconds,
-        stats.samples as f64 / stats.seconds / 1e6,
-        stats.rays as f64 / stats.seconds / 1e6,
-        if stats.nonfinite > 0 {
-            format!(", {} NaN/Inf contributions dropped", stats.nonfinite)
-        } else {
-            String::new()
+        preview_exposure: args.exposure,
+    };
+    let prepared = match job.prepare() {
+        Ok(p) => p,
+        Err(e) => {
+            tell!("error: {e}");
+            return ExitCode::FAILURE;
         }
-    );
-    say!("wrote {} and {}", exr_path.display(), png_path.display());
-    ExitCode::SUCCESS
+    };
+    for w in &prepared.warnings {
+        tell!("warning: {w}");
+    }
+    let progress = progress_reporter(choose_progress(args.quiet, std::io::stderr().is_terminal()));
+    match prepared.run(progress.as_ref()) {
+        Ok(summary) => {
+            say!("{}", summary.line());
+            say!(
+                "wrote {} and {}",
+                summary.paths.exr.display(),
+                summary.paths.png.display()
+            );
+            ExitCode::SUCCESS
+        }
+        Err(e) => {
+            tell!("error: {e}");
+            ExitCode::FAILURE
+        }
+    }
 }
 
 fn lpe_command(cmd: LpeCommand) -> ExitCode {

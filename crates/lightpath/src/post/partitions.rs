@@ -5,6 +5,47 @@ use crate::aov::naming::{self, PartitionKind};
 use crate::output::ExrContents;
 use crate::post::comp::{aov_planes, evaluate, Term};
 use glam::Vec3A;
+use std::fmt::Write;
+use std::path::Path;
+
+/// `lightpath aovs`: an EXR's AOVs with their expressions and each declared partition's
+/// check, as the text to print; `Ok(false)` when a partition is off by more than
+/// `tolerance`.
+pub fn report(path: &Path, tolerance: f32) -> Result<(String, bool), String> {
+    let exr = crate::output::read_exr(path)?;
+    let mut aovs = exr.aovs();
+    aovs.sort();
+    let mut out = String::new();
+    let _ = writeln!(
+        out,
+        "{}: {}x{}, {} AOVs",
+        path.display(),
+        exr.width,
+        exr.height,
+        aovs.len()
+    );
+    for (name, def) in &aovs {
+        let _ = writeln!(out, "  {name:<24} {def}");
+    }
+    let checks = check_partitions(&exr);
+    if checks.is_empty() {
+        out.push_str("no known partitions (standard set, light groups, bounces) to check\n");
+    }
+    let mut ok = true;
+    for c in &checks {
+        let pass = c.max_relative_error <= tolerance;
+        ok &= pass;
+        let _ = writeln!(
+            out,
+            "{} {} = {}: max relative error {:.2e}",
+            if pass { "ok  " } else { "FAIL" },
+            c.whole,
+            c.parts.join(" + "),
+            c.max_relative_error
+        );
+    }
+    Ok((out, ok))
+}
 
 /// A partition of an AOV that the EXR holds, and how far its parts are from summing to it.
 #[derive(Clone, Debug)]

@@ -1,0 +1,220 @@
+//! One render as the command line asks for it: load the scene, apply the overrides, plan
+//! the AOVs, build, render, write the EXR and its PNG preview. The binary fills a
+//! [`RenderJob`] from its arguments and prints what [`RenderJob::run`] returns; every
+//! decision lives here or further down, so a script embedding the library gets the same
+//! render as `lightpath render`.
+
+use crate::aov::{self, AovSpec};
+use crate::output;
+use crate::progress::Progress;
+use crate::scene::desc::SceneDesc;
+use crate::scene::{Scene, Source};
+use crate::{Error, RenderOptions, RenderStats};
+use std::path::PathBuf;
+
+/// Everything `lightpath render` can be told.
+#[derive(Clone, Debug)]
+pub struct RenderJob {
+    /// A scene file or the name of a built-in scene.
+    pub scene: String,
+    /// Output EXR; `None`: `<scene stem>.exr` in the working directory.
+    pub output: Option<PathBuf>,
+    pub overrides: SettingOverrides,
+    pub aovs: AovRequest,
+    /// Index of the first sample (a farm's sample range).
+    pub first_sample: u32,
+    pub exr: output::ExrOptions,
+    /// Exposure of the PNG preview, in stops.
+    pub preview_exposure: f32,
+}
+
+/// Render settings the command line overrides; `None` keeps the scene's value.
+#[derive(Clone, Debug, Default)]
+pub struct SettingOverrides {
+    pub spp: Option<u32>,
+    pub max_depth: Option<u32>,
+    pub resolution: Option<[u32; 2]>,
+    pub seed: Option<u64>,
+}
+
+/// Which AOVs the command line asks for, besides the scene's own.
+#[derive(Clone, Debug, Default)]
+pub struct AovRequest {
+    /// Add the standard set (LPE.md §7).
+    pub standard: bool,
+    /// `NAME=DEFINITION` arguments.
+    pub extra: Vec<String>,
+    /// Bounce AOVs `bounce0 … bounce<K>plus`.
+    pub bounces: Option<u32>,
+    /// Split beauty per light group.
+    pub light_groups: bool,
+    /// Further AOVs to split per light group.
+    pub light_group_aovs: Vec<String>,
+}
+
+/// A job whose scene is loaded, planned and built: ready to render, with what the user
+/// should be told before the render starts.
+pub struct PreparedRender {
+    pub job: RenderJob,
+    pub source: Source,
+    pub scene: Scene,
+    pub paths: output::naming::OutputPaths,
+    pub warnings: Vec<String>,
+}
+
+/// What a finished render wrote and measured.
+#[derive(Clone, Debug)]
+pub struct RenderSummary {
+    pub width: u32,
+    pub height: u32,
+    pub spp: u32,
+    pub aovs: usize,
+    pub stats: RenderStats,
+    pub paths: output::naming::OutputPaths,
+}
+
+impl RenderSummary {
+    /// The one line `lightpath render` prints at the end.
+    pub fn line(&self) -> String {
+        let s = &self.stats;
+        let dropped = if s.nonfinite > 0 {
+            format!(", {} NaN/Inf contributions dropped", s.nonfinite)
+        } else {
+            String::new()
+        };
+        format!(
+            "{}x{} at {} spp, {} AOVs: {:.2} s, {:.2} M samples/s, {:.2} M rays/s{dropped}",
+            self.width,
+            self.height,
+            self.spp,
+            self.aovs,
+            s.seconds,
+            s.samples as f64 / s.seconds / 1e6,
+            s.rays as f64 / s.seconds / 1e6,
+        )
+    }
+}
+
+impl RenderJob {
+    /// A job rendering `scene` with its own settings and the standard AOVs.
+    pub fn new(scene: impl Into<String>) -> RenderJob {
+        RenderJob {
+            scene: scene.into(),
+            output: None,
+            overrides: SettingOverrides::default(),
+            aovs: AovRequest {
+                standard: true,
+                ..AovRequest::default()
+            },
+            first_sample: 0,
+            exr: output::ExrOptions::default(),
+            preview_exposure: 0.0,
+        }
+    }
+
+    /// Loads the scene, applies the overrides, plans the AOVs and builds the scene.
+    pub fn prepare(self) -> Result<PreparedRender, Error> {
+        let source = crate::load_source(&self.scene)?;
+        let mut desc = source.parse()?;
+        self.overrides.apply(&mut desc);
+        let mut warnings = Vec::new();
+        let specs = self.plan(&desc, &mut warnings)?;
+        let scene = Scene::build(&desc, &specs)?;
+        for w in scene.automaton.warnings() {
+            let aov = &scene.aovs[w.rule.0 as usize];
+            warnings.push(format!(
+                "AOV '{}' ({}): {}",
+                aov.name, aov.definition, w.message
+            ));
+        }
+        let paths = output::naming::output_paths(&self.scene, self.output.as_deref());
+        Ok(PreparedRender {
+            job: self,
+            source,
+            scene,
+            paths,
+            warnings,
+        })
+    }
+
+    /// The AOV plan from the request and the scene description.
+    fn plan(&self, desc: &SceneDesc, warnings: &mut Vec<String>) -> Result<Vec<AovSpec>, Error> {
+        let request = aov::plan::PlanRequest {
+            standard: self.aovs.standard,
+            scene_aovs: desc
+                .aovs
+                .iter()
+                .map(|(n, d)| (n.clone(), d.definition.clone()))
+                .collect(),
+            extra: aov::plan::parse_aov_args(&self.aovs.extra)
+                .map_err(|e| Error::Plan(e.to_string()))?,
+            bounces: self.aovs.bounces,
+            split: self.aovs.light_group_aovs.clone(),
+            scene_split: desc.light_group_aovs.clone(),
+            light_groups: self.aovs.light_groups || desc.light_groups,
+            scene_light_groups: desc
+                .lights
+                .iter()
+                .flat_map(|l| l.groups.iter().cloned())
+                .collect(),
+        };
+        let plan = aov::plan::AovPlan::build(&request).map_err(|e| Error::Plan(e.to_string()))?;
+        warnings.extend(plan.warnings.iter().map(|w| w.to_string()));
+        Ok(plan.specs)
+    }
+}
+
+impl SettingOverrides {
+    fn apply(&self, desc: &mut SceneDesc) {
+        if let Some(spp) = self.spp {
+            desc.render.spp = spp;
+        }
+        if let Some(d) = self.max_depth {
+            desc.render.max_depth = d;
+        }
+        if let Some(r) = self.resolution {
+            desc.film.resolution = r;
+        }
+        if let Some(s) = self.seed {
+            desc.render.seed = s;
+        }
+    }
+}
+
+impl PreparedRender {
+    /// Renders and writes the EXR and its PNG preview (each atomically).
+    pub fn run(self, progress: &dyn Progress) -> Result<RenderSummary, Error> {
+        let PreparedRender {
+            job,
+            source,
+            scene,
+            paths,
+            ..
+        } = self;
+        let options = RenderOptions {
+            spp: scene.settings.spp,
+            first_sample: job.first_sample,
+        };
+        let (film, stats) = crate::render_with_progress(&scene, &options, progress);
+        let extra = output::naming::RenderMetadata {
+            scene: source.name.clone(),
+            spp: scene.settings.spp,
+            first_sample: job.first_sample,
+            seed: scene.settings.seed,
+        }
+        .attributes();
+        let derived = output::derived_aovs(&film, &scene.aovs);
+        output::write_png(&paths.png, &film, 0, job.preview_exposure).map_err(Error::Output)?;
+        let (width, height, spp) = (film.width, film.height, film.spp);
+        output::write_exr(&paths.exr, film, &scene.aovs, derived, job.exr, &extra)
+            .map_err(Error::Output)?;
+        Ok(RenderSummary {
+            width,
+            height,
+            spp,
+            aovs: scene.aovs.len(),
+            stats,
+            paths,
+        })
+    }
+}
