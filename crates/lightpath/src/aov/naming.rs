@@ -34,6 +34,13 @@ pub const PART_ATTRIBUTE_PREFIX: &str = "lightpath/part/";
 pub const PARTITION_ATTRIBUTE_PREFIX: &str = "lightpath/partition/";
 pub const LIGHTGROUP_ATTRIBUTE_PREFIX: &str = "lightpath/lightgroup/";
 /// Render metadata attributes.
+/// The holdout pair RenderMan's shadow matte is derived from (LPE.md §7), and the matte.
+pub const OCCLUDED: &str = "occluded";
+pub const UNOCCLUDED: &str = "unoccluded";
+pub const SHADOW: &str = "shadow";
+/// The definition written for the derived shadow matte.
+pub const SHADOW_DEFINITION: &str = "derived: 1 - occluded/unoccluded";
+
 pub const SCENE_ATTRIBUTE: &str = "lightpath/scene";
 pub const SPP_ATTRIBUTE: &str = "lightpath/spp";
 pub const FIRST_SAMPLE_ATTRIBUTE: &str = "lightpath/first_sample";

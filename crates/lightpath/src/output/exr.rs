@@ -75,10 +75,10 @@ pub struct DerivedAov {
 /// the matte a compositor multiplies a background plate by.
 pub fn derived_aovs(film: &Film, aovs: &[Aov]) -> Vec<DerivedAov> {
     let find = |n: &str| aovs.iter().position(|a| a.name == n);
-    let (Some(occ), Some(unocc)) = (find("occluded"), find("unoccluded")) else {
+    let (Some(occ), Some(unocc)) = (find(naming::OCCLUDED), find(naming::UNOCCLUDED)) else {
         return Vec::new();
     };
-    if find("shadow").is_some() {
+    if find(naming::SHADOW).is_some() {
         return Vec::new();
     }
     let rgb = [0, 1, 2].map(|c| {
@@ -95,8 +95,8 @@ pub fn derived_aovs(film: &Film, aovs: &[Aov]) -> Vec<DerivedAov> {
             .collect()
     });
     vec![DerivedAov {
-        name: "shadow".into(),
-        definition: "derived: 1 - occluded/unoccluded".into(),
+        name: naming::SHADOW.into(),
+        definition: naming::SHADOW_DEFINITION.into(),
         rgb,
     }]
 }
