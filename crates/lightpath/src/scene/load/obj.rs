@@ -69,6 +69,7 @@ pub fn load_scene(path: &Path, at: &Origin) -> Result<SceneDesc, SceneError> {
             visible_camera: true,
             visible_indirect: true,
             casts_shadows: true,
+            asset: None,
             origin: part.origin.clone(),
         };
         if let Some((ke, at)) = emission {

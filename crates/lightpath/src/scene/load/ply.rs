@@ -59,6 +59,7 @@ pub fn load_scene(path: &Path, at: &Origin) -> Result<SceneDesc, SceneError> {
         visible_camera: true,
         visible_indirect: true,
         casts_shadows: true,
+        asset: None,
         origin,
     });
     Ok(desc)
