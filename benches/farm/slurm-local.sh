@@ -59,7 +59,7 @@ if ! pgrep -x munged >/dev/null; then
     chown munge:munge /etc/munge/munge.key && chmod 600 /etc/munge/munge.key
     install -d -o munge -g munge -m 755 /run/munge
     install -d -o munge -g munge -m 700 /var/lib/munge /var/log/munge
-    runuser -u munge -- /usr/sbin/munged --foreground &
+    runuser -u munge -- /usr/sbin/munged --foreground >"$WORK/munged.log" 2>&1 &
     started+=($!)
     for _ in $(seq 50); do [ -S /run/munge/munge.socket.2 ] && break; sleep 0.1; done
 fi
