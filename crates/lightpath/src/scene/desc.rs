@@ -213,6 +213,11 @@ pub enum ShapeDesc {
     Mesh {
         parts: Vec<MeshData>,
     },
+    /// Mesh parts several objects share (the same OBJ file named twice): stored once, and
+    /// each object that uses them is an instance (`docs/scene-format.md`).
+    SharedMesh {
+        parts: std::sync::Arc<Vec<MeshData>>,
+    },
 }
 
 #[derive(Clone, Debug)]

@@ -8,7 +8,7 @@ use crate::camera::FovAxis;
 use crate::scene::desc::{self as d, NameRef};
 use crate::scene::SceneError;
 use serde::Deserialize;
-use std::collections::BTreeMap;
+use std::collections::{BTreeMap, HashMap};
 use std::ops::Range;
 use toml::Spanned;
 
@@ -304,10 +304,12 @@ pub fn load(src: &Source) -> Result<d::SceneDesc, SceneError> {
     for (name, m) in &file.materials {
         materials.insert(name.clone(), material(src, name, m)?);
     }
+    // OBJ files by path: objects naming the same file share its triangles.
+    let mut files = HashMap::new();
     let objects = file
         .objects
         .iter()
-        .map(|o| object(src, o))
+        .map(|o| object(src, o, &mut files))
         .collect::<Result<_, _>>()?;
     let lights = file
         .lights
@@ -434,7 +436,14 @@ fn material(
     })
 }
 
-fn object(src: &Source, o: &Spanned<ObjectDesc>) -> Result<d::ObjectDesc, SceneError> {
+/// The OBJ files a scene has loaded, by path.
+type ObjFiles = HashMap<std::path::PathBuf, std::sync::Arc<Vec<d::MeshData>>>;
+
+fn object(
+    src: &Source,
+    o: &Spanned<ObjectDesc>,
+    files: &mut ObjFiles,
+) -> Result<d::ObjectDesc, SceneError> {
     let span = o.span();
     let o = o.get_ref();
     let missing = |what: &str| {
@@ -461,8 +470,15 @@ fn object(src: &Source, o: &Spanned<ObjectDesc>) -> Result<d::ObjectDesc, SceneE
         "obj" => {
             let file = o.file.as_ref().ok_or_else(|| missing("file"))?;
             let path = src.dir.join(file.get_ref());
-            let parts = obj::load(&path).map_err(|message| src.error(Some(file.span()), message))?;
-            d::ShapeDesc::Mesh { parts }
+            let path = std::fs::canonicalize(&path).unwrap_or(path);
+            let parts = match files.get(&path) {
+                Some(parts) => parts.clone(),
+                None => {
+                    let parts = obj::load(&path).map_err(|message| src.error(Some(file.span()), message))?;
+                    files.entry(path).or_insert(std::sync::Arc::new(parts)).clone()
+                }
+            };
+            d::ShapeDesc::SharedMesh { parts }
         }
         other => {
             return Err(src.error(
