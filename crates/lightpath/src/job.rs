@@ -135,7 +135,8 @@ impl RenderJob {
         let source = crate::load_source(&self.scene)?;
         let mut desc = source.parse()?;
         self.overrides.apply(&mut desc);
-        let mut warnings = Vec::new();
+        let mut warnings = desc.warnings.clone();
+        warnings.extend(crate::scene::load::defaults::no_light_warning(&desc));
         let specs = self.plan(&desc, &mut warnings)?;
         let scene = Scene::build(&desc, &specs)?;
         for w in scene.automaton.warnings() {

@@ -157,6 +157,10 @@ pub enum LightShape {
         by_area: Distribution1D,
         area: f32,
         two_sided: bool,
+        /// A mesh light (an object's own triangles): they may shadow one another, so
+        /// shadow rays do not pass through its object, and the lights-only test finds
+        /// them in `Scene::mesh_lights` instead of trying each.
+        mesh: bool,
     },
     Sphere {
         center: Vec3A,
@@ -265,6 +269,7 @@ impl Light {
                 by_area,
                 area,
                 two_sided,
+                ..
             } => {
                 let shape = TriangleLight {
                     ids,
@@ -413,6 +418,16 @@ impl Light {
             pdf: uniform_cone_pdf(cos_max),
             delta: false,
         })
+    }
+
+    /// The object a shadow ray towards this light may pass through: an area light's own
+    /// surface (planar, it cannot hide itself); none for a mesh light, whose triangles
+    /// can shadow one another.
+    pub fn shadow_exempt(&self) -> u32 {
+        match self.shape {
+            LightShape::Triangles { mesh: true, .. } => u32::MAX,
+            _ => self.object.unwrap_or(u32::MAX),
+        }
     }
 
     /// Radiance leaving a point of the light's surface with normal `ng` towards `-dir`

@@ -189,6 +189,15 @@ impl GeometryBuilder {
         Ok(())
     }
 
+    /// How many primitives the scene's own list holds so far.
+    pub fn len(&self) -> u32 {
+        self.prims.len() as u32
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.prims.is_empty()
+    }
+
     pub fn build(self) -> Accel {
         // The shared meshes' trees on every core (each build also splits its work).
         let meshes: Vec<Accel> = self
