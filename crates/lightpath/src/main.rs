@@ -140,6 +140,21 @@ struct RenderArgs {
     /// No progress bar.
     #[arg(short, long)]
     quiet: bool,
+    /// Render only the window X0,Y0,X1,Y1 of the frame (pixels, end exclusive), with
+    /// the frame's own sample numbers: the EXR's data window, inside the whole frame's
+    /// display window. `lightpath merge` stitches tiles into the frame.
+    #[arg(long, value_parser = lightpath::film::PixelWindow::parse)]
+    crop: Option<lightpath::film::PixelWindow>,
+    /// Write Cryptomatte layers CryptoObject, CryptoMaterial and CryptoAsset.
+    #[arg(long)]
+    cryptomatte: bool,
+    /// Ranks (id/coverage pairs) per Cryptomatte layer.
+    #[arg(long, default_value_t = 6, value_parser = clap::value_parser!(u32).range(1..=16))]
+    cryptomatte_ranks: u32,
+    /// Record the render's date in the header (capDate); without it identical renders are
+    /// identical files.
+    #[arg(long)]
+    timestamp: bool,
 }
 
 fn parse_resolution(s: &str) -> Result<[u32; 2], String> {
@@ -316,6 +331,9 @@ fn render(args: RenderArgs) -> ExitCode {
             compression: args.compression,
         },
         preview_exposure: args.exposure,
+        crop: args.crop,
+        cryptomatte: args.cryptomatte.then_some(args.cryptomatte_ranks),
+        timestamp: args.timestamp,
     };
     let prepared = match job.prepare() {
         Ok(p) => p,

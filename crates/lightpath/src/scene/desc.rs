@@ -242,6 +242,9 @@ pub struct ObjectDesc {
     pub material: Option<NameRef>,
     /// LPE labels of every event on this object; None: the object's name.
     pub lpegroups: Option<Vec<String>>,
+    /// The asset it belongs to (Cryptomatte's `CryptoAsset`; a glTF's top-level node);
+    /// None: the object's own name.
+    pub asset: Option<String>,
     /// Radiance of a glowing (non-light) surface: seen as an `O` event.
     pub emission: Option<[f32; 3]>,
     pub holdout: bool,

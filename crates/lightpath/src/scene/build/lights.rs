@@ -92,11 +92,39 @@ pub fn light_shape(l: &LightDesc) -> Result<(LightShape, Option<ShapePrims>, Vec
         LightKind::Dome { map } => {
             let map = match map {
                 None => None,
-                Some((path, origin)) => Some(load_env(path, origin)?),
+                Some((path, origin)) => {
+                    let map = load_env(path, origin)?;
+                    match dome_rotation(xf, &l.origin)? {
+                        None => Some(map),
+                        Some(r) => Some(map.rotated(r)),
+                    }
+                }
             };
             (LightShape::Dome { map }, None, color)
         }
     })
+}
+
+/// The rotation of a dome's `rotate`/`matrix` (None: none). Scale is divided out and the
+/// translation ignored (the dome is infinitely far); a shear is an error, since it would
+/// not keep solid angles.
+fn dome_rotation(xf: &glam::Affine3A, origin: &Origin) -> Result<Option<glam::Mat3A>, SceneError> {
+    let m = xf.matrix3;
+    if m == glam::Mat3A::IDENTITY {
+        return Ok(None);
+    }
+    let cols = [m.x_axis, m.y_axis, m.z_axis];
+    let lengths = cols.map(|c| c.length());
+    if lengths.iter().any(|l| !(l.is_finite() && *l > 0.0)) {
+        return Err(origin.error("a dome's transform must be invertible (a rotation)"));
+    }
+    let [x, y, z] = [0, 1, 2].map(|i| cols[i] / lengths[i]);
+    if x.dot(y).abs() > 1e-4 || y.dot(z).abs() > 1e-4 || x.dot(z).abs() > 1e-4 {
+        return Err(origin.error(
+            "a dome's transform must be a rotation (with scale, which is ignored), not a shear",
+        ));
+    }
+    Ok(Some(glam::Mat3A::from_cols(x, y, z)))
 }
 
 /// Points each area light at its triangles: `added` is where the scene's primitive list

@@ -251,6 +251,8 @@ struct ObjectDesc {
     material: Option<Spanned<String>>,
     /// LPE labels of every event on this object; defaults to the object's name.
     lpegroups: Option<Vec<String>>,
+    /// The asset the object belongs to (Cryptomatte's CryptoAsset); defaults to its name.
+    asset: Option<String>,
     translate: Option<[f32; 3]>,
     rotate: Option<[f32; 3]>,
     scale: Option<ScaleDesc>,
@@ -532,6 +534,7 @@ fn object(src: &Source, o: &Spanned<ObjectDesc>) -> Result<d::ObjectDesc, SceneE
         transform: placement(o.translate, o.rotate, o.scale, o.matrix),
         material: name_ref(src, &o.material),
         lpegroups: o.lpegroups.clone(),
+        asset: o.asset.clone(),
         emission: o.emission,
         holdout: o.holdout,
         visible_camera: o.visible_camera,
