@@ -42,6 +42,8 @@ pub enum ErrorKind {
     SlotKind,
     LobeRange,
     UnterminatedLabel,
+    /// Groups and sets nested deeper than the parser's limit (`MAX_NESTING`).
+    Nesting,
     /// The automaton would exceed the configured state limit.
     StateLimit,
     /// The path's events are not in the vocabulary the automaton was built for.
@@ -67,6 +69,7 @@ impl ErrorKind {
             ErrorKind::SlotKind => "slot_kind",
             ErrorKind::LobeRange => "lobe_range",
             ErrorKind::UnterminatedLabel => "unterminated_label",
+            ErrorKind::Nesting => "nesting",
             ErrorKind::StateLimit => "state_limit",
             ErrorKind::UnknownEvent => "unknown_event",
         }

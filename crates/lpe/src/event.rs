@@ -411,11 +411,17 @@ impl<'a> Cursor<'a> {
     pub fn unexpected(&self, at: usize, expected: &str) -> Error {
         let span = self.token_span(at);
         let found = &self.src[span.start..span.end];
-        Error::new(
+        let err = Error::new(
             ErrorKind::Unexpected,
             span,
             format!("unexpected {}: expected {expected}", quote_token(found)),
-        )
+        );
+        // The digit for the letter: guides write `[<L.>0]` where `O` (object) is meant.
+        if found == "0" {
+            err.with_help("did you mean 'O' (the letter, an object's emission)?")
+        } else {
+            err
+        }
     }
     pub fn unclosed(&self, open: usize) -> Error {
         let opener = self.src[open..].chars().next().unwrap_or('?');

@@ -35,7 +35,10 @@ fn describe(e: &Expr) -> String {
             .map(describe)
             .collect::<Vec<_>>()
             .join(", then "),
-        Expr::Alt(a, b) => format!("either {} or {}", describe(a), describe(b)),
+        Expr::Alt(arms) => format!(
+            "either {}",
+            arms.iter().map(describe).collect::<Vec<_>>().join(" or ")
+        ),
         Expr::Repeat { expr, min, max } => {
             let inner = describe(expr);
             match (min, max) {

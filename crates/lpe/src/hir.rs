@@ -121,7 +121,7 @@ impl Hir {
 pub fn lower(e: &Expr) -> Hir {
     match e {
         Expr::Concat(v) => Hir::Concat(v.iter().map(lower).collect()),
-        Expr::Alt(a, b) => Hir::Alt(vec![lower(a), lower(b)]),
+        Expr::Alt(arms) => Hir::Alt(arms.iter().map(lower).collect()),
         Expr::Repeat { expr, min, max } => Hir::Repeat {
             hir: Box::new(lower(expr)),
             min: *min,

@@ -50,6 +50,8 @@ pub const SCENE_HASH_ATTRIBUTE: &str = "lightpath/scene_hash";
 pub const SAMPLES_ATTRIBUTE: &str = "lightpath/samples";
 pub const CROP_ATTRIBUTE: &str = "lightpath/crop";
 pub const SETTING_ATTRIBUTE_PREFIX: &str = "lightpath/setting/";
+/// The per-pixel sample count channel of adaptive renders: merges weigh by it.
+pub const SAMPLE_COUNT_CHANNEL: &str = "sampleCount";
 
 /// Attribute name holding AOV `name`'s compiled expression.
 pub fn expression_attribute(name: &str) -> String {

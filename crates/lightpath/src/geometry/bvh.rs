@@ -8,7 +8,7 @@
 //! `cornell-classic` a shadow ray took ~560 instructions; here ~350, with a box test of
 //! ~45 (docs/performance.md).
 
-use super::{Hit, Prim, Ray};
+use super::{Hit, Instance, Prim, Ray};
 use glam::{Vec3A, Vec4};
 use obvhs::aabb::Aabb;
 use obvhs::bvh2::builder::build_bvh2;
@@ -44,7 +44,12 @@ thread_local! {
     // Grown once per thread, so rays through a very deep tree still allocate nothing.
     static DEEP_CLOSEST: std::cell::RefCell<Vec<(u32, f32)>> = const { std::cell::RefCell::new(Vec::new()) };
     static DEEP_ANY: std::cell::RefCell<Vec<u32>> = const { std::cell::RefCell::new(Vec::new()) };
+    // The same for the meshes of instances, traced while the scene's tree holds its own.
+    static DEEP_CLOSEST_MESH: std::cell::RefCell<Vec<(u32, f32)>> = const { std::cell::RefCell::new(Vec::new()) };
+    static DEEP_ANY_MESH: std::cell::RefCell<Vec<u32>> = const { std::cell::RefCell::new(Vec::new()) };
 }
+
+type DeepStack<T> = std::thread::LocalKey<std::cell::RefCell<Vec<T>>>;
 
 /// Below this many boxes obvhs's PLOC builder (with spatial splits and reinsertion: the
 /// best trees) is fast whatever the input.
@@ -97,7 +102,7 @@ struct Leaf {
     first: u32,
     /// For each ray-kind mask (0..8), the lanes holding a triangle that kind of ray sees.
     triangles: [u8; 8],
-    /// The same for spheres.
+    /// The same for primitives tested one at a time: spheres and instances.
     spheres: [u8; 8],
     last: bool,
 }
@@ -116,6 +121,9 @@ pub struct Accel {
     face_normals: Vec<Vec3A>,
     /// Where each primitive, by its index as given to `build`, sits in `prims`.
     slots: Vec<u32>,
+    /// Shared meshes, each in its own space, and their placements (`Prim::Instance`).
+    meshes: Vec<Accel>,
+    instances: Vec<Instance>,
 }
 
 /// Per-ray constants of the box and triangle tests.
@@ -219,6 +227,8 @@ impl Accel {
             normals,
             face_normals: Vec::new(),
             slots: Vec::new(),
+            meshes: Vec::new(),
+            instances: Vec::new(),
         };
         if prims.is_empty() {
             return accel;
@@ -406,7 +416,7 @@ impl Accel {
                             }
                         }
                     }
-                    Prim::Sphere { .. } => {
+                    Prim::Sphere { .. } | Prim::Instance { .. } => {
                         for mask in 0..8 {
                             if seen_by(mask) {
                                 leaf.spheres[mask] |= 1 << lane;
@@ -425,6 +435,35 @@ impl Accel {
         &self.prims
     }
 
+    /// Gives the accelerator the meshes and placements its `Prim::Instance` primitives
+    /// name (`index` into `instances`, each naming one of `meshes`). Meshes hold no
+    /// instances themselves: the structure has two levels.
+    pub fn with_instances(mut self, meshes: Vec<Accel>, instances: Vec<Instance>) -> Accel {
+        debug_assert!(meshes.iter().all(|m| m.instances.is_empty()));
+        self.meshes = meshes;
+        self.instances = instances;
+        self
+    }
+
+    /// The box around every primitive (inverted, min > max, when there are none).
+    pub fn bounds(&self) -> (Vec3A, Vec3A) {
+        self.prims.iter().fold(
+            (Vec3A::splat(f32::INFINITY), Vec3A::splat(f32::NEG_INFINITY)),
+            |(lo, hi), p| {
+                let (a, b) = p.bounds();
+                (lo.min(a), hi.max(b))
+            },
+        )
+    }
+
+    pub fn instances(&self) -> &[Instance] {
+        &self.instances
+    }
+
+    pub fn meshes(&self) -> &[Accel] {
+        &self.meshes
+    }
+
     /// The index in `prims()` of the primitive given to `build` as number `original`.
     pub fn slot(&self, original: u32) -> u32 {
         self.slots[original as usize]
@@ -440,20 +479,70 @@ impl Accel {
         if self.nodes.is_empty() {
             return None;
         }
-        let (prim, t) = if self.stack_need <= STACK {
+        let (prim, t, inner) = self.nearest(ray, tmin, mask, &DEEP_CLOSEST);
+        (prim != u32::MAX).then(|| self.surface(ray, prim, t, inner))
+    }
+
+    /// `closest` on the machine stack, or on `deep` for very deep trees.
+    #[inline]
+    fn nearest(
+        &self,
+        ray: &Ray,
+        tmin: f32,
+        mask: u8,
+        deep: &'static DeepStack<(u32, f32)>,
+    ) -> (u32, f32, u32) {
+        if self.stack_need <= STACK {
             self.closest(ray, tmin, mask, &mut Stack::<(u32, f32), STACK>::new())
         } else {
-            DEEP_CLOSEST.with_borrow_mut(|stack| {
+            deep.with_borrow_mut(|stack| {
                 if stack.len() < self.stack_need {
                     stack.resize(self.stack_need, (0, 0.0));
                 }
                 self.closest(ray, tmin, mask, stack)
             })
-        };
-        (prim != u32::MAX).then(|| self.surface(ray, prim, t))
+        }
     }
 
-    /// Closest-hit traversal, nearest child first; returns (slot, t) or (`u32::MAX`, _).
+    /// The ray in instance `index`'s space (same distances along it).
+    #[inline]
+    fn local_ray(&self, index: u32, ray: &Ray, tmax: f32) -> (&Instance, Ray) {
+        let inst = &self.instances[index as usize];
+        let local = Ray {
+            origin: inst.to_local.transform_point3a(ray.origin),
+            dir: inst.to_local.transform_vector3a(ray.dir),
+            tmax,
+        };
+        (inst, local)
+    }
+
+    /// The nearest hit on instance `index` before `tmax`: (the mesh's slot, t), t
+    /// infinite for none.
+    #[inline(never)]
+    fn instance_nearest(&self, index: u32, ray: &Ray, tmin: f32, tmax: f32) -> (u32, f32) {
+        let (inst, local) = self.local_ray(index, ray, tmax);
+        let mesh = &self.meshes[inst.mesh as usize];
+        if mesh.nodes.is_empty() {
+            return (u32::MAX, f32::INFINITY);
+        }
+        let (slot, t, _) = mesh.nearest(&local, tmin, Visibility::ALL, &DEEP_CLOSEST_MESH);
+        if slot == u32::MAX {
+            (slot, f32::INFINITY)
+        } else {
+            (slot, t)
+        }
+    }
+
+    /// Does instance `index` block the ray before its `tmax`?
+    #[inline(never)]
+    fn instance_occluded(&self, index: u32, ray: &Ray, tmin: f32) -> bool {
+        let (inst, local) = self.local_ray(index, ray, ray.tmax);
+        let mesh = &self.meshes[inst.mesh as usize];
+        !mesh.nodes.is_empty() && mesh.occluded_with(&local, tmin, u32::MAX, &DEEP_ANY_MESH)
+    }
+
+    /// Closest-hit traversal, nearest child first; returns (slot, t, the instanced mesh's
+    /// slot when the slot is an instance) or (`u32::MAX`, _, _).
     #[inline(always)]
     fn closest(
         &self,
@@ -461,11 +550,12 @@ impl Accel {
         tmin: f32,
         mask: u8,
         stack: &mut impl TraversalStack<(u32, f32)>,
-    ) -> (u32, f32) {
+    ) -> (u32, f32, u32) {
         let r = RayLanes::new(ray, tmin);
         let mask = (mask & 7) as usize;
         let mut tmax = ray.tmax;
         let mut best = u32::MAX;
+        let mut inner = u32::MAX;
         let mut sp = 0;
         let mut current = 0u32;
         loop {
@@ -541,8 +631,16 @@ impl Accel {
                     while spheres != 0 {
                         let slot = leaf.first + spheres.trailing_zeros();
                         spheres &= spheres - 1;
-                        let t =
-                            self.prims[slot as usize].intersect(ray.origin, ray.dir, tmin, tmax);
+                        let prim = &self.prims[slot as usize];
+                        let t = if let Prim::Instance { index, .. } = *prim {
+                            let (hit, t) = self.instance_nearest(index, ray, tmin, tmax);
+                            if t < tmax {
+                                inner = hit;
+                            }
+                            t
+                        } else {
+                            prim.intersect(ray.origin, ray.dir, tmin, tmax)
+                        };
                         if t < tmax {
                             tmax = t;
                             best = slot;
@@ -557,7 +655,7 @@ impl Accel {
             // Next stacked child that is still nearer than the nearest hit.
             loop {
                 if sp == 0 {
-                    return (best, tmax);
+                    return (best, tmax, inner);
                 }
                 sp -= 1;
                 let (child, t) = stack.take(sp);
@@ -576,10 +674,22 @@ impl Accel {
         if self.nodes.is_empty() {
             return false;
         }
+        self.occluded_with(ray, tmin, ignore, &DEEP_ANY)
+    }
+
+    /// `any_hit` on the machine stack, or on `deep` for very deep trees.
+    #[inline]
+    fn occluded_with(
+        &self,
+        ray: &Ray,
+        tmin: f32,
+        ignore: u32,
+        deep: &'static DeepStack<u32>,
+    ) -> bool {
         if self.stack_need <= STACK {
             self.any_hit(ray, tmin, ignore, &mut Stack::<u32, STACK>::new())
         } else {
-            DEEP_ANY.with_borrow_mut(|stack| {
+            deep.with_borrow_mut(|stack| {
                 if stack.len() < self.stack_need {
                     stack.resize(self.stack_need, 0);
                 }
@@ -637,9 +747,14 @@ impl Accel {
                         let slot = leaf.first + spheres.trailing_zeros();
                         spheres &= spheres - 1;
                         if self.objects[slot as usize] != ignore
-                            && self.prims[slot as usize]
-                                .intersect(ray.origin, ray.dir, tmin, tmax)
-                                .is_finite()
+                            && match self.prims[slot as usize] {
+                                Prim::Instance { index, .. } => {
+                                    self.instance_occluded(index, ray, tmin)
+                                }
+                                ref prim => {
+                                    prim.intersect(ray.origin, ray.dir, tmin, tmax).is_finite()
+                                }
+                            }
                         {
                             return true;
                         }
@@ -658,7 +773,10 @@ impl Accel {
         }
     }
 
-    fn surface(&self, ray: &Ray, prim: u32, t: f32) -> Hit {
+    fn surface(&self, ray: &Ray, prim: u32, t: f32, inner: u32) -> Hit {
+        if let Prim::Instance { index, .. } = self.prims[prim as usize] {
+            return self.instance_surface(ray, prim, index, t, inner);
+        }
         let p = ray.origin + ray.dir * t;
         let (ng, ns) = match self.prims[prim as usize] {
             Prim::Triangle {
@@ -692,12 +810,31 @@ impl Accel {
                 let n = (p - center) / radius;
                 (n, n)
             }
+            Prim::Instance { .. } => unreachable!("instances are placed above"),
         };
         Hit {
             t,
             p,
             ng,
             ns,
+            prim,
+            object: self.objects[prim as usize],
+        }
+    }
+
+    /// The hit on an instance: the mesh's own surface at the same distance, placed.
+    #[inline(never)]
+    fn instance_surface(&self, ray: &Ray, prim: u32, index: u32, t: f32, inner: u32) -> Hit {
+        let (inst, local) = self.local_ray(index, ray, t);
+        let mesh = &self.meshes[inst.mesh as usize];
+        let h = mesh.surface(&local, inner, t, u32::MAX);
+        let ng = (inst.normal_to_world * h.ng).normalize_or(Vec3A::Z);
+        let ns = (inst.normal_to_world * h.ns).normalize_or(ng);
+        Hit {
+            t,
+            p: ray.origin + ray.dir * t,
+            ng,
+            ns: if ns.dot(ng) < 0.0 { -ns } else { ns },
             prim,
             object: self.objects[prim as usize],
         }
@@ -951,6 +1088,120 @@ mod tests {
                 assert_eq!(accel.occluded(&ray, 0.0, 1), blocked, "n {n}");
             }
         }
+    }
+
+    /// A mesh placed several times (turned, scaled unevenly, one mirrored) answers as the
+    /// same triangles placed and built flat: the same distances, normals and objects.
+    #[test]
+    fn instances_trace_like_their_flattened_copies() {
+        use glam::{Affine3A, Quat, Vec3};
+        let mut rng = Rng::for_sample(2, 4, 6);
+        let (mesh, _, _) = soup(300, &mut rng);
+        let mesh: Vec<Prim> = mesh
+            .into_iter()
+            .filter(|p| matches!(p, Prim::Triangle { .. }))
+            .collect();
+        let placements = [
+            Affine3A::from_scale_rotation_translation(
+                Vec3::new(0.5, 0.8, 0.3),
+                Quat::from_rotation_y(0.6),
+                Vec3::new(1.5, 0.0, 0.0),
+            ),
+            Affine3A::from_rotation_translation(
+                Quat::from_rotation_x(-1.1),
+                Vec3::new(-1.2, 0.3, 0.4),
+            ),
+            Affine3A::from_scale_rotation_translation(
+                Vec3::new(-0.6, 0.6, 0.6),
+                Quat::from_rotation_z(0.3),
+                Vec3::new(0.0, -1.4, 0.2),
+            ),
+        ];
+        let meshes = vec![Accel::build(
+            mesh.clone(),
+            vec![0; mesh.len()],
+            Vec::new(),
+            vec![7; mesh.len()],
+        )];
+        let mut top = Vec::new();
+        let mut flat = Vec::new();
+        let mut flat_objects = Vec::new();
+        let mut instances = Vec::new();
+        for (k, xf) in placements.iter().enumerate() {
+            let inst = Instance::new(0, *xf).unwrap();
+            let (lo, hi) = meshes[0].bounds();
+            let (lo, hi) = inst.world_bounds(lo, hi);
+            top.push(Prim::Instance {
+                lo,
+                hi,
+                index: k as u32,
+            });
+            instances.push(inst);
+            for p in &mesh {
+                let Prim::Triangle { p0, e1, e2, .. } = *p else {
+                    unreachable!()
+                };
+                let q0 = xf.transform_point3a(p0);
+                flat.push(Prim::Triangle {
+                    p0: q0,
+                    e1: xf.transform_point3a(p0 + e1) - q0,
+                    e2: xf.transform_point3a(p0 + e2) - q0,
+                    normals: u32::MAX,
+                });
+                flat_objects.push(k as u32);
+            }
+        }
+        // The first placement is hidden from camera rays.
+        let top_visibility = vec![6, 7, 7];
+        let flat_visibility: Vec<u8> = flat_objects
+            .iter()
+            .map(|&k| top_visibility[k as usize])
+            .collect();
+        let n = top.len();
+        let instanced = Accel::build(top, (0..n as u32).collect(), Vec::new(), top_visibility)
+            .with_instances(meshes, instances);
+        let flat = Accel::build(flat, flat_objects, Vec::new(), flat_visibility);
+        let mut hits = 0;
+        for _ in 0..4000 {
+            let origin = Vec3A::new(rng.next_f32(), rng.next_f32(), rng.next_f32()) * 5.0
+                - Vec3A::splat(2.5);
+            let ray = Ray {
+                origin,
+                dir: uniform_sphere(rng.next_2d()),
+                tmax: if rng.next_f32() < 0.5 {
+                    f32::INFINITY
+                } else {
+                    2.0
+                },
+            };
+            for mask in [Visibility::CAMERA, Visibility::INDIRECT] {
+                let a = instanced.intersect(&ray, 0.0, mask);
+                let b = flat.intersect(&ray, 0.0, mask);
+                match (a, b) {
+                    (None, None) => {}
+                    (Some(a), Some(b)) => {
+                        hits += 1;
+                        assert!((a.t - b.t).abs() <= 1e-4 * b.t, "{} vs {}", a.t, b.t);
+                        assert_eq!(a.object, b.object);
+                        assert!((a.ng - b.ng).length() < 1e-3, "{} vs {}", a.ng, b.ng);
+                        assert!((a.p - b.p).length() < 1e-4);
+                    }
+                    // A ray grazing an edge may pass between two triangles in one copy only.
+                    (a, b) => panic!(
+                        "instanced {:?} vs flat {:?}",
+                        a.map(|h| h.t),
+                        b.map(|h| h.t)
+                    ),
+                }
+            }
+            for ignore in [0, 1, u32::MAX] {
+                assert_eq!(
+                    instanced.occluded(&ray, 0.0, ignore),
+                    flat.occluded(&ray, 0.0, ignore)
+                );
+            }
+        }
+        assert!(hits > 500, "{hits}");
     }
 
     #[test]

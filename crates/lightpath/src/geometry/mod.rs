@@ -2,10 +2,12 @@
 //! `intersect` / `occluded` seam; `obvhs` builds the BVH, `bvh` lays it out 4 wide.
 
 mod bvh;
+mod instance;
 mod sah;
 pub mod shapes;
 
 pub use bvh::{Accel, Visibility};
+pub use instance::Instance;
 
 use glam::Vec3A;
 
@@ -30,6 +32,13 @@ pub enum Prim {
     Sphere {
         center: Vec3A,
         radius: f32,
+    },
+    /// A placement of a shared mesh (`Accel::instance`), with its world bounds; the
+    /// accelerator traces it in the mesh's own space.
+    Instance {
+        lo: Vec3A,
+        hi: Vec3A,
+        index: u32,
     },
 }
 
@@ -59,10 +68,12 @@ impl Prim {
             Prim::Sphere { center, radius } => {
                 (center - Vec3A::splat(radius), center + Vec3A::splat(radius))
             }
+            Prim::Instance { lo, hi, .. } => (lo, hi),
         }
     }
 
-    /// Distance along the ray to the nearest hit in (tmin, tmax), or infinity.
+    /// Distance along the ray to the nearest hit in (tmin, tmax), or infinity (always for
+    /// an instance, which only the accelerator holding its mesh can trace).
     #[inline]
     pub fn intersect(&self, origin: Vec3A, dir: Vec3A, tmin: f32, tmax: f32) -> f32 {
         match *self {
@@ -115,6 +126,7 @@ impl Prim {
                     f32::INFINITY
                 }
             }
+            Prim::Instance { .. } => f32::INFINITY,
         }
     }
 
@@ -123,7 +135,7 @@ impl Prim {
     pub fn face_normal(&self) -> Vec3A {
         match *self {
             Prim::Triangle { e1, e2, .. } => e1.cross(e2).normalize_or(Vec3A::Z),
-            Prim::Sphere { .. } => Vec3A::Z,
+            Prim::Sphere { .. } | Prim::Instance { .. } => Vec3A::Z,
         }
     }
 
@@ -131,6 +143,8 @@ impl Prim {
         match *self {
             Prim::Triangle { e1, e2, .. } => 0.5 * e1.cross(e2).length(),
             Prim::Sphere { radius, .. } => 4.0 * std::f32::consts::PI * radius * radius,
+            // Lights are never instances; the area of a placement is not needed.
+            Prim::Instance { .. } => 0.0,
         }
     }
 }

@@ -141,7 +141,8 @@ pub fn render_frame(
     // writes one contiguous run), and each band is moved into the film's planes: the
     // peak memory is the film plus one band, with no allocation churn.
     let row_len = stride * w as usize;
-    let band_rows = (BAND_BYTES / (4 * row_len)).clamp(8, h.max(1) as usize);
+    // At least 8 rows (or the whole window when it is shorter).
+    let band_rows = (BAND_BYTES / (4 * row_len)).max(8).min(h.max(1) as usize);
     let mut band = vec![0.0f32; band_rows * row_len];
     let mut film = Film::for_window(win, [fw, fh], scene.aovs.len(), options.spp);
     // Cryptomatte values, band by band beside the AOVs' (one dummy value per row without).

@@ -7,7 +7,7 @@ use crate::aov::naming::{
 };
 use crate::camera::PixelFilter;
 use crate::film::PixelWindow;
-use crate::scene::desc::{LightKind, SceneDesc, ShapeDesc};
+use crate::scene::desc::{LightKind, SceneDesc};
 use crate::scene::Scene;
 use std::path::{Path, PathBuf};
 
@@ -142,7 +142,7 @@ pub fn scene_hash(text: &str, desc: &SceneDesc) -> Result<u64, String> {
     let mut h = Fnv64::default();
     h.write(text.as_bytes());
     for o in &desc.objects {
-        if let ShapeDesc::Mesh { parts } = &o.shape {
+        if let Some(parts) = o.shape.mesh_parts() {
             for m in parts {
                 for p in &m.positions {
                     p.iter().for_each(|v| h.write(&v.to_le_bytes()));

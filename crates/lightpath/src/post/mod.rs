@@ -4,6 +4,7 @@
 
 pub mod comp;
 pub mod cryptomatte;
+pub mod diff;
 pub mod merge;
 pub mod partitions;
 

@@ -229,6 +229,22 @@ pub enum ShapeDesc {
     Mesh {
         parts: Vec<MeshData>,
     },
+    /// Mesh parts several objects share (the same OBJ file named twice): stored once, and
+    /// each object that uses them is an instance (`docs/scene-format.md`).
+    SharedMesh {
+        parts: std::sync::Arc<Vec<MeshData>>,
+    },
+}
+
+impl ShapeDesc {
+    /// The triangle mesh parts of a `Mesh` or `SharedMesh`.
+    pub fn mesh_parts(&self) -> Option<&[MeshData]> {
+        match self {
+            ShapeDesc::Mesh { parts } => Some(parts),
+            ShapeDesc::SharedMesh { parts } => Some(parts),
+            _ => None,
+        }
+    }
 }
 
 #[derive(Clone, Debug)]

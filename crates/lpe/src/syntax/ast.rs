@@ -23,8 +23,10 @@ pub enum Body {
 pub enum Expr {
     /// Events one after another.
     Concat(Vec<Expr>),
-    /// `a|b`: the single unit before the bar or the one after it.
-    Alt(Box<Expr>, Box<Expr>),
+    /// `a|b|…`: one of the units joined by bars (a flat list, so a long chain of
+    /// alternatives does not nest: every pass over the tree recurses only as deep as the
+    /// groups and sets are nested, which the parser bounds).
+    Alt(Vec<Expr>),
     Repeat {
         expr: Box<Expr>,
         min: u32,

@@ -4,5 +4,5 @@ pub mod ast;
 mod parser;
 mod print;
 
-pub use parser::parse_definition;
+pub use parser::{parse_definition, MAX_NESTING};
 pub use print::print_definition;

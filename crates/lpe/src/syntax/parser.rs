@@ -10,6 +10,7 @@ use crate::prefix::{closest, standard_name, Prefix, STANDARD_NAMES};
 pub fn parse_definition(src: &str) -> Result<Definition, Error> {
     let mut p = Parser {
         c: Cursor { src, pos: 0 },
+        depth: 0,
     };
     let name = p.name();
     p.c.skip_ws();
@@ -77,7 +78,14 @@ fn suggest_standard_name(err: Error, rest: &str, lpe_marker: bool) -> Error {
 
 struct Parser<'a> {
     c: Cursor<'a>,
+    /// Groups and sets open around the cursor.
+    depth: u32,
 }
+
+/// Groups and sets nested deeper than this are an error: every pass over the tree (parse,
+/// lowering, printing, dropping) recurses once per level, and 8000 levels overflowed the
+/// stack. Real expressions nest a handful of levels.
+pub const MAX_NESTING: u32 = 100;
 
 fn is_ident_start(c: char) -> bool {
     c.is_ascii_alphabetic() || c == '_'
@@ -233,7 +241,8 @@ impl<'a> Parser<'a> {
 
     /// `alt := unit { '|' unit }`.
     fn alternation(&mut self) -> Result<Expr, Error> {
-        let mut expr = self.unit()?;
+        let first = self.unit()?;
+        let mut arms = vec![first];
         loop {
             self.c.skip_ws();
             match self.c.peek() {
@@ -258,10 +267,10 @@ impl<'a> Parser<'a> {
                             ))
                         }
                     }
-                    let rhs = self.unit()?;
-                    expr = Expr::Alt(Box::new(expr), Box::new(rhs));
+                    arms.push(self.unit()?);
                 }
-                _ => return Ok(expr),
+                _ if arms.len() == 1 => return Ok(arms.swap_remove(0)),
+                _ => return Ok(Expr::Alt(arms)),
             }
         }
     }
@@ -303,8 +312,10 @@ impl<'a> Parser<'a> {
             _ => {}
         }
         let syntax = |c: &Cursor<'_>, what: &str| -> Error {
+            // A token (LPE.md §8): a numbered symbol such as `D4` or a label is reported
+            // whole, as anywhere else.
             let span = match c.peek() {
-                Some((at, ch)) => Span::new(at, at + ch.len_utf8()),
+                Some((at, _)) => c.token_span(at),
                 None => Span::at(c.src.len()),
             };
             Error::new(
@@ -399,7 +410,7 @@ impl<'a> Parser<'a> {
         match c {
             '(' => {
                 self.c.bump();
-                let inner = self.sequence()?;
+                let inner = self.nested(at, Self::sequence)?;
                 self.c.skip_ws();
                 match self.c.peek() {
                     None => Err(self.c.unclosed(at)),
@@ -422,7 +433,7 @@ impl<'a> Parser<'a> {
             }
             '[' => {
                 self.c.bump();
-                self.set(at)
+                self.nested(at, |p| p.set(at))
             }
             '<' => {
                 self.c.bump();
@@ -437,6 +448,27 @@ impl<'a> Parser<'a> {
                 None => Err(self.c.unexpected(at, "an event")),
             },
         }
+    }
+
+    /// Parses what a `(` or `[` at `open` holds, one level deeper.
+    fn nested(
+        &mut self,
+        open: usize,
+        inner: impl FnOnce(&mut Self) -> Result<Expr, Error>,
+    ) -> Result<Expr, Error> {
+        if self.depth >= MAX_NESTING {
+            return Err(Error::new(
+                ErrorKind::Nesting,
+                Span::new(open, open + 1),
+                format!(
+                    "groups and sets nested more than {MAX_NESTING} deep: expected at most {MAX_NESTING} levels of '(' and '['"
+                ),
+            ));
+        }
+        self.depth += 1;
+        let expr = inner(self);
+        self.depth -= 1;
+        expr
     }
 
     /// A symbol or label at `at`, consumed; `None` (nothing consumed) if there is none.
@@ -833,4 +865,63 @@ fn slot_kind_error(span: Span, index: usize, what: &str, item: Option<&Item>) ->
 
 fn prefix_list() -> String {
     Prefix::ALL.map(Prefix::word).join(", ")
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn error(src: &str) -> Error {
+        parse_definition(src).unwrap_err()
+    }
+
+    #[test]
+    fn nesting_beyond_the_limit_is_an_error_at_the_bracket_that_goes_too_deep() {
+        let ok = format!(
+            "C{}L{}",
+            "(".repeat(MAX_NESTING as usize),
+            ")".repeat(MAX_NESTING as usize)
+        );
+        assert!(parse_definition(&ok).is_ok());
+        for open in ["(", "["] {
+            let close = if open == "(" { ")" } else { "]" };
+            let deep = format!("C{}L{}", open.repeat(9000), close.repeat(9000));
+            let e = error(&deep);
+            assert_eq!(e.kind, ErrorKind::Nesting);
+            let at = 1 + MAX_NESTING as usize;
+            assert_eq!(e.span, Span::new(at, at + 1));
+        }
+    }
+
+    #[test]
+    fn a_long_chain_of_alternatives_is_flat() {
+        let chain = format!("C({}D)L", "D|".repeat(100_000));
+        let def = parse_definition(&chain).unwrap();
+        let Body::Expr(Expr::Concat(units)) = def.body else {
+            panic!("not a sequence");
+        };
+        let Expr::Group(inner) = &units[1] else {
+            panic!("not a group");
+        };
+        assert!(matches!(&**inner, Expr::Alt(arms) if arms.len() == 100_001));
+    }
+
+    #[test]
+    fn a_zero_for_an_o_gets_a_hint_and_a_numbered_symbol_in_a_quantifier_is_whole() {
+        let e = error("C<RD>[<L.>0]");
+        assert_eq!(e.span, Span::new(10, 11));
+        assert!(
+            e.help
+                .as_deref()
+                .is_some_and(|h| h.contains("did you mean 'O'")),
+            "{e:?}"
+        );
+        let e = error("C<RD>{,D4}");
+        assert_eq!(
+            (e.kind, e.span),
+            (ErrorKind::QuantifierSyntax, Span::new(7, 9))
+        );
+        let e = error("CD{a}L");
+        assert_eq!(e.span, Span::new(3, 4));
+    }
 }

@@ -25,10 +25,13 @@ pub fn print_definition(def: &Definition) -> String {
 pub(crate) fn print_expr(e: &Expr, out: &mut String) {
     match e {
         Expr::Concat(units) => units.iter().for_each(|u| print_expr(u, out)),
-        Expr::Alt(a, b) => {
-            print_expr(a, out);
-            out.push('|');
-            print_expr(b, out);
+        Expr::Alt(arms) => {
+            for (i, arm) in arms.iter().enumerate() {
+                if i > 0 {
+                    out.push('|');
+                }
+                print_expr(arm, out);
+            }
         }
         Expr::Repeat { expr, min, max } => {
             print_expr(expr, out);

@@ -2,11 +2,14 @@
 //! sets) into the acceleration structure.
 
 use crate::geometry::shapes::{self, ShapePrims};
-use crate::geometry::{Accel, Prim, RAY_EPSILON};
-use crate::scene::desc::{MeshData, Origin, ShapeDesc};
+use crate::geometry::{Accel, Instance, Prim, Visibility, RAY_EPSILON};
+use crate::scene::desc::{MeshData, ObjectDesc, Origin, ShapeDesc};
 use crate::scene::SceneError;
 use glam::{Affine3A, Vec3A};
+use rayon::prelude::*;
+use std::collections::HashMap;
 use std::ops::Range;
+use std::sync::Arc;
 
 /// The primitives of a shape placed by `xf`.
 pub fn shape_prims(
@@ -27,18 +30,26 @@ pub fn shape_prims(
                 r => return Err(origin.error(format!("sphere radius must be positive, got {r}"))),
             }
         }
-        ShapeDesc::Mesh { parts } => {
-            let mut out = ShapePrims::default();
-            for part in parts {
-                let part = mesh(part, xf, origin)?;
-                let base = out.prims.len();
-                out.normals
-                    .extend(part.normals.into_iter().map(|(i, n)| (i + base, n)));
-                out.prims.extend(part.prims);
-            }
-            out
-        }
+        ShapeDesc::Mesh { parts } => mesh_parts(parts, xf, origin)?,
+        ShapeDesc::SharedMesh { parts } => mesh_parts(parts, xf, origin)?,
     })
+}
+
+/// The triangles of mesh parts placed by `xf`.
+fn mesh_parts(
+    parts: &[MeshData],
+    xf: &Affine3A,
+    origin: &Origin,
+) -> Result<ShapePrims, SceneError> {
+    let mut out = ShapePrims::default();
+    for part in parts {
+        let part = mesh(part, xf, origin)?;
+        let base = out.prims.len();
+        out.normals
+            .extend(part.normals.into_iter().map(|(i, n)| (i + base, n)));
+        out.prims.extend(part.prims);
+    }
+    Ok(out)
 }
 
 fn mesh(m: &MeshData, xf: &Affine3A, origin: &Origin) -> Result<ShapePrims, SceneError> {
@@ -79,13 +90,35 @@ fn mesh(m: &MeshData, xf: &Affine3A, origin: &Origin) -> Result<ShapePrims, Scen
     Ok(shapes::mesh(xf, &pos, &m.indices, normals.as_deref()))
 }
 
-/// Collects primitives of all objects, with their shading normals.
+/// The key of shared mesh parts: their address.
+pub fn mesh_key(parts: &Arc<Vec<MeshData>>) -> usize {
+    Arc::as_ptr(parts) as usize
+}
+
+/// How many objects use each shared mesh (by `mesh_key`).
+pub fn shared_mesh_users(objects: &[ObjectDesc]) -> HashMap<usize, usize> {
+    let mut users = HashMap::new();
+    for o in objects {
+        if let ShapeDesc::SharedMesh { parts } = &o.shape {
+            *users.entry(mesh_key(parts)).or_insert(0) += 1;
+        }
+    }
+    users
+}
+
+/// Collects primitives of all objects, with their shading normals, and the shared meshes
+/// with their placements.
 #[derive(Default)]
 pub struct GeometryBuilder {
     prims: Vec<Prim>,
     objects: Vec<u32>,
     normals: Vec<[Vec3A; 3]>,
     visibility: Vec<u8>,
+    /// Each shared mesh's primitives in its own space, with their bounds, by the address
+    /// of the parts the objects share.
+    meshes: Vec<(GeometryBuilder, (Vec3A, Vec3A))>,
+    mesh_ids: HashMap<usize, u32>,
+    instances: Vec<Instance>,
 }
 
 impl GeometryBuilder {
@@ -106,8 +139,74 @@ impl GeometryBuilder {
         start..self.prims.len() as u32
     }
 
+    /// Places the shared `parts` by `xf` as one more instance of object `object` (the
+    /// parts are stored the first time they are seen).
+    pub fn add_instance(
+        &mut self,
+        object: u32,
+        parts: &Arc<Vec<MeshData>>,
+        xf: &Affine3A,
+        visibility: u8,
+        origin: &Origin,
+    ) -> Result<(), SceneError> {
+        let key = mesh_key(parts);
+        let mesh = match self.mesh_ids.get(&key) {
+            Some(&id) => id,
+            None => {
+                let mut local = GeometryBuilder::default();
+                local.add(
+                    0,
+                    mesh_parts(parts, &Affine3A::IDENTITY, origin)?,
+                    Visibility::ALL,
+                );
+                let bounds = local.prims.iter().fold(
+                    (Vec3A::splat(f32::INFINITY), Vec3A::splat(f32::NEG_INFINITY)),
+                    |(lo, hi), p| {
+                        let (a, b) = p.bounds();
+                        (lo.min(a), hi.max(b))
+                    },
+                );
+                let id = self.meshes.len() as u32;
+                self.meshes.push((local, bounds));
+                self.mesh_ids.insert(key, id);
+                id
+            }
+        };
+        let (_, (lo, hi)) = &self.meshes[mesh as usize];
+        if lo.x > hi.x {
+            // No triangles: nothing to place.
+            return Ok(());
+        }
+        let instance = Instance::new(mesh, *xf).ok_or_else(|| {
+            origin.error("the object's transform is not invertible (a zero scale?)")
+        })?;
+        let (lo, hi) = instance.world_bounds(*lo, *hi);
+        let index = self.instances.len() as u32;
+        self.instances.push(instance);
+        self.prims.push(Prim::Instance { lo, hi, index });
+        self.objects.push(object);
+        self.visibility.push(visibility);
+        Ok(())
+    }
+
+    /// How many primitives the scene's own list holds so far.
+    pub fn len(&self) -> u32 {
+        self.prims.len() as u32
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.prims.is_empty()
+    }
+
     pub fn build(self) -> Accel {
+        // The shared meshes' trees on every core (each build also splits its work).
+        let meshes: Vec<Accel> = self
+            .meshes
+            .into_par_iter()
+            .map(|(m, _)| Accel::build(m.prims, m.objects, m.normals, m.visibility))
+            .collect();
         Accel::build(self.prims, self.objects, self.normals, self.visibility)
+            .with_instances(meshes, self.instances)
     }
 }
 

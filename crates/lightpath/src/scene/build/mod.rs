@@ -10,7 +10,7 @@ use crate::aov::AovSpec;
 use crate::events::Vocabulary;
 use crate::geometry::Visibility;
 use crate::light::Light;
-use crate::scene::desc::{LightDesc, LightKind, Origin, SceneDesc};
+use crate::scene::desc::{LightDesc, LightKind, Origin, SceneDesc, ShapeDesc};
 use crate::scene::{Aov, Object, Scene, SceneError};
 use geometry::GeometryBuilder;
 use glam::Vec3A;
@@ -93,17 +93,40 @@ fn add_objects(
 ) -> Result<(Vec<Object>, Vec<Range<u32>>), SceneError> {
     let mut objects: Vec<Object> = Vec::new();
     let mut ranges = Vec::new();
+    let users = geometry::shared_mesh_users(&desc.objects);
+    // Objects whose triangles a mesh light samples stay in the scene's own list.
+    let mesh_light_objects: Vec<usize> = desc
+        .lights
+        .iter()
+        .filter_map(|l| match l.kind {
+            LightKind::Mesh { object } => Some(object),
+            _ => None,
+        })
+        .collect();
     for o in &desc.objects {
         let name = o
             .name
             .clone()
             .unwrap_or_else(|| format!("object{}", objects.len()));
-        let shape = geometry::shape_prims(&o.shape, &o.transform, &o.origin)?;
         let id = objects.len() as u32;
         let visibility = (o.visible_camera as u8 * Visibility::CAMERA)
             | (o.visible_indirect as u8 * Visibility::INDIRECT)
             | (o.casts_shadows as u8 * Visibility::SHADOW);
-        ranges.push(geometry.add(id, shape, visibility));
+        match &o.shape {
+            // A mesh several objects share: stored once, placed as an instance (no
+            // primitives of its own in the scene's list).
+            ShapeDesc::SharedMesh { parts }
+                if users[&geometry::mesh_key(parts)] > 1
+                    && !mesh_light_objects.contains(&(id as usize)) =>
+            {
+                geometry.add_instance(id, parts, &o.transform, visibility, &o.origin)?;
+                ranges.push(geometry.len()..geometry.len());
+            }
+            shape => {
+                let shape = geometry::shape_prims(shape, &o.transform, &o.origin)?;
+                ranges.push(geometry.add(id, shape, visibility));
+            }
+        }
         let groups = o.lpegroups.clone().unwrap_or_else(|| vec![name.clone()]);
         objects.push(Object {
             material: materials::find(desc, material_ids, &o.material)?,

@@ -41,7 +41,9 @@ pub fn bounds(desc: &SceneDesc) -> Option<(Vec3A, Vec3A)> {
             add(c - Vec3A::splat(*radius));
             add(c + Vec3A::splat(*radius));
         }
-        ShapeDesc::Mesh { parts } => parts
+        ShapeDesc::Mesh { .. } | ShapeDesc::SharedMesh { .. } => s
+            .mesh_parts()
+            .unwrap_or_default()
             .iter()
             .flat_map(|p| &p.positions)
             .for_each(|&p| add(xf.transform_point3a(p.into()))),

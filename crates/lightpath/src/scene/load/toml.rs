@@ -9,7 +9,7 @@ use crate::camera::FovAxis;
 use crate::scene::desc::{self as d, NameRef};
 use crate::scene::SceneError;
 use serde::Deserialize;
-use std::collections::BTreeMap;
+use std::collections::{BTreeMap, HashMap};
 use std::ops::Range;
 use toml::Spanned;
 
@@ -345,8 +345,10 @@ pub fn load(src: &Source) -> Result<d::SceneDesc, SceneError> {
     for inc in &file.include {
         include(src, inc, &mut scene)?;
     }
+    // OBJ files by path: objects naming the same file share its triangles.
+    let mut files = HashMap::new();
     for o in &file.objects {
-        scene.objects.push(object(src, o)?);
+        scene.objects.push(object(src, o, &mut files)?);
     }
     for l in &file.lights {
         if l.get_ref().kind.get_ref() == "mesh" {
@@ -490,7 +492,14 @@ fn material(
     })
 }
 
-fn object(src: &Source, o: &Spanned<ObjectDesc>) -> Result<d::ObjectDesc, SceneError> {
+/// The OBJ files a scene has loaded, by path.
+type ObjFiles = HashMap<std::path::PathBuf, std::sync::Arc<Vec<d::MeshData>>>;
+
+fn object(
+    src: &Source,
+    o: &Spanned<ObjectDesc>,
+    files: &mut ObjFiles,
+) -> Result<d::ObjectDesc, SceneError> {
     let span = o.span();
     let o = o.get_ref();
     let missing = |what: &str| {
@@ -517,8 +526,15 @@ fn object(src: &Source, o: &Spanned<ObjectDesc>) -> Result<d::ObjectDesc, SceneE
         "obj" => {
             let file = o.file.as_ref().ok_or_else(|| missing("file"))?;
             let path = src.dir.join(file.get_ref());
-            let parts = obj::load_meshes(&path, &src.origin(Some(file.span())))?;
-            d::ShapeDesc::Mesh { parts }
+            let path = std::fs::canonicalize(&path).unwrap_or(path);
+            let parts = match files.get(&path) {
+                Some(parts) => parts.clone(),
+                None => {
+                    let parts = obj::load_meshes(&path, &src.origin(Some(file.span())))?;
+                    files.entry(path).or_insert(std::sync::Arc::new(parts)).clone()
+                }
+            };
+            d::ShapeDesc::SharedMesh { parts }
         }
         other => {
             return Err(src.error(
