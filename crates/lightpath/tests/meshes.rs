@@ -490,7 +490,8 @@ fn ply_ascii_and_binary_load_the_same_mesh_and_errors_name_the_element() {
         assert_eq!(m.positions, QUAD);
         assert_eq!(m.indices, [[0, 1, 2], [0, 2, 3]]);
         assert_eq!(m.normals.as_deref(), Some(&[[0.0, 0.0, 1.0]; 4][..]));
-        assert_eq!(m.uvs.as_ref().unwrap()[3], [1.0, 1.0]);
+        // (s, t) = (1, 1): the top-right corner, (1, 0) in our top-down UVs.
+        assert_eq!(m.uvs.as_ref().unwrap()[3], [1.0, 0.0]);
     }
     // It renders: lit by the default dome, the quad seen face-on fills the middle.
     let desc = parse(&dir.join("le.ply")).unwrap();
@@ -644,5 +645,58 @@ fn rendering_an_obj_directly_warns_about_the_defaults_it_adds() {
         "{:?}",
         prepared.warnings
     );
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// The lights-only test finds mesh lights through their own BVH: with a concave mesh
+/// light (it shadows itself) and the room's walls in the way, `plain + shadows =
+/// unoccluded` pixel by pixel, as for the other lights.
+#[test]
+fn unoccluded_sees_mesh_lights_and_plain_plus_shadows_is_unoccluded() {
+    let dir = temp_dir("unoccluded");
+    cornell_files(&dir);
+    // A folded strip of light (a 'V', concave) in the room.
+    write(
+        &dir,
+        "fold.obj",
+        "v -0.4 0.2 0\nv 0 -0.1 0\nv 0.4 0.2 0\nv -0.4 0.2 -0.4\nv 0 -0.1 -0.4\nv 0.4 0.2 -0.4\n\
+         o fold\nf 1 2 5 4\nf 2 3 6 5\n",
+    );
+    let scene = write(
+        &dir,
+        "scene.toml",
+        format!(
+            "{CAMERA}\n[[include]]\nfile = \"room.obj\"\n\n[[include]]\nfile = \"fold.obj\"\n\n\
+             [[lights]]\ntype = \"mesh\"\nobject = \"fold\"\nradiance = [2, 2, 2]\ntwo_sided = true\n"
+        ),
+    );
+    let desc = parse(&scene).unwrap();
+    let expr = "C<RD>[<L.>O]";
+    let aovs = vec![
+        AovSpec::new("plain", expr),
+        AovSpec::new("shadows", format!("shadows;{expr}")),
+        AovSpec::new("unoccluded", format!("unoccluded;{expr}")),
+    ];
+    let (scene, film) = render_desc(desc, 16, 4, 0, aovs);
+    let (p, s, u) = (
+        index(&scene, "plain"),
+        index(&scene, "shadows"),
+        index(&scene, "unoccluded"),
+    );
+    let (mut worst, mut peak, mut shadow) = (0.0f32, 0.0f32, 0.0f32);
+    for y in 0..film.height {
+        for x in 0..film.width {
+            let un = film.pixel(u, x, y);
+            worst = worst.max(
+                (film.pixel(p, x, y) + film.pixel(s, x, y) - un)
+                    .abs()
+                    .max_element(),
+            );
+            peak = peak.max(un.max_element());
+            shadow += film.pixel(s, x, y).x;
+        }
+    }
+    assert!(peak > 0.0 && shadow > 0.0, "peak {peak}, shadows {shadow}");
+    assert!(worst <= 1e-5 * peak, "off by {worst} of {peak}");
     std::fs::remove_dir_all(&dir).unwrap();
 }

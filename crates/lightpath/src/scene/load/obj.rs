@@ -207,7 +207,9 @@ fn parse(bytes: &[u8], file: &str, path: &Path) -> Result<Obj, SceneError> {
                     Some(w) => line.number(Some(w), keyword, "texture coordinate v")?,
                     None => 0.0,
                 };
-                uvs.push([u, v]);
+                // Our UVs put (0, 0) at the image's top-left corner (glTF's
+                // convention); OBJ's v runs up from the bottom.
+                uvs.push([u, 1.0 - v]);
             }
             "f" => {
                 let key = (object_id, material.as_ref().map(|m| m.0.clone()));

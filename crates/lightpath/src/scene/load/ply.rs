@@ -144,7 +144,8 @@ pub fn load(path: &Path, at: &Origin) -> Result<(MeshData, Vec<String>), SceneEr
                         normals.push(n);
                     }
                     if has.1 {
-                        uvs.push([row.v[U] as f32, row.v[V] as f32]);
+                        // v runs up in PLY as in OBJ; ours from the image's top.
+                        uvs.push([row.v[U] as f32, 1.0 - row.v[V] as f32]);
                     }
                 }
                 "face" => {
