@@ -107,6 +107,9 @@ pub fn render_with_progress(
     // peak memory is the film plus one band, with no allocation churn.
     let row_len = stride * w as usize;
     let band_rows = (BAND_BYTES / (4 * row_len)).clamp(8, h.max(1) as usize);
+    let band_rows = progress
+        .band_rows()
+        .map_or(band_rows, |r| r.clamp(1, band_rows));
     let mut band = vec![0.0f32; band_rows * row_len];
     let mut film = Film::new(w, h, scene.aovs.len(), options.spp);
     for first_row in (0..h as usize).step_by(band_rows) {
@@ -143,6 +146,7 @@ pub fn render_with_progress(
             },
         );
         film.store_rows(first_row, band);
+        progress.rows_done(&film, first_row..first_row + rows_here);
     }
     progress.finish();
     let stats = RenderStats {

@@ -113,13 +113,30 @@ pub fn write_exr(
     let (width, height) = (film.width as usize, film.height as usize);
     let mut planes = film.into_means().into_iter();
     let mut channels = Vec::new();
-    let mut attributes = Vec::new();
+    let mut attributes = aov_attributes(aovs);
     for aov in aovs {
         for name in channel_names(&aov.name) {
             channels.push((name, planes.next().unwrap_or_default()));
         }
-        attributes.push((naming::aov_attribute(&aov.name), aov.definition.clone()));
     }
+    channels.push((naming::ALPHA.into(), planes.next().unwrap_or_default()));
+    for d in derived {
+        for (name, values) in channel_names(&d.name).into_iter().zip(d.rgb) {
+            channels.push((name, values));
+        }
+        attributes.push((naming::aov_attribute(&d.name), d.definition));
+    }
+    attributes.extend(extra.iter().cloned());
+    write_channels(path, width, height, channels, &attributes, options)
+}
+
+/// The header attributes describing a render's AOVs: each one's definition and the
+/// structured partition attributes.
+pub fn aov_attributes(aovs: &[Aov]) -> Vec<(String, String)> {
+    let mut attributes: Vec<(String, String)> = aovs
+        .iter()
+        .map(|a| (naming::aov_attribute(&a.name), a.definition.clone()))
+        .collect();
     let parts: Vec<naming::PartInfo> = aovs
         .iter()
         .map(|a| naming::PartInfo {
@@ -131,15 +148,7 @@ pub fn write_exr(
         })
         .collect();
     attributes.extend(naming::partition_attributes(&parts));
-    channels.push((naming::ALPHA.into(), planes.next().unwrap_or_default()));
-    for d in derived {
-        for (name, values) in channel_names(&d.name).into_iter().zip(d.rgb) {
-            channels.push((name, values));
-        }
-        attributes.push((naming::aov_attribute(&d.name), d.definition));
-    }
-    attributes.extend(extra.iter().cloned());
-    write_channels(path, width, height, channels, &attributes, options)
+    attributes
 }
 
 /// Writes named float channels and text attributes as one single-part EXR, atomically.
