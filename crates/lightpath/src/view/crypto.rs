@@ -20,12 +20,14 @@ pub struct CryptoLayer {
     pub manifest: Vec<(u32, String)>,
 }
 
-/// The Cryptomatte layers whose `name` attribute is present and whose `<name>00` set of
-/// channels exists.
+/// The Cryptomatte layers the header names (`post::cryptomatte::layers_in`) whose
+/// `<name>00` set of channels exists.
 pub fn layers(exr: &ExrContents) -> Vec<CryptoLayer> {
+    let named = crate::post::cryptomatte::layers_in(&exr.attributes);
     let mut out: Vec<CryptoLayer> = exr
         .attributes
         .iter()
+        .filter(|(_, name)| named.contains(name))
         .filter_map(|(k, name)| {
             let key = k.strip_prefix(PREFIX)?.strip_suffix("/name")?;
             let channels: Vec<[String; 4]> = (0..100)

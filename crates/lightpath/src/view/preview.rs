@@ -32,6 +32,11 @@ pub fn live_data(scene: &Scene, title: impl Into<String>) -> ViewData {
         height: scene.camera.height as usize,
         channels,
         attributes: crate::output::aov_attributes(&scene.aovs),
+        frame: [scene.camera.width, scene.camera.height],
+        origin: [0, 0],
+        world_to_camera: None,
+        world_to_ndc: None,
+        capture_date: None,
     };
     let mut data = ViewData::new(exr, title);
     data.live = true;
@@ -75,6 +80,9 @@ impl Progress for LivePreview<'_> {
         let pixels = rows.start * w..rows.end * w;
         let inv = 1.0 / film.spp.max(1) as f32;
         self.shared.update(|data| {
+            if (data.exr.width, data.exr.height) != (w, film.height as usize) {
+                return; // not the film this preview was made for
+            }
             for (plane, (_, channel)) in film.planes.iter().zip(data.exr.channels.iter_mut()) {
                 if let (Some(src), Some(dst)) =
                     (plane.get(pixels.clone()), channel.get_mut(pixels.clone()))
