@@ -22,6 +22,7 @@ pub mod progress;
 pub mod sampler;
 pub mod sampling;
 pub mod scene;
+pub mod view;
 
 pub use error::Error;
 pub use integrator::{render, render_with_progress, RenderOptions, RenderStats};

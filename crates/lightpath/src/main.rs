@@ -5,6 +5,7 @@ use lightpath::job::{AovRequest, RenderJob, SettingOverrides};
 use lightpath::lpe_tools;
 use lightpath::output;
 use lightpath::progress::{PeriodicLines, Progress, Silent};
+use lightpath::view;
 use std::io::{BufRead, IsTerminal, Write};
 use std::path::PathBuf;
 use std::process::ExitCode;
@@ -53,7 +54,7 @@ enum Command {
     Aovs {
         exr: PathBuf,
         /// Largest acceptable relative error of a partition.
-        #[arg(long, default_value_t = 1e-4)]
+        #[arg(long, default_value_t = lightpath::post::partitions::DEFAULT_TOLERANCE)]
         tolerance: f32,
     },
     /// Composite AOVs by addition: relight without re-rendering.
@@ -77,6 +78,24 @@ enum Command {
     /// Split a frame over a farm: print a script that renders its parts and merges them.
     #[command(subcommand)]
     Farm(FarmCommand),
+    /// Look at an EXR's AOVs in the browser: every AOV with its expression, the
+    /// partitions' errors, a pixel inspector, a light-group mixer, "Save comp".
+    View {
+        exr: PathBuf,
+        #[command(flatten)]
+        serve: ServeArgs,
+    },
+}
+
+/// Where and how the viewer's page is served.
+#[derive(clap::Args)]
+struct ServeArgs {
+    /// Port on 127.0.0.1 (default: a free one).
+    #[arg(long, default_value_t = 0)]
+    port: u16,
+    /// Print the URL without opening a browser.
+    #[arg(long)]
+    no_open: bool,
 }
 
 #[derive(Subcommand)]
@@ -205,6 +224,12 @@ struct RenderArgs {
     /// No progress bar.
     #[arg(short, long)]
     quiet: bool,
+    /// Serve the viewer's page during the render (refreshed as rows arrive), then the
+    /// written EXR until Ctrl-C.
+    #[arg(long)]
+    preview: bool,
+    #[command(flatten)]
+    serve: ServeArgs,
     /// Render only the window X0,Y0,X1,Y1 of the frame (pixels, end exclusive), with
     /// the frame's own sample numbers: the EXR's data window, inside the whole frame's
     /// display window. `lightpath merge` stitches tiles into the frame.
@@ -313,7 +338,58 @@ fn main() -> ExitCode {
                 ExitCode::FAILURE
             }
         },
+        Command::View { exr, serve } => view_command(exr, &serve),
     }
+}
+
+/// Starts the viewer on `data`, prints its URL and opens a browser unless told not to.
+fn start_viewer(
+    data: view::ViewData,
+    exr: Option<PathBuf>,
+    serve: &ServeArgs,
+) -> Result<view::Viewer, String> {
+    let viewer = view::Viewer::start(data, exr, serve.port)?;
+    say!("viewing at {}", viewer.url());
+    if !serve.no_open && !view::open_browser(&viewer.url()) {
+        tell!("no browser opener found (xdg-open, open): open the URL yourself");
+    }
+    Ok(viewer)
+}
+
+/// Blocks until Ctrl-C (SIGINT, or SIGTERM).
+fn wait_for_ctrl_c() {
+    let (tx, rx) = std::sync::mpsc::channel();
+    if let Err(e) = ctrlc::set_handler(move || {
+        let _ = tx.send(());
+    }) {
+        tell!("warning: cannot catch Ctrl-C ({e}); stop with a signal");
+        loop {
+            std::thread::park();
+        }
+    }
+    let _ = rx.recv();
+}
+
+fn view_command(exr: PathBuf, serve: &ServeArgs) -> ExitCode {
+    let data = match view::open(&exr) {
+        Ok(d) => d,
+        Err(e) => {
+            tell!("error: {e}");
+            return ExitCode::FAILURE;
+        }
+    };
+    let viewer = match start_viewer(data, Some(exr), serve) {
+        Ok(v) => v,
+        Err(e) => {
+            tell!("error: {e}");
+            return ExitCode::FAILURE;
+        }
+    };
+    say!("press Ctrl-C to stop");
+    wait_for_ctrl_c();
+    viewer.stop();
+    say!("stopped");
+    ExitCode::SUCCESS
 }
 
 /// The farm script: the parts of the frame and the commands rendering and merging them.
@@ -523,6 +599,13 @@ fn render(args: RenderArgs) -> ExitCode {
         tell!("warning: {w}");
     }
     let progress = progress_reporter(choose_progress(args.quiet, std::io::stderr().is_terminal()));
+    if args.preview {
+        if args.crop.is_some() {
+            tell!("error: --preview shows whole frames: leave out --crop");
+            return ExitCode::FAILURE;
+        }
+        return render_with_preview(prepared, progress.as_ref(), &args.serve);
+    }
     match prepared.run(progress.as_ref()) {
         Ok(summary) => {
             say!("{}", summary.line());
@@ -538,6 +621,47 @@ fn render(args: RenderArgs) -> ExitCode {
             ExitCode::FAILURE
         }
     }
+}
+
+/// `render --preview`: the viewer fed by the render, then showing the written EXR.
+fn render_with_preview(
+    prepared: lightpath::job::PreparedRender,
+    progress: &dyn Progress,
+    serve: &ServeArgs,
+) -> ExitCode {
+    let data = view::preview::live_data(&prepared.scene, prepared.source.name.clone());
+    let height = prepared.scene.camera.height;
+    let viewer = match start_viewer(data, None, serve) {
+        Ok(v) => v,
+        Err(e) => {
+            tell!("error: {e}");
+            return ExitCode::FAILURE;
+        }
+    };
+    let preview = view::preview::LivePreview::new(progress, viewer.shared().clone(), height);
+    let summary = match prepared.run(&preview) {
+        Ok(s) => s,
+        Err(e) => {
+            tell!("error: {e}");
+            viewer.stop();
+            return ExitCode::FAILURE;
+        }
+    };
+    say!("{}", summary.line());
+    say!(
+        "wrote {} and {}",
+        summary.paths.exr.display(),
+        summary.paths.png.display()
+    );
+    match view::open(&summary.paths.exr) {
+        Ok(data) => viewer.shared().show_file(data, summary.paths.exr.clone()),
+        Err(e) => tell!("warning: cannot show the written EXR: {e}"),
+    }
+    say!("still viewing at {}; press Ctrl-C to stop", viewer.url());
+    wait_for_ctrl_c();
+    viewer.stop();
+    say!("stopped");
+    ExitCode::SUCCESS
 }
 
 fn lpe_command(cmd: LpeCommand) -> ExitCode {

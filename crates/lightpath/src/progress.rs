@@ -2,7 +2,9 @@
 //! chooses an `indicatif` bar in a terminal and [`PeriodicLines`] when stderr is a log
 //! (a farm's), where a bar would print nothing useful.
 
+use crate::film::Film;
 use std::io::Write;
+use std::ops::Range;
 use std::sync::Mutex;
 use std::time::{Duration, Instant};
 
@@ -14,6 +16,14 @@ pub trait Progress: Sync {
     fn advance(&self, units: u64);
     /// The render is over (also after an early stop).
     fn finish(&self);
+    /// Rows `rows` of `film` hold their final sums (the render loop stores a band of rows
+    /// at a time): a live preview copies them; other reporters ignore it.
+    fn rows_done(&self, _film: &Film, _rows: Range<usize>) {}
+    /// The most rows a band should have, for a reporter that wants rows sooner (a live
+    /// preview). The render's pixels do not depend on the band size.
+    fn band_rows(&self) -> Option<usize> {
+        None
+    }
 }
 
 /// Reports nothing.

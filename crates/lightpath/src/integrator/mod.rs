@@ -143,6 +143,10 @@ pub fn render_frame(
     let row_len = stride * w as usize;
     // At least 8 rows (or the whole window when it is shorter).
     let band_rows = (BAND_BYTES / (4 * row_len)).max(8).min(h.max(1) as usize);
+    // A live preview asks for smaller bands, to show rows sooner; pixels do not depend on it.
+    let band_rows = progress
+        .band_rows()
+        .map_or(band_rows, |r| r.clamp(1, band_rows));
     let mut band = vec![0.0f32; band_rows * row_len];
     let mut film = Film::for_window(win, [fw, fh], scene.aovs.len(), options.spp);
     // Cryptomatte values, band by band beside the AOVs' (one dummy value per row without).
@@ -215,6 +219,7 @@ pub fn render_frame(
                 }
             }
         }
+        progress.rows_done(&film, first_row..first_row + rows_here);
     }
     if let Some(t) = table {
         film.mattes = Some(Mattes {

@@ -134,11 +134,33 @@ pub fn write_film(
     let mattes = film.mattes.clone();
     let mut planes = film.into_means().into_iter();
     let mut channels = Vec::new();
-    let mut attributes = Vec::new();
+    let mut attributes = aov_attributes(aovs);
     for aov in aovs {
         for name in channel_names(&aov.name) {
             channels.push((name, planes.next().unwrap_or_default()));
         }
+    }
+    channels.push((naming::ALPHA.into(), planes.next().unwrap_or_default()));
+    for d in derived {
+        for (name, values) in channel_names(&d.name).into_iter().zip(d.rgb) {
+            channels.push((name, values));
+        }
+        attributes.push((naming::aov_attribute(&d.name), d.definition));
+    }
+    if let Some(m) = mattes {
+        attributes.extend(m.table.attributes());
+        channels.extend(m.table.channel_names().into_iter().zip(m.planes));
+    }
+    attributes.append(&mut header.text);
+    header.text = attributes;
+    write_image(path, width, height, channels, &header, options)
+}
+
+/// The header attributes describing a render's AOVs: each one's definition and compiled
+/// expression, and the structured partition attributes.
+pub fn aov_attributes(aovs: &[Aov]) -> Vec<(String, String)> {
+    let mut attributes = Vec::new();
+    for aov in aovs {
         attributes.push((naming::aov_attribute(&aov.name), aov.definition.clone()));
         attributes.push((
             naming::expression_attribute(&aov.name),
@@ -156,20 +178,7 @@ pub fn write_film(
         })
         .collect();
     attributes.extend(naming::partition_attributes(&parts));
-    channels.push((naming::ALPHA.into(), planes.next().unwrap_or_default()));
-    for d in derived {
-        for (name, values) in channel_names(&d.name).into_iter().zip(d.rgb) {
-            channels.push((name, values));
-        }
-        attributes.push((naming::aov_attribute(&d.name), d.definition));
-    }
-    if let Some(m) = mattes {
-        attributes.extend(m.table.attributes());
-        channels.extend(m.table.channel_names().into_iter().zip(m.planes));
-    }
-    attributes.append(&mut header.text);
-    header.text = attributes;
-    write_image(path, width, height, channels, &header, options)
+    attributes
 }
 
 /// What an EXR's header says besides its channels and their definitions.

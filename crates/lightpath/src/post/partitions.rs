@@ -8,6 +8,10 @@ use glam::Vec3A;
 use std::fmt::Write;
 use std::path::Path;
 
+/// The largest relative error of a partition that `lightpath aovs` (and the viewer) call
+/// fine by default: float sums of a few dozen parts stay well below it.
+pub const DEFAULT_TOLERANCE: f32 = 1e-4;
+
 /// `lightpath aovs`: an EXR's AOVs with their expressions and each declared partition's
 /// check, as the text to print; `Ok(false)` when a partition is off by more than
 /// `tolerance`.

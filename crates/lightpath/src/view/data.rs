@@ -1,0 +1,322 @@
+//! What the page shows of an EXR: its AOVs and what its header declares about them
+//! (partitions, light groups, Cryptomatte layers, `_noisy` twins), images as half floats,
+//! the values of one pixel in every AOV. Every name comes from `aov::naming` and the
+//! structured partition attributes; no definition's prose is read.
+
+use super::crypto;
+use crate::aov::naming::{self, channel_names, PartitionKind};
+use crate::output::ExrContents;
+use crate::post::partitions::{check_partitions, PartitionCheck};
+use ::exr::prelude::f16;
+use rayon::prelude::*;
+use serde_json::{json, Value};
+
+/// The suffix of an AOV's pre-denoise twin (`beauty_noisy` beside a denoised `beauty`).
+pub const NOISY_SUFFIX: &str = "_noisy";
+
+/// An EXR as the viewer holds it: the file's channels and header, or a live render's.
+pub struct ViewData {
+    pub exr: ExrContents,
+    /// Bumped whenever pixels change (a live render's bands): the page reloads on a change.
+    pub generation: u64,
+    /// A render is still filling the channels.
+    pub live: bool,
+    /// What the page calls the image (the file name, or the scene of a live render).
+    pub title: String,
+    /// Partition checks of the current generation (measured once, not per request).
+    checks: Option<(u64, Vec<PartitionCheck>)>,
+}
+
+/// An image to send: `channels` half floats per pixel, rows top to bottom.
+pub struct HalfImage {
+    pub width: usize,
+    pub height: usize,
+    pub channels: usize,
+    /// Little-endian IEEE half floats.
+    pub bytes: Vec<u8>,
+}
+
+impl ViewData {
+    pub fn new(exr: ExrContents, title: impl Into<String>) -> ViewData {
+        ViewData {
+            exr,
+            generation: 0,
+            live: false,
+            title: title.into(),
+            checks: None,
+        }
+    }
+
+    /// AOV names with their definitions, in name order.
+    pub fn aovs(&self) -> Vec<(String, String)> {
+        let mut aovs = self.exr.aovs();
+        aovs.sort();
+        aovs
+    }
+
+    fn has_aov(&self, name: &str) -> bool {
+        channel_names(name)
+            .iter()
+            .all(|c| self.exr.channel(c).is_some())
+    }
+
+    /// The partition checks, measured once per generation (and not while a render runs:
+    /// rows not rendered yet are zero in every AOV, so nothing would be learnt).
+    fn checks(&mut self) -> Vec<PartitionCheck> {
+        if self.live {
+            return Vec::new();
+        }
+        match &self.checks {
+            Some((g, c)) if *g == self.generation => c.clone(),
+            _ => {
+                let c = check_partitions(&self.exr);
+                self.checks = Some((self.generation, c.clone()));
+                c
+            }
+        }
+    }
+
+    /// Everything the page lays out: the AOVs with their expressions, grouped by the
+    /// partitions the header declares with each one's measured error, the light-group
+    /// mixers, the Cryptomatte layers and the `_noisy` twins.
+    pub fn info(&mut self) -> Value {
+        let aovs = self.aovs();
+        let parts = naming::parts_from_attributes(&self.exr.attributes);
+        let checks = self.checks();
+        let mut partitions: Vec<(String, PartitionKind, Vec<String>)> = Vec::new();
+        let mut sorted = parts.clone();
+        sorted.sort_by_key(|p| (p.whole.clone(), p.kind, naming::part_order(p)));
+        for p in &sorted {
+            match partitions.last_mut() {
+                Some((w, k, names)) if *w == p.whole && *k == p.kind => names.push(p.name.clone()),
+                _ => partitions.push((p.whole.clone(), p.kind, vec![p.name.clone()])),
+            }
+        }
+        let partitions: Vec<Value> = partitions
+            .into_iter()
+            .map(|(whole, kind, names)| {
+                let error = checks
+                    .iter()
+                    .find(|c| c.whole == whole && c.parts == names)
+                    .map(|c| c.max_relative_error);
+                json!({
+                    "whole": whole,
+                    "kind": kind.as_str(),
+                    "parts": names,
+                    "max_relative_error": error,
+                })
+            })
+            .collect();
+        let mixers: Vec<Value> = {
+            let mut wholes: Vec<&str> = sorted
+                .iter()
+                .filter(|p| p.kind == PartitionKind::LightGroups)
+                .map(|p| p.whole.as_str())
+                .collect();
+            wholes.dedup();
+            wholes
+                .into_iter()
+                .filter(|w| self.has_aov(w))
+                .map(|whole| {
+                    let groups: Vec<Value> = sorted
+                        .iter()
+                        .filter(|p| p.whole == whole && p.kind == PartitionKind::LightGroups)
+                        .filter(|p| self.has_aov(&p.name))
+                        .map(|p| {
+                            let group = p.group.clone().flatten();
+                            json!({
+                                "part": p.name,
+                                "group": group.clone().unwrap_or_else(|| naming::DEFAULT_GROUP.into()),
+                                "arg": group.unwrap_or_else(|| naming::DEFAULT_GROUP_ARG.into()),
+                            })
+                        })
+                        .collect();
+                    json!({ "base": whole, "groups": groups })
+                })
+                .collect()
+        };
+        let noisy: Vec<Value> = aovs
+            .iter()
+            .filter(|(n, _)| !n.ends_with(NOISY_SUFFIX))
+            .filter_map(|(n, _)| {
+                let twin = format!("{n}{NOISY_SUFFIX}");
+                self.has_aov(&twin)
+                    .then(|| json!({ "aov": n, "noisy": twin }))
+            })
+            .collect();
+        let crypto: Vec<Value> = crypto::layers(&self.exr)
+            .iter()
+            .map(|l| json!({ "name": l.name, "key": l.key, "ranks": 2 * l.channels.len(), "objects": l.manifest.len() }))
+            .collect();
+        let aovs: Vec<Value> = aovs
+            .iter()
+            .map(|(name, definition)| {
+                let part = parts.iter().find(|p| p.name == *name);
+                json!({
+                    "name": name,
+                    "definition": definition,
+                    "whole": part.map(|p| p.whole.clone()),
+                    "partition": part.map(|p| p.kind.as_str()),
+                    "present": self.has_aov(name),
+                })
+            })
+            .collect();
+        json!({
+            "title": self.title,
+            "width": self.exr.width,
+            "height": self.exr.height,
+            "generation": self.generation,
+            "live": self.live,
+            "beauty": naming::BEAUTY,
+            "aovs": aovs,
+            "partitions": partitions,
+            "tolerance": crate::post::partitions::DEFAULT_TOLERANCE,
+            "mixers": mixers,
+            "noisy": noisy,
+            "cryptomatte": crypto,
+        })
+    }
+
+    /// AOV `name` (or a Cryptomatte layer's false colours) as half floats, box-filtered
+    /// down by a whole factor to at most `max_width` pixels across.
+    pub fn image(&self, name: &str, max_width: usize) -> Option<HalfImage> {
+        let planes: Vec<std::borrow::Cow<[f32]>> = if self.has_aov(name) {
+            channel_names(name)
+                .iter()
+                .map(|c| self.exr.channel(c).map(std::borrow::Cow::Borrowed))
+                .collect::<Option<_>>()?
+        } else {
+            let layer = crypto::layers(&self.exr)
+                .into_iter()
+                .find(|l| l.name == name)?;
+            layer
+                .false_colours(&self.exr)
+                .into_iter()
+                .map(std::borrow::Cow::Owned)
+                .collect()
+        };
+        let planes: Vec<&[f32]> = planes.iter().map(|p| p.as_ref()).collect();
+        Some(downsample(
+            &planes,
+            self.exr.width,
+            self.exr.height,
+            max_width,
+        ))
+    }
+
+    /// The matte of object `id` in Cryptomatte layer `layer`: one half-float channel.
+    pub fn matte(&self, layer: &str, id: u32) -> Option<HalfImage> {
+        let layer = crypto::layers(&self.exr)
+            .into_iter()
+            .find(|l| l.name == layer)?;
+        let matte = layer.matte(&self.exr, id);
+        Some(downsample(
+            &[&matte],
+            self.exr.width,
+            self.exr.height,
+            usize::MAX,
+        ))
+    }
+
+    /// The values at pixel (x, y) of every AOV and of alpha, and the object each
+    /// Cryptomatte layer sees there.
+    pub fn pixel(&self, x: usize, y: usize) -> Option<Value> {
+        if x >= self.exr.width || y >= self.exr.height {
+            return None;
+        }
+        let i = y * self.exr.width + x;
+        let values: Vec<Value> = self
+            .aovs()
+            .iter()
+            .filter(|(n, _)| self.has_aov(n))
+            .map(|(n, _)| {
+                let rgb: Vec<f32> = channel_names(n)
+                    .iter()
+                    .map(|c| self.exr.channel(c).map_or(0.0, |p| p[i]))
+                    .collect();
+                json!({ "name": n, "rgb": rgb })
+            })
+            .collect();
+        let crypto: Vec<Value> = crypto::layers(&self.exr)
+            .iter()
+            .filter_map(|l| {
+                let (id, coverage) = l.top(&self.exr, i)?;
+                Some(json!({
+                    "layer": l.name,
+                    "id": format!("{id:08x}"),
+                    "name": l.object_name(id),
+                    "coverage": coverage,
+                }))
+            })
+            .collect();
+        Some(json!({
+            "x": x,
+            "y": y,
+            "alpha": self.exr.channel(naming::ALPHA).map(|a| a[i]),
+            "values": values,
+            "cryptomatte": crypto,
+        }))
+    }
+}
+
+/// Box-filters planes by the whole factor that brings the width to at most `max_width`
+/// (partial boxes at the right and bottom edges average what they cover) and packs them
+/// interleaved as little-endian half floats.
+pub fn downsample(planes: &[&[f32]], width: usize, height: usize, max_width: usize) -> HalfImage {
+    let f = width.div_ceil(max_width.max(1)).max(1);
+    let (w, h) = (width.div_ceil(f), height.div_ceil(f));
+    let channels = planes.len();
+    let mut bytes = vec![0u8; w * h * channels * 2];
+    let row_bytes = (w * channels * 2).max(1);
+    bytes
+        .par_chunks_mut(row_bytes)
+        .enumerate()
+        .for_each(|(oy, row)| {
+            let ys = oy * f..((oy + 1) * f).min(height);
+            for ox in 0..w {
+                let xs = ox * f..((ox + 1) * f).min(width);
+                let n = (ys.len() * xs.len()) as f32;
+                for (c, plane) in planes.iter().enumerate() {
+                    let mut sum = 0.0f32;
+                    for y in ys.clone() {
+                        sum += plane[y * width + xs.start..y * width + xs.end]
+                            .iter()
+                            .sum::<f32>();
+                    }
+                    let v = f16::from_f32(sum / n).to_bits().to_le_bytes();
+                    let at = (ox * channels + c) * 2;
+                    row[at..at + 2].copy_from_slice(&v);
+                }
+            }
+        });
+    HalfImage {
+        width: w,
+        height: h,
+        channels,
+        bytes,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn half(bytes: &[u8], i: usize) -> f32 {
+        f16::from_bits(u16::from_le_bytes([bytes[2 * i], bytes[2 * i + 1]])).to_f32()
+    }
+
+    #[test]
+    fn downsampling_averages_whole_boxes_and_partial_edges() {
+        // 5×3, factor 2 (max width 3): boxes 2×2, the right column and bottom row partial.
+        let plane: Vec<f32> = (0..15).map(|v| v as f32).collect();
+        let img = downsample(&[&plane], 5, 3, 3);
+        assert_eq!((img.width, img.height, img.channels), (3, 2, 1));
+        assert_eq!(half(&img.bytes, 0), (0.0 + 1.0 + 5.0 + 6.0) / 4.0);
+        assert_eq!(half(&img.bytes, 2), (4.0 + 9.0) / 2.0);
+        assert_eq!(half(&img.bytes, 3), (10.0 + 11.0) / 2.0);
+        assert_eq!(half(&img.bytes, 5), 14.0);
+        let full = downsample(&[&plane, &plane], 5, 3, usize::MAX);
+        assert_eq!((full.width, full.height), (5, 3));
+        assert_eq!(half(&full.bytes, 2 * 7 + 1), 7.0);
+    }
+}
