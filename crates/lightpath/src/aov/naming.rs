@@ -14,6 +14,9 @@
 pub const BEAUTY: &str = "beauty";
 /// The alpha channel.
 pub const ALPHA: &str = "A";
+/// The channel of each pixel's sample count, written when adaptive sampling let pixels
+/// stop at different counts (`lightpath merge` weighs by it).
+pub const SAMPLE_COUNT: &str = "sampleCount";
 /// The group of lights without a group, as a split's suffix and an attribute value.
 pub const DEFAULT_GROUP: &str = "__default";
 /// How `--gain` names the default group (`_default`: `beauty` + `_` + `_default`).

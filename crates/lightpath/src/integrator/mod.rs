@@ -9,14 +9,15 @@
 
 mod direct;
 mod path;
+mod pixel;
 mod routing;
 
 use crate::film::{Film, SampleAccumulator};
 use crate::geometry::{Hit, Ray};
 use crate::progress::{Progress, Silent};
-use crate::sampler::{dim, IndependentSampler, Sampler};
 use crate::scene::Scene;
-use glam::{Vec2, Vec3A};
+use glam::Vec3A;
+use pixel::PixelJob;
 use rayon::prelude::*;
 use routing::Route;
 use std::sync::atomic::{AtomicU64, Ordering};
@@ -108,43 +109,65 @@ pub fn render_with_progress(
     let row_len = stride * w as usize;
     let band_rows = (BAND_BYTES / (4 * row_len)).clamp(8, h.max(1) as usize);
     let mut band = vec![0.0f32; band_rows * row_len];
+    let adaptive = scene.settings.noise_threshold > 0.0;
+    let mut counts = vec![0u32; if adaptive { band_rows * w as usize } else { 0 }];
     let mut film = Film::new(w, h, scene.aovs.len(), options.spp);
+    if adaptive {
+        film.sample_counts = Some(vec![0; w as usize * h as usize]);
+    }
     for first_row in (0..h as usize).step_by(band_rows) {
         let rows_here = band_rows.min(h as usize - first_row);
         let band = &mut band[..rows_here * row_len];
         band.fill(0.0);
-        band.par_chunks_mut(row_len).enumerate().for_each_init(
-            || SampleAccumulator::new(scene.aovs.len()),
-            |acc, (i, row)| {
-                let y = (first_row + i) as u32;
-                let mut out = Sink {
-                    acc,
-                    rays: 0,
-                    nonfinite: 0,
-                    holdout: false,
-                };
-                for x in 0..w {
-                    let pixel = &mut row[x as usize * stride..(x as usize + 1) * stride];
-                    let index = y as u64 * w as u64 + x as u64;
-                    for s in options.first_sample..options.first_sample + options.spp {
-                        let mut sampler =
-                            IndependentSampler::new(scene.settings.seed, index, s as u64);
-                        let offset = scene.filter.offset(sampler.get_2d(dim::FILTER));
-                        let film_pos = Vec2::new(x as f32 + 0.5, y as f32 + 0.5) + offset;
-                        let ray = cam.ray(film_pos, sampler.get_2d(dim::LENS));
-                        let alpha = tracer.trace(ray, &mut sampler, &mut out);
-                        out.acc.flush(pixel);
-                        pixel[Film::alpha_slot(stride)] += alpha;
+        // Per row: its sample counts (adaptive sampling), or nothing.
+        let count_rows: Vec<&mut [u32]> = if adaptive {
+            counts[..rows_here * w as usize]
+                .chunks_mut(w as usize)
+                .collect()
+        } else {
+            (0..rows_here).map(|_| &mut [][..]).collect()
+        };
+        band.par_chunks_mut(row_len)
+            .zip(count_rows)
+            .enumerate()
+            .for_each_init(
+                || SampleAccumulator::new(scene.aovs.len()),
+                |acc, (i, (row, row_counts))| {
+                    let y = (first_row + i) as u32;
+                    let mut out = Sink {
+                        acc,
+                        rays: 0,
+                        nonfinite: 0,
+                        holdout: false,
+                    };
+                    for x in 0..w {
+                        let job = PixelJob {
+                            x,
+                            y,
+                            run: &mut row[x as usize * stride..(x as usize + 1) * stride],
+                            first_sample: options.first_sample,
+                            spp: options.spp,
+                        };
+                        let taken = tracer.render_pixel(job, &mut out);
+                        if let Some(c) = row_counts.get_mut(x as usize) {
+                            *c = taken;
+                        }
                     }
-                }
-                rays.fetch_add(out.rays, Ordering::Relaxed);
-                nonfinite.fetch_add(out.nonfinite, Ordering::Relaxed);
-                progress.advance(1);
-            },
-        );
+                    rays.fetch_add(out.rays, Ordering::Relaxed);
+                    nonfinite.fetch_add(out.nonfinite, Ordering::Relaxed);
+                    progress.advance(1);
+                },
+            );
         film.store_rows(first_row, band);
+        if adaptive {
+            film.store_counts(first_row, &counts[..rows_here * w as usize]);
+        }
     }
     progress.finish();
+    let samples = film
+        .sample_counts
+        .as_ref()
+        .map_or(samples, |c| c.iter().map(|&n| n as u64).sum());
     let stats = RenderStats {
         samples,
         rays: rays.into_inner(),

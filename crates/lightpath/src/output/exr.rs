@@ -111,6 +111,10 @@ pub fn write_exr(
     extra: &[(String, String)],
 ) -> std::result::Result<(), String> {
     let (width, height) = (film.width as usize, film.height as usize);
+    let counts = film
+        .sample_counts
+        .as_ref()
+        .map(|c| c.iter().map(|&n| n as f32).collect::<Vec<f32>>());
     let mut planes = film.into_means().into_iter();
     let mut channels = Vec::new();
     let mut attributes = Vec::new();
@@ -132,6 +136,9 @@ pub fn write_exr(
         .collect();
     attributes.extend(naming::partition_attributes(&parts));
     channels.push((naming::ALPHA.into(), planes.next().unwrap_or_default()));
+    if let Some(counts) = counts {
+        channels.push((naming::SAMPLE_COUNT.into(), counts));
+    }
     for d in derived {
         for (name, values) in channel_names(&d.name).into_iter().zip(d.rgb) {
             channels.push((name, values));
