@@ -20,6 +20,7 @@ pub const CHECK_EVERY: u32 = 8;
 
 /// Where one pixel's samples go and which samples it takes.
 pub(super) struct PixelJob<'p> {
+    /// The pixel in the frame (its sample numbers are the frame's).
     pub x: u32,
     pub y: u32,
     /// The pixel's run of the band: RGB per AOV, then alpha.
@@ -27,6 +28,8 @@ pub(super) struct PixelJob<'p> {
     pub first_sample: u32,
     /// Samples to take, or at most when adaptive.
     pub spp: u32,
+    /// Called after each sample with what it left in the sink (Cryptomatte coverage).
+    pub after_sample: &'p mut dyn FnMut(&Sink),
 }
 
 /// Running sums of a pixel's beauty luminance, for its standard error.
@@ -86,6 +89,7 @@ impl Tracer<'_> {
             let film_pos = Vec2::new(job.x as f32 + 0.5, job.y as f32 + 0.5) + offset;
             let ray = cam.ray(film_pos, sampler.get_2d(dim::LENS));
             let alpha = self.trace(ray, &mut sampler, out);
+            (job.after_sample)(out);
             if adaptive {
                 // The beauty is AOV 0 (aov::plan puts it first).
                 moments.add(luminance(out.acc.value(0)));

@@ -58,6 +58,7 @@ pub struct RenderSettings {
     pub clamp_indirect: f32,
     pub seed: u64,
     pub sampler: crate::sampler::SamplerKind,
+    pub light_selection: crate::light::select::LightSelection,
     /// Adaptive sampling's relative standard error (0: off) and its first samples.
     pub noise_threshold: f32,
     pub min_spp: u32,
@@ -82,6 +83,9 @@ pub struct Aov {
 
 pub struct Scene {
     pub accel: Accel,
+    /// The triangles of every mesh light (object id: the light), for the lights-only
+    /// test of `unoccluded`/`shadows` AOVs.
+    pub mesh_lights: Accel,
     pub objects: Vec<Object>,
     pub materials: Vec<Material>,
     pub lights: Vec<Light>,
