@@ -263,47 +263,6 @@ impl LightBounds {
     fn centroid(&self) -> Vec3A {
         0.5 * (self.min + self.max)
     }
-
-    /// An upper bound of what these lights send to `p` with normal `n` (zero: none), up
-    /// to one factor common to all nodes (pbrt-v4 `LightBounds::Importance`).
-    #[inline]
-    fn importance(&self, p: Vec3A, n: Vec3A) -> f32 {
-        let pc = self.centroid();
-        let diag = (self.max - self.min).length();
-        let d2 = p.distance_squared(pc).max(0.5 * diag);
-        let to_p = p - pc;
-        let len = to_p.length();
-        let wi = if len > 0.0 { to_p / len } else { Vec3A::Z };
-        let mut cos_w = self.normals.w.dot(wi);
-        if self.two_sided {
-            cos_w = cos_w.abs();
-        }
-        let sin_w = safe_sqrt(1.0 - cos_w * cos_w);
-        // The angle the box subtends from `p`.
-        let radius = 0.5 * diag;
-        let dist2_c = to_p.length_squared();
-        let cos_b = if dist2_c < radius * radius {
-            -1.0
-        } else {
-            safe_sqrt(1.0 - radius * radius / dist2_c)
-        };
-        let sin_b = safe_sqrt(1.0 - cos_b * cos_b);
-        let cos_o = self.normals.cos_theta;
-        let sin_o = safe_sqrt(1.0 - cos_o * cos_o);
-        let cos_x = cos_sub_clamped(sin_w, cos_w, sin_o, cos_o);
-        let sin_x = sin_sub_clamped(sin_w, cos_w, sin_o, cos_o);
-        let cos_p = cos_sub_clamped(sin_x, cos_x, sin_b, cos_b);
-        if cos_p <= self.cos_e {
-            return 0.0;
-        }
-        let mut importance = self.phi * cos_p / d2;
-        if n != Vec3A::ZERO {
-            let cos_i = wi.dot(n).abs();
-            let sin_i = safe_sqrt(1.0 - cos_i * cos_i);
-            importance *= cos_sub_clamped(sin_i, cos_i, sin_b, cos_b);
-        }
-        importance.max(0.0)
-    }
 }
 
 /// The bounds of one light in the tree, or `None` for lights at infinity.
@@ -385,16 +344,96 @@ fn light_bounds(light: &Light, prims: &[Prim]) -> Option<LightBounds> {
     }
 }
 
+/// A node's bounds as the traversal reads them, precomputed from its [`LightBounds`].
+#[derive(Clone, Copy, Debug)]
+struct NodeBounds {
+    centroid: Vec3A,
+    /// Squared radius of the box's bounding sphere.
+    radius2: f32,
+    /// The smallest squared distance the importance divides by (pbrt-v4's clamp).
+    d2_min: f32,
+    phi: f32,
+    w: Vec3A,
+    cos_o: f32,
+    sin_o: f32,
+    cos_e: f32,
+    two_sided: bool,
+}
+
+impl NodeBounds {
+    fn new(b: &LightBounds) -> NodeBounds {
+        let diag = (b.max - b.min).length();
+        let cos_o = b.normals.cos_theta;
+        NodeBounds {
+            centroid: b.centroid(),
+            radius2: 0.25 * diag * diag,
+            d2_min: 0.5 * diag,
+            phi: b.phi,
+            w: b.normals.w,
+            cos_o,
+            sin_o: safe_sqrt(1.0 - cos_o * cos_o),
+            cos_e: b.cos_e,
+            two_sided: b.two_sided,
+        }
+    }
+
+    /// An upper bound of what the node's lights send to `p` with normal `n` (zero: no
+    /// normal), in irradiance (pbrt-v4 `LightBounds::Importance`): power × the cosine
+    /// of the smallest angle between the emission cone and `p`, widened by the angle the
+    /// bounds subtend, over the squared distance, × the receiver's bounded cosine. Zero
+    /// when `p` is outside every direction the lights emit into.
+    #[inline]
+    fn importance(&self, p: Vec3A, n: Vec3A) -> f32 {
+        let to_p = p - self.centroid;
+        let dist2 = to_p.length_squared();
+        let d2 = dist2.max(self.d2_min);
+        let wi = if dist2 > 0.0 {
+            to_p * dist2.sqrt().recip()
+        } else {
+            Vec3A::Z
+        };
+        // The angle the bounding sphere subtends from `p` (`cos_b = -1`: all of it).
+        let (cos_b, sin_b) = if dist2 <= self.radius2 {
+            (-1.0, 0.0)
+        } else {
+            let s2 = self.radius2 / dist2;
+            (safe_sqrt(1.0 - s2), s2.sqrt())
+        };
+        let cos_p = if self.cos_o <= -1.0 {
+            1.0
+        } else {
+            let mut cos_w = self.w.dot(wi);
+            if self.two_sided {
+                cos_w = cos_w.abs();
+            }
+            let sin_w = safe_sqrt(1.0 - cos_w * cos_w);
+            let cos_x = cos_sub_clamped(sin_w, cos_w, self.sin_o, self.cos_o);
+            let sin_x = sin_sub_clamped(sin_w, cos_w, self.sin_o, self.cos_o);
+            cos_sub_clamped(sin_x, cos_x, sin_b, cos_b)
+        };
+        if cos_p <= self.cos_e {
+            return 0.0;
+        }
+        let mut importance = self.phi * cos_p / d2;
+        if n != Vec3A::ZERO && cos_b > -1.0 {
+            let cos_i = wi.dot(n).abs();
+            let sin_i = safe_sqrt(1.0 - cos_i * cos_i);
+            importance *= cos_sub_clamped(sin_i, cos_i, sin_b, cos_b);
+        }
+        importance.max(0.0)
+    }
+}
+
 #[derive(Clone, Debug)]
 struct Node {
-    bounds: LightBounds,
+    bounds: NodeBounds,
     /// A leaf: the light; an interior node: its second child (the first follows it).
     index: u32,
     leaf: bool,
 }
 
 /// A light at infinity beside the tree: what it can deliver, as in
-/// [`LightBounds::importance`]'s unit.
+/// [`NodeBounds::importance`]'s unit.
 #[derive(Clone, Copy, Debug)]
 struct Infinite {
     light: u32,
@@ -478,7 +517,7 @@ impl LightTree {
         if items.len() == 1 || depth >= MAX_DEPTH {
             let (light, bounds) = items[0];
             self.nodes.push(Node {
-                bounds,
+                bounds: NodeBounds::new(&bounds),
                 index: light,
                 leaf: true,
             });
@@ -506,7 +545,7 @@ impl LightTree {
                 .then(a.0.cmp(&b.0))
         });
         self.nodes.push(Node {
-            bounds: all,
+            bounds: NodeBounds::new(&all),
             index: 0,
             leaf: false,
         });
