@@ -14,6 +14,9 @@ pub struct Film {
     pub spp: u32,
     /// `3 × aovs + 1` planes of `width × height` sums: R, G, B of each AOV, then alpha.
     pub planes: Vec<Vec<f32>>,
+    /// Samples each pixel took, when adaptive sampling let pixels stop early (`None`:
+    /// every pixel took `spp`). Every AOV and alpha of a pixel share its count.
+    pub sample_counts: Option<Vec<u32>>,
     /// The pixels of the frame this film holds (a `--crop` window; else the whole frame).
     pub window: PixelWindow,
     /// The whole frame's size (the EXR's display window).
@@ -124,6 +127,7 @@ impl Film {
             aovs,
             spp,
             planes,
+            sample_counts: None,
             window: PixelWindow::full(width, height),
             frame: [width, height],
             mattes: None,
@@ -137,6 +141,26 @@ impl Film {
             frame,
             ..Film::new(window.width(), window.height(), aovs, spp)
         }
+    }
+
+    /// Stores the sample counts of rows starting at `first_row` (adaptive sampling).
+    pub fn store_counts(&mut self, first_row: usize, rows: &[u32]) {
+        if let Some(counts) = &mut self.sample_counts {
+            let start = first_row * self.width as usize;
+            counts[start..start + rows.len()].copy_from_slice(rows);
+        }
+    }
+
+    /// The samples pixel `i` (row by row) took.
+    #[inline]
+    pub fn samples_at(&self, i: usize) -> u32 {
+        self.sample_counts.as_ref().map_or(self.spp, |c| c[i])
+    }
+
+    /// 1 / samples of each pixel, row by row.
+    fn inverse_counts(&self) -> impl Iterator<Item = f32> + '_ {
+        (0..self.width as usize * self.height as usize)
+            .map(|i| 1.0 / self.samples_at(i).max(1) as f32)
     }
 
     /// Moves rendered rows (each `width × stride` interleaved sums) starting at row
@@ -166,26 +190,39 @@ impl Film {
             self.planes[3 * k][i],
             self.planes[3 * k + 1][i],
             self.planes[3 * k + 2][i],
-        ) / self.spp as f32
+        ) / self.samples_at(i).max(1) as f32
     }
 
     /// Channel `c` of AOV `k` as a plane of means, row by row.
     pub fn channel(&self, k: usize, c: usize) -> Vec<f32> {
-        let inv = 1.0 / self.spp as f32;
-        self.planes[3 * k + c].iter().map(|v| v * inv).collect()
+        self.planes[3 * k + c]
+            .iter()
+            .zip(self.inverse_counts())
+            .map(|(v, inv)| v * inv)
+            .collect()
     }
 
     pub fn alpha(&self) -> Vec<f32> {
-        let inv = 1.0 / self.spp as f32;
-        self.planes[3 * self.aovs].iter().map(|v| v * inv).collect()
+        self.planes[3 * self.aovs]
+            .iter()
+            .zip(self.inverse_counts())
+            .map(|(v, inv)| v * inv)
+            .collect()
     }
 
     /// All planes as means, consuming the film (no copy): R, G, B per AOV, then alpha.
     pub fn into_means(self) -> Vec<Vec<f32>> {
+        let inverse: Option<Vec<f32>> = self
+            .sample_counts
+            .is_some()
+            .then(|| self.inverse_counts().collect());
         let inv = 1.0 / self.spp as f32;
         let mut planes = self.planes;
         for p in &mut planes {
-            p.iter_mut().for_each(|v| *v *= inv);
+            match &inverse {
+                Some(inverse) => p.iter_mut().zip(inverse).for_each(|(v, i)| *v *= i),
+                None => p.iter_mut().for_each(|v| *v *= inv),
+            }
         }
         planes
     }
@@ -202,6 +239,12 @@ impl Film {
             for (x, y) in a.iter_mut().zip(b) {
                 *x += y;
             }
+        }
+        if self.sample_counts.is_some() || other.sample_counts.is_some() {
+            let counts = (0..self.width as usize * self.height as usize)
+                .map(|i| self.samples_at(i) + other.samples_at(i))
+                .collect();
+            self.sample_counts = Some(counts);
         }
         if let (Some(m), Some(o)) = (&mut self.mattes, &other.mattes) {
             let total = (self.spp + other.spp).max(1) as f64;
@@ -256,6 +299,16 @@ impl SampleAccumulator {
             self.values[aov] = value;
         } else {
             self.values[aov] += value;
+        }
+    }
+
+    /// What the sample has added to AOV `k` so far.
+    #[inline]
+    pub fn value(&self, k: usize) -> Vec3A {
+        if self.touched[k >> 6] & (1u64 << (k & 63)) != 0 {
+            self.values[k]
+        } else {
+            Vec3A::ZERO
         }
     }
 

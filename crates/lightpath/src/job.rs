@@ -46,6 +46,13 @@ pub struct SettingOverrides {
     pub max_depth: Option<u32>,
     pub resolution: Option<[u32; 2]>,
     pub seed: Option<u64>,
+    pub sampler: Option<crate::sampler::SamplerKind>,
+    pub light_selection: Option<crate::light::select::LightSelection>,
+    pub noise_threshold: Option<f32>,
+    pub min_spp: Option<u32>,
+    pub clamp_indirect: Option<f32>,
+    pub clamp_direct: Option<f32>,
+    pub regularize: Option<f32>,
 }
 
 /// Which AOVs the command line asks for, besides the scene's own.
@@ -238,6 +245,28 @@ impl SettingOverrides {
         }
         if let Some(s) = self.seed {
             desc.render.seed = s;
+        }
+        let r = &mut desc.render;
+        if let Some(s) = self.sampler {
+            r.sampler = s;
+        }
+        if let Some(s) = self.light_selection {
+            r.light_selection = s;
+        }
+        if let Some(t) = self.noise_threshold {
+            r.noise_threshold = t;
+        }
+        if let Some(n) = self.min_spp {
+            r.min_spp = n;
+        }
+        if let Some(c) = self.clamp_indirect {
+            r.clamp_indirect = c;
+        }
+        if let Some(c) = self.clamp_direct {
+            r.clamp_direct = c;
+        }
+        if let Some(g) = self.regularize {
+            r.regularize = g;
         }
     }
 }

@@ -12,6 +12,8 @@
 //! scale = [0.25, 0.25, 1]
 //! ```
 
+pub mod select;
+
 use crate::geometry::Prim;
 use crate::sampling::{
     uniform_cone, uniform_cone_pdf, uniform_sphere, uniform_triangle, Distribution1D, Frame,
@@ -232,30 +234,6 @@ impl Light {
             self.shape,
             LightShape::Dome { .. } | LightShape::Distant { .. }
         )
-    }
-
-    /// How often light sampling picks this light: its power at unit colour. The colour
-    /// is left out on purpose, so that changing a light's intensity changes no sampling
-    /// decision and relighting from AOVs equals re-rendering (see `lightpath comp`).
-    pub fn sampling_weight(&self, scene_radius: f32) -> f32 {
-        let l = 1.0;
-        match &self.shape {
-            LightShape::Triangles {
-                area, two_sided, ..
-            } => l * area * PI * if *two_sided { 2.0 } else { 1.0 },
-            LightShape::Sphere { radius, .. } => l * 4.0 * PI * radius * radius * PI,
-            LightShape::Point { .. } => l * 4.0 * PI,
-            LightShape::Spot {
-                cos_inner,
-                cos_outer,
-                ..
-            } => l * 2.0 * PI * (1.0 - 0.5 * (cos_inner + cos_outer)),
-            LightShape::Distant { .. } => l * PI * scene_radius * scene_radius,
-            LightShape::Dome { map } => {
-                let avg = map.as_ref().map_or(1.0, |m| luminance(m.average()));
-                l * avg * 4.0 * PI * PI * scene_radius * scene_radius
-            }
-        }
     }
 
     /// Samples a point of the light as seen from `p`; `prims` is the scene's primitive

@@ -2,10 +2,12 @@
 
 use clap::{Parser, Subcommand};
 use lightpath::job::{AovRequest, RenderJob, SettingOverrides};
+use lightpath::light::select::LightSelection;
 use lightpath::lpe_tools;
 use lightpath::output;
 use lightpath::progress::{PeriodicLines, Progress, Silent};
 use lightpath::view;
+use lightpath::sampler::SamplerKind;
 use std::io::{BufRead, IsTerminal, Write};
 use std::path::PathBuf;
 use std::process::ExitCode;
@@ -230,6 +232,31 @@ struct RenderArgs {
     preview: bool,
     #[command(flatten)]
     serve: ServeArgs,
+    /// Sample numbers: sobol (Owen-scrambled Sobol points, the default) or independent.
+    #[arg(long, value_parser = ["sobol", "independent"])]
+    sampler: Option<String>,
+    /// How lights are chosen for light sampling: tree (power, distance and orientation;
+    /// the default), power, or uniform (relighting from AOVs then equals re-rendering
+    /// bit for bit).
+    #[arg(long, value_parser = ["tree", "power", "uniform"])]
+    light_selection: Option<String>,
+    /// Adaptive sampling: a pixel stops once the relative standard error of its beauty
+    /// is below this (e.g. 0.02); --spp is then the most a pixel takes.
+    #[arg(long)]
+    noise_threshold: Option<f32>,
+    /// Adaptive sampling: samples every pixel takes first.
+    #[arg(long)]
+    min_spp: Option<u32>,
+    /// Largest luminance of one contribution of indirect light (0: off).
+    #[arg(long)]
+    clamp_indirect: Option<f32>,
+    /// Largest luminance of one contribution of direct light (0: off).
+    #[arg(long)]
+    clamp_direct: Option<f32>,
+    /// Path regularisation: after a diffuse bounce, specular lobes are at least this
+    /// rough (0 to 1; e.g. 0.3). Tames caustic fireflies at the cost of sharp caustics.
+    #[arg(long)]
+    regularize: Option<f32>,
     /// Render only the window X0,Y0,X1,Y1 of the frame (pixels, end exclusive), with
     /// the frame's own sample numbers: the EXR's data window, inside the whole frame's
     /// display window. `lightpath merge` stitches tiles into the frame.
@@ -570,6 +597,16 @@ fn render(args: RenderArgs) -> ExitCode {
             max_depth: args.max_depth,
             resolution: args.resolution,
             seed: args.seed,
+            sampler: args.sampler.as_deref().and_then(SamplerKind::parse),
+            light_selection: args
+                .light_selection
+                .as_deref()
+                .and_then(LightSelection::parse),
+            noise_threshold: args.noise_threshold,
+            min_spp: args.min_spp,
+            clamp_indirect: args.clamp_indirect,
+            clamp_direct: args.clamp_direct,
+            regularize: args.regularize,
         },
         aovs: AovRequest {
             standard: args.aov_set == "standard",

@@ -18,8 +18,18 @@
 //! with `bounce(d) = 4 + 7 d`, `d` counting scattering vertices from 0 at the first hit.
 //! A path may skip dimensions (no roulette before `rr_depth`, a path that ends early) but
 //! never asks for one out of order.
+//!
+//! Two samplers implement the layout, chosen by `[render] sampler` or `--sampler`:
+//! [`SobolSampler`] (the default: Owen-scrambled Sobol points) and
+//! [`IndependentSampler`] (one PCG32 stream per camera sample, the numbers of earlier
+//! versions).
+//!
+//! ```toml
+//! [render]
+//! sampler = "sobol"    # sobol | independent
+//! ```
 
-use crate::sampling::Rng;
+use crate::sampling::{splitmix64, Rng};
 use glam::Vec2;
 
 /// The dimension numbers of the layout above.
@@ -55,9 +65,32 @@ pub trait Sampler {
     fn get_2d(&mut self, dim: u32) -> Vec2;
 }
 
-/// The name of the sampler renders use, as the header's `lightpath/setting/sampler`
-/// records it.
-pub const NAME: &str = "independent";
+/// Which sampler a render uses.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum SamplerKind {
+    #[default]
+    Sobol,
+    Independent,
+}
+
+impl SamplerKind {
+    pub const NAMES: [&'static str; 2] = ["sobol", "independent"];
+
+    pub fn parse(s: &str) -> Option<SamplerKind> {
+        match s {
+            "sobol" => Some(SamplerKind::Sobol),
+            "independent" => Some(SamplerKind::Independent),
+            _ => None,
+        }
+    }
+
+    pub fn name(self) -> &'static str {
+        match self {
+            SamplerKind::Sobol => "sobol",
+            SamplerKind::Independent => "independent",
+        }
+    }
+}
 
 /// Independent uniform numbers: one PCG32 stream per camera sample, read in dimension
 /// order (which is why the layout forbids asking out of order). This is the sequence
@@ -106,6 +139,73 @@ impl Sampler for IndependentSampler {
     }
 }
 
+/// Owen-scrambled Sobol points (Burley 2020, the `sobol_burley` crate): a camera
+/// sample's numbers are point `sample` of a Sobol sequence whose scrambling and index
+/// shuffle are seeded per pixel, so pixels are decorrelated while each pixel's samples
+/// stratify every dimension and the 2D and 4D projections the layout pairs up.
+///
+/// The numbers depend only on (seed, pixel, sample index, dimension), like the
+/// independent sampler's, so sample ranges merge exactly; a range that starts and ends
+/// at multiples of a power of two (0–63, 64–127, …) is itself a well-stratified point
+/// set. The crate computes four dimensions at once: the sampler keeps the last set.
+/// Past the crate's 256 dimensions (a path deeper than 36 bounces) the numbers are
+/// independent hashes of (seed, pixel, sample, dimension); past its 2^16 samples per
+/// sequence, each further block of 2^16 samples uses a sequence of its own.
+pub struct SobolSampler {
+    /// The pixel's sequence seed, with the block of 2^16 samples folded in.
+    seed: u32,
+    /// The sample's index in its sequence.
+    index: u32,
+    /// Seed, pixel and sample hashed, for the dimensions past the crate's.
+    hash: u64,
+    /// The set of four dimensions in `cached` (`u32::MAX`: none yet).
+    set: u32,
+    cached: [f32; 4],
+}
+
+/// Dimensions the Sobol sequence covers (the rest are independent).
+pub const SOBOL_DIMENSIONS: u32 = sobol_burley::NUM_DIMENSIONS;
+
+impl SobolSampler {
+    pub fn new(seed: u64, pixel: u64, sample: u64) -> SobolSampler {
+        let block = sample >> 16;
+        let h = splitmix64(seed ^ splitmix64(pixel ^ block.rotate_left(40)));
+        SobolSampler {
+            seed: (h ^ (h >> 32)) as u32,
+            index: (sample & 0xffff) as u32,
+            hash: splitmix64(h ^ sample),
+            set: u32::MAX,
+            cached: [0.0; 4],
+        }
+    }
+
+    #[inline(always)]
+    fn value(&mut self, dim: u32) -> f32 {
+        if dim >= SOBOL_DIMENSIONS {
+            let h = splitmix64(self.hash ^ (dim as u64).wrapping_mul(0x9e37_79b9_7f4a_7c15));
+            return (h >> 40) as f32 * (1.0 / (1u32 << 24) as f32);
+        }
+        let set = dim / 4;
+        if set != self.set {
+            self.set = set;
+            self.cached = sobol_burley::sample_4d(self.index, set, self.seed);
+        }
+        self.cached[(dim % 4) as usize]
+    }
+}
+
+impl Sampler for SobolSampler {
+    #[inline(always)]
+    fn get_1d(&mut self, dim: u32) -> f32 {
+        self.value(dim)
+    }
+
+    #[inline(always)]
+    fn get_2d(&mut self, dim: u32) -> Vec2 {
+        Vec2::new(self.value(dim), self.value(dim + 1))
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -137,5 +237,157 @@ mod tests {
         let mut s = IndependentSampler::new(1, 2, 3);
         s.get_2d(dim::LENS);
         s.get_2d(dim::FILTER);
+    }
+
+    /// Owen-scrambled Sobol points stratify every dimension: the first 2^k samples of a
+    /// pixel put exactly one number in each interval [j/2^k, (j+1)/2^k), in every
+    /// dimension the crate covers. Independent numbers do not (checked too, so the test
+    /// can tell the two apart).
+    #[test]
+    fn sobol_stratifies_each_dimension() {
+        let n = 256u64;
+        for dim in [0u32, 1, 2, 4, 5, 7, 10, 38, 100, 255] {
+            for pixel in [0u64, 77, 4096] {
+                let mut hit = vec![0u32; n as usize];
+                for s in 0..n {
+                    let x = SobolSampler::new(3, pixel, s).get_1d(dim);
+                    assert!((0.0..1.0).contains(&x));
+                    hit[(x * n as f32) as usize] += 1;
+                }
+                assert!(hit.iter().all(|&h| h == 1), "dim {dim} pixel {pixel}");
+            }
+        }
+        let mut hit = vec![0u32; n as usize];
+        for s in 0..n {
+            let x = IndependentSampler::new(3, 0, s).get_1d(0);
+            hit[(x * n as f32) as usize] += 1;
+        }
+        assert!(hit.iter().any(|&h| h != 1));
+    }
+
+    /// The pixel filter's two dimensions form a (0, 2)-net: 1024 samples put one point
+    /// in each cell of a 32 × 32 grid.
+    #[test]
+    fn sobol_filter_dimensions_form_a_net() {
+        let mut cells = vec![0u32; 1024];
+        for s in 0..1024 {
+            let u = SobolSampler::new(9, 5, s).get_2d(dim::FILTER);
+            cells[(u.y * 32.0) as usize * 32 + (u.x * 32.0) as usize] += 1;
+        }
+        assert!(cells.iter().all(|&c| c == 1));
+    }
+
+    /// Pearson's χ² over a 16 × 16 grid of 2D points (255 degrees of freedom).
+    fn chi2_2d(points: impl Iterator<Item = Vec2>, n: usize) -> f64 {
+        let mut cells = vec![0f64; 256];
+        for u in points {
+            assert!(u.x >= 0.0 && u.x < 1.0 && u.y >= 0.0 && u.y < 1.0);
+            cells[(u.y * 16.0) as usize * 16 + (u.x * 16.0) as usize] += 1.0;
+        }
+        let e = n as f64 / 256.0;
+        cells.iter().map(|c| (c - e) * (c - e) / e).sum()
+    }
+
+    /// Every 2D pair of the layout, over one pixel's samples and across pixels at one
+    /// sample index, is uniform: χ² with 255 degrees of freedom below its 99.9 %
+    /// quantile (330.5), for points past the crate's 256 dimensions (independent hashes)
+    /// too. Within a pixel the Sobol points are far more even than random points would
+    /// be (χ² far below its mean of 255).
+    #[test]
+    fn sobol_pairs_are_uniform_within_and_across_pixels() {
+        let n = 4096;
+        let mut pairs: Vec<u32> = vec![dim::FILTER, dim::LENS];
+        for d in [0, 1, 5, 30] {
+            let b = dim::bounce(d);
+            pairs.extend([b + dim::LIGHT_POINT, b + dim::DIRECTION]);
+        }
+        pairs.extend([300, 1000]);
+        for &d in &pairs {
+            let within = chi2_2d(
+                (0..n).map(|s| SobolSampler::new(1, 42, s).get_2d(d)),
+                n as usize,
+            );
+            assert!(within < 330.5, "dim {d} within a pixel: chi2 {within}");
+            if d < SOBOL_DIMENSIONS {
+                assert!(
+                    within < 128.0,
+                    "dim {d}: chi2 {within}, no better than random"
+                );
+            }
+            let across = chi2_2d(
+                (0..n).map(|p| SobolSampler::new(1, p, 3).get_2d(d)),
+                n as usize,
+            );
+            assert!(across < 330.5, "dim {d} across pixels: chi2 {across}");
+        }
+    }
+
+    /// Neighbouring pixels' sequences are decorrelated: the correlation of the same
+    /// sample and dimension in pixels p and p + 1, over 4096 pixels, is within 4.5
+    /// standard errors (1 / √n) of zero.
+    #[test]
+    fn sobol_pixels_are_decorrelated() {
+        let n = 4096u64;
+        for (dim, s) in [(0u32, 0u64), (4, 1), (8, 17), (300, 2)] {
+            let v: Vec<f64> = (0..=n)
+                .map(|p| SobolSampler::new(0, p, s).get_1d(dim) as f64 - 0.5)
+                .collect();
+            let cov: f64 = v.windows(2).map(|w| w[0] * w[1]).sum::<f64>() / n as f64;
+            let corr = cov / (1.0 / 12.0);
+            assert!(corr.abs() < 4.5 / (n as f64).sqrt(), "dim {dim}: {corr}");
+        }
+    }
+
+    /// A sample's numbers depend only on (seed, pixel, sample, dimension): reading every
+    /// dimension or skipping some gives the same numbers (so a path that ends early
+    /// leaves the next sample untouched and ranges merge exactly), and a sample past
+    /// the crate's 2^16 per sequence is still a valid number.
+    #[test]
+    fn sobol_numbers_depend_only_on_their_coordinates() {
+        let all: Vec<f32> = {
+            let mut s = SobolSampler::new(5, 9, 70_000);
+            (0..300).map(|d| s.get_1d(d)).collect()
+        };
+        let mut s = SobolSampler::new(5, 9, 70_000);
+        for d in (0..300).step_by(7) {
+            assert_eq!(s.get_1d(d), all[d as usize]);
+        }
+        assert_ne!(
+            SobolSampler::new(5, 9, 70_000).get_1d(0),
+            SobolSampler::new(5, 9, 70_000 - 65_536).get_1d(0),
+            "each block of 2^16 samples has its own sequence"
+        );
+    }
+
+    /// What the sampler is for: the mean of a smooth 4D integrand over 64 samples has a
+    /// far smaller error with Sobol points than with independent ones (measured over 200
+    /// pixels; Owen-scrambled Sobol converges as n^-1.5 or better for smooth integrands,
+    /// random points as n^-0.5).
+    #[test]
+    fn sobol_integrates_smooth_functions_with_less_error() {
+        let f = |a: Vec2, b: Vec2| (a.x * a.y + b.x * b.x + (3.0 * b.y).sin()) as f64;
+        let exact = 0.25 + 1.0 / 3.0 + (1.0 - 3f64.cos()) / 3.0;
+        let mse = |sobol: bool| {
+            (0..200u64)
+                .map(|p| {
+                    let mean = (0..64u64)
+                        .map(|s| {
+                            if sobol {
+                                let mut x = SobolSampler::new(2, p, s);
+                                f(x.get_2d(dim::FILTER), x.get_2d(dim::LENS))
+                            } else {
+                                let mut x = IndependentSampler::new(2, p, s);
+                                f(x.get_2d(dim::FILTER), x.get_2d(dim::LENS))
+                            }
+                        })
+                        .sum::<f64>()
+                        / 64.0;
+                    (mean - exact).powi(2)
+                })
+                .sum::<f64>()
+                / 200.0
+        };
+        let (sobol, independent) = (mse(true), mse(false));
+        assert!(sobol < independent / 20.0, "{sobol} vs {independent}");
     }
 }

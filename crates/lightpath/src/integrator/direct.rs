@@ -49,7 +49,10 @@ impl Tracer<'_> {
             let scene = self.scene;
             power_heuristic(
                 path.prev_pdf,
-                scene.light_select.pmf(li as usize) * light_pdf(&scene.lights[li as usize]),
+                scene
+                    .light_select
+                    .pmf(li as usize, path.prev_p, path.prev_n)
+                    * light_pdf(&scene.lights[li as usize]),
             )
         }
     }
@@ -112,12 +115,15 @@ impl Tracer<'_> {
         let bounce = dim::bounce(path.depth);
         let u_light = sampler.get_1d(bounce + dim::LIGHT_CHOICE);
         let u_point = sampler.get_2d(bounce + dim::LIGHT_POINT);
-        let bsdf = &v.material.bsdf;
+        let bsdf = v.bsdf;
         let lobes = bsdf.lobes();
         if scene.lights.is_empty() || lobes.iter().all(|l| l.delta) {
             return;
         }
-        let (li, select_pmf, _) = scene.light_select.sample(u_light);
+        let Some((li, select_pmf)) = scene.light_select.sample(u_light, v.hit.p, v.sh.frame.n)
+        else {
+            return;
+        };
         let light = &scene.lights[li];
         if !self.lit(v.hit.object, li as u32) {
             return;

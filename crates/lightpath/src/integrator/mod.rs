@@ -9,15 +9,16 @@
 
 mod direct;
 mod path;
+mod pixel;
 mod routing;
 
 use crate::film::{Film, Mattes, PixelWindow, SampleAccumulator};
 use crate::geometry::{Hit, Ray};
 use crate::post::cryptomatte::{MatteTable, PixelMatte};
 use crate::progress::{Progress, Silent};
-use crate::sampler::{dim, IndependentSampler, Sampler};
 use crate::scene::Scene;
-use glam::{Vec2, Vec3A};
+use glam::Vec3A;
+use pixel::PixelJob;
 use rayon::prelude::*;
 use routing::Route;
 use std::sync::atomic::{AtomicU64, Ordering};
@@ -148,7 +149,12 @@ pub fn render_frame(
         .band_rows()
         .map_or(band_rows, |r| r.clamp(1, band_rows));
     let mut band = vec![0.0f32; band_rows * row_len];
+    let adaptive = scene.settings.noise_threshold > 0.0;
+    let mut counts = vec![0u32; if adaptive { band_rows * w as usize } else { 0 }];
     let mut film = Film::for_window(win, [fw, fh], scene.aovs.len(), options.spp);
+    if adaptive {
+        film.sample_counts = Some(vec![0; w as usize * h as usize]);
+    }
     // Cryptomatte values, band by band beside the AOVs' (one dummy value per row without).
     let table = request.mattes.as_ref();
     let matte_stride = table.map_or(0, |t| t.stride());
@@ -162,8 +168,17 @@ pub fn render_frame(
         let band = &mut band[..rows_here * row_len];
         band.fill(0.0);
         let matte_band = &mut matte_band[..rows_here * matte_row];
+        // Per row: its sample counts (adaptive sampling), or nothing.
+        let count_rows: Vec<&mut [u32]> = if adaptive {
+            counts[..rows_here * w as usize]
+                .chunks_mut(w as usize)
+                .collect()
+        } else {
+            (0..rows_here).map(|_| &mut [][..]).collect()
+        };
         band.par_chunks_mut(row_len)
             .zip(matte_band.par_chunks_mut(matte_row))
+            .zip(count_rows)
             .enumerate()
             .for_each_init(
                 || {
@@ -172,7 +187,7 @@ pub fn render_frame(
                         PixelMatte::new(table.map_or(0, |t| t.layers.len())),
                     )
                 },
-                |(acc, matte), (i, (row, matte_row))| {
+                |(acc, matte), (i, ((row, matte_row), row_counts))| {
                     let y = win.y0 + (first_row + i) as u32;
                     let mut out = Sink {
                         acc,
@@ -182,20 +197,22 @@ pub fn render_frame(
                         first_object: None,
                     };
                     for (col, x) in (win.x0..win.x1).enumerate() {
-                        let pixel = &mut row[col * stride..(col + 1) * stride];
-                        let index = y as u64 * fw as u64 + x as u64;
-                        for s in options.first_sample..options.first_sample + options.spp {
-                            let mut sampler =
-                                IndependentSampler::new(scene.settings.seed, index, s as u64);
-                            let offset = scene.filter.offset(sampler.get_2d(dim::FILTER));
-                            let film_pos = Vec2::new(x as f32 + 0.5, y as f32 + 0.5) + offset;
-                            let ray = cam.ray(film_pos, sampler.get_2d(dim::LENS));
-                            let alpha = tracer.trace(ray, &mut sampler, &mut out);
-                            out.acc.flush(pixel);
-                            pixel[Film::alpha_slot(stride)] += alpha;
+                        let mut after_sample = |out: &Sink| {
                             if let Some(t) = table {
                                 matte.add(t, out.first_object);
                             }
+                        };
+                        let job = PixelJob {
+                            x,
+                            y,
+                            run: &mut row[col * stride..(col + 1) * stride],
+                            first_sample: options.first_sample,
+                            spp: options.spp,
+                            after_sample: &mut after_sample,
+                        };
+                        let taken = tracer.render_pixel(job, &mut out);
+                        if let Some(c) = row_counts.get_mut(col) {
+                            *c = taken;
                         }
                         if let Some(t) = table {
                             let run = col * matte_stride..(col + 1) * matte_stride;
@@ -208,6 +225,9 @@ pub fn render_frame(
                 },
             );
         film.store_rows(first_row, band);
+        if adaptive {
+            film.store_counts(first_row, &counts[..rows_here * w as usize]);
+        }
         if matte_stride > 0 {
             let start = first_row * w as usize;
             for (c, plane) in matte_planes.iter_mut().enumerate() {
@@ -228,6 +248,10 @@ pub fn render_frame(
         });
     }
     progress.finish();
+    let samples = film
+        .sample_counts
+        .as_ref()
+        .map_or(samples, |c| c.iter().map(|&n| n as u64).sum());
     let stats = RenderStats {
         samples,
         rays: rays.into_inner(),

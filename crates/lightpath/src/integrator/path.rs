@@ -5,7 +5,7 @@
 use super::routing::{Origin, Via};
 use super::{Sink, Tracer};
 use crate::geometry::{Hit, Ray, Visibility};
-use crate::material::Shading;
+use crate::material::{Bsdf, Shading};
 use crate::sampler::{dim, Sampler};
 use crate::scene::{DataLobe, Material, Object};
 use glam::Vec3A;
@@ -21,6 +21,9 @@ pub(super) struct PathState {
     /// The last scattering point, the pdf of the direction sampled there and whether it
     /// came from a delta lobe (for MIS when the ray finds a light).
     pub prev_p: Vec3A,
+    /// The normal light selection used there (the light tree's probabilities depend on
+    /// the shading point and its normal).
+    pub prev_n: Vec3A,
     pub prev_pdf: f32,
     pub prev_delta: bool,
     /// The object scattered from last (`u32::MAX`: the camera), for light linking.
@@ -36,6 +39,9 @@ pub(super) struct Vertex<'a> {
     pub hit: &'a Hit,
     pub obj: &'a Object,
     pub material: &'a Material,
+    /// The BSDF shading uses here: the material's, or its regularised one after a
+    /// diffuse bounce.
+    pub bsdf: &'a Bsdf,
     pub sh: Shading,
 }
 
@@ -49,6 +55,7 @@ impl Tracer<'_> {
             throughput: Vec3A::ONE,
             eta_scale: 1.0,
             prev_p: ray.origin,
+            prev_n: Vec3A::ZERO,
             prev_pdf: 0.0,
             prev_delta: true,
             prev_object: u32::MAX,
@@ -94,7 +101,11 @@ impl Tracer<'_> {
             let Some(material) = obj.material.map(|m| &scene.materials[m as usize]) else {
                 break;
             };
-            let sh = Shading::new(&material.bsdf, hit.ns, hit.ng, -ray.dir);
+            let bsdf = match &material.regularized {
+                Some(rough) if path.diffuse > 0 => rough,
+                _ => &material.bsdf,
+            };
+            let sh = Shading::new(bsdf, hit.ns, hit.ng, -ray.dir);
             if sh.wo.z == 0.0 {
                 break;
             }
@@ -102,6 +113,7 @@ impl Tracer<'_> {
                 hit: &hit,
                 obj,
                 material,
+                bsdf,
                 sh,
             };
             self.data_lobes(out, &path, &v);
@@ -181,7 +193,7 @@ impl Tracer<'_> {
                 continue;
             }
             let value = match kind {
-                DataLobe::Albedo => v.material.bsdf.albedo(),
+                DataLobe::Albedo => v.bsdf.albedo(),
                 DataLobe::Position => v.hit.p,
                 DataLobe::Normal => v.sh.frame.n,
                 DataLobe::UserColor => v.material.user_color.unwrap_or(Vec3A::ZERO),
@@ -208,8 +220,8 @@ impl Tracer<'_> {
         let bounce = dim::bounce(path.depth);
         let u_lobe = sampler.get_1d(bounce + dim::LOBE_CHOICE);
         let u_dir = sampler.get_2d(bounce + dim::DIRECTION);
-        let bs = v.material.bsdf.sample(&v.sh, u_lobe, u_dir)?;
-        match v.material.bsdf.lobes()[bs.lobe].scatter.class {
+        let bs = v.bsdf.sample(&v.sh, u_lobe, u_dir)?;
+        match v.bsdf.lobes()[bs.lobe].scatter.class {
             ScatterClass::Diffuse => {
                 path.diffuse += 1;
                 if path.diffuse > settings.max_diffuse_depth {
@@ -232,6 +244,7 @@ impl Tracer<'_> {
         path.throughput *= bs.weight;
         path.eta_scale *= bs.eta;
         path.prev_p = v.hit.p;
+        path.prev_n = v.sh.frame.n;
         path.prev_pdf = bs.pdf;
         path.prev_delta = bs.delta;
         path.prev_object = v.hit.object;

@@ -129,6 +129,10 @@ pub fn write_film(
     mut header: ExrHeader,
 ) -> std::result::Result<(), String> {
     let (width, height) = (film.width as usize, film.height as usize);
+    let counts = film
+        .sample_counts
+        .as_ref()
+        .map(|c| c.iter().map(|&n| n as f32).collect::<Vec<f32>>());
     header.frame = Some(film.frame);
     header.origin = [film.window.x0, film.window.y0];
     let mattes = film.mattes.clone();
@@ -141,6 +145,9 @@ pub fn write_film(
         }
     }
     channels.push((naming::ALPHA.into(), planes.next().unwrap_or_default()));
+    if let Some(counts) = counts {
+        channels.push((naming::SAMPLE_COUNT_CHANNEL.into(), counts));
+    }
     for d in derived {
         for (name, values) in channel_names(&d.name).into_iter().zip(d.rgb) {
             channels.push((name, values));

@@ -104,7 +104,11 @@ pub fn settings_attributes(
             format!("{}x{}", scene.camera.width, scene.camera.height),
         ),
         ("rr_depth", s.rr_depth.to_string()),
-        ("sampler", crate::sampler::NAME.to_string()),
+        ("sampler", s.sampler.name().to_string()),
+        ("light_selection", s.light_selection.name().to_string()),
+        ("noise_threshold", s.noise_threshold.to_string()),
+        ("min_spp", s.min_spp.to_string()),
+        ("regularize", s.regularize.to_string()),
     ];
     let mut out: Vec<(String, String)> = settings
         .into_iter()

@@ -135,7 +135,22 @@ pub struct RenderDesc {
     pub clamp_direct: f32,
     pub clamp_indirect: f32,
     pub seed: u64,
+    /// Which numbers drive the samples (`sampler.rs`).
+    pub sampler: crate::sampler::SamplerKind,
+    /// How lights are chosen for light sampling (`light/select.rs`).
+    pub light_selection: crate::light::select::LightSelection,
+    /// Adaptive sampling: stop a pixel once the relative standard error of its beauty is
+    /// below this (0: off, every pixel takes `spp` samples).
+    pub noise_threshold: f32,
+    /// Adaptive sampling: samples every pixel takes before it may stop.
+    pub min_spp: u32,
+    /// Path regularisation: after a diffuse bounce, specular lobes are at least this
+    /// rough (0: off).
+    pub regularize: f32,
 }
+
+/// Samples a pixel takes before adaptive sampling may stop it, unless told.
+pub const DEFAULT_MIN_SPP: u32 = 16;
 
 impl Default for RenderDesc {
     fn default() -> Self {
@@ -148,6 +163,11 @@ impl Default for RenderDesc {
             clamp_direct: 0.0,
             clamp_indirect: 0.0,
             seed: 0,
+            sampler: Default::default(),
+            light_selection: Default::default(),
+            noise_threshold: 0.0,
+            min_spp: DEFAULT_MIN_SPP,
+            regularize: 0.0,
         }
     }
 }

@@ -14,7 +14,6 @@ use crate::camera::{Camera, PixelFilter};
 use crate::geometry::Accel;
 use crate::light::Light;
 use crate::material::Bsdf;
-use crate::sampling::Distribution1D;
 use glam::Vec3A;
 use lpe::{Automaton, ClassId, Flags};
 
@@ -22,6 +21,9 @@ use lpe::{Automaton, ClassId, Flags};
 #[derive(Clone, Debug)]
 pub struct Material {
     pub bsdf: Bsdf,
+    /// The BSDF after a diffuse bounce under path regularisation (`[render] regularize`):
+    /// specular lobes roughened, the same lobes and events. `None`: unchanged.
+    pub regularized: Option<Bsdf>,
     pub user_color: Option<Vec3A>,
 }
 
@@ -55,6 +57,14 @@ pub struct RenderSettings {
     pub clamp_direct: f32,
     pub clamp_indirect: f32,
     pub seed: u64,
+    pub sampler: crate::sampler::SamplerKind,
+    pub light_selection: crate::light::select::LightSelection,
+    /// Adaptive sampling's relative standard error (0: off) and its first samples.
+    pub noise_threshold: f32,
+    pub min_spp: u32,
+    /// Path regularisation: the roughness specular lobes get after a diffuse bounce
+    /// (0: off).
+    pub regularize: f32,
 }
 
 /// One output AOV: its name, definition and rule flags (its rule id is its index).
@@ -81,7 +91,7 @@ pub struct Scene {
     pub lights: Vec<Light>,
     /// Class of each light's `L` and `O` events.
     pub light_classes: Vec<(ClassId, ClassId)>,
-    pub light_select: Distribution1D,
+    pub light_select: crate::light::select::LightSelector,
     /// Lights reached by rays that escape the scene.
     pub escape_lights: Vec<u32>,
     pub camera: Camera,

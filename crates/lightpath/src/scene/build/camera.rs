@@ -66,5 +66,10 @@ pub fn settings(desc: &SceneDesc) -> RenderSettings {
         clamp_direct: r.clamp_direct,
         clamp_indirect: r.clamp_indirect,
         seed: r.seed,
+        sampler: r.sampler,
+        light_selection: r.light_selection,
+        noise_threshold: r.noise_threshold.max(0.0),
+        min_spp: r.min_spp.max(1),
+        regularize: r.regularize.clamp(0.0, 1.0),
     }
 }

@@ -1,5 +1,5 @@
-//! Lights: shapes, colours, environment maps, light linking and the light selection
-//! probabilities.
+//! Lights: shapes, colours, environment maps and light linking (the selection
+//! probabilities are `light/select.rs`'s).
 
 use crate::geometry::shapes::{self, ShapePrims};
 use crate::geometry::{Accel, Prim};
@@ -258,27 +258,6 @@ pub fn link(descs: &[LightDesc], objects: &mut [Object]) {
             }
         }
     }
-}
-
-/// Lights are chosen in proportion to their power at unit colour, with a floor so small
-/// lights still get samples.
-pub fn selection(lights: &[Light], scene_radius: f32) -> Distribution1D {
-    let powers: Vec<f32> = lights
-        .iter()
-        .map(|l| l.sampling_weight(scene_radius))
-        .collect();
-    let total: f32 = powers.iter().sum();
-    let weights: Vec<f32> = powers
-        .iter()
-        .map(|p| {
-            if total > 0.0 {
-                p / total + 0.1 / lights.len() as f32
-            } else {
-                1.0
-            }
-        })
-        .collect();
-    Distribution1D::new(&weights)
 }
 
 /// Lights reached by rays that escape the scene.

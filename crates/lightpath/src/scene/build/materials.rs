@@ -12,7 +12,24 @@ pub fn build(desc: &SceneDesc) -> Result<(Vec<Material>, HashMap<String, u32>), 
     let mut ids = HashMap::new();
     for (name, m) in &desc.materials {
         ids.insert(name.clone(), materials.len() as u32);
-        materials.push(material(name, m)?);
+        let mut built = material(name, m)?;
+        let roughness = desc.render.regularize;
+        if roughness > m.roughness && !matches!(m.kind, MaterialKind::Diffuse { .. }) {
+            let rough = MaterialDesc {
+                roughness,
+                ..m.clone()
+            };
+            let bsdf = material(name, &rough)?.bsdf;
+            // Regularising changes how lobes scatter, never which events they emit.
+            let same_events = bsdf.lobes().len() == built.bsdf.lobes().len()
+                && bsdf
+                    .lobes()
+                    .iter()
+                    .zip(built.bsdf.lobes())
+                    .all(|(a, b)| (a.transmit, a.scatter) == (b.transmit, b.scatter));
+            built.regularized = same_events.then_some(bsdf);
+        }
+        materials.push(built);
     }
     Ok((materials, ids))
 }
@@ -57,6 +74,7 @@ fn material(name: &str, m: &MaterialDesc) -> Result<Material, SceneError> {
     };
     Ok(Material {
         bsdf,
+        regularized: None,
         user_color: m.user_color.map(v3),
     })
 }

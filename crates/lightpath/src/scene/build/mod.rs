@@ -9,6 +9,7 @@ pub mod materials;
 use crate::aov::AovSpec;
 use crate::events::Vocabulary;
 use crate::geometry::Visibility;
+use crate::light::select::LightSelector;
 use crate::light::Light;
 use crate::scene::desc::{LightDesc, LightKind, Origin, SceneDesc, ShapeDesc};
 use crate::scene::{Aov, Object, Scene, SceneError};
@@ -31,6 +32,12 @@ impl Scene {
         let mesh_lights = lights::mesh_surfaces(&mut lights, &desc.lights, &object_prims, &accel)?;
         lights::link(&desc.lights, &mut objects);
         let (scene_radius, epsilon) = geometry::scene_size(&accel);
+        let light_select = LightSelector::build(
+            desc.render.light_selection,
+            &lights,
+            accel.prims(),
+            scene_radius,
+        );
 
         let vocabulary = Vocabulary::of_scene(&objects, &materials, &lights);
         let automaton = compile_aovs(desc, aovs, &vocabulary)?;
@@ -49,7 +56,7 @@ impl Scene {
             objects,
             materials,
             light_classes: classes.lights,
-            light_select: lights::selection(&lights, scene_radius),
+            light_select,
             escape_lights: lights::escape_lights(&lights),
             lights,
             camera,

@@ -165,6 +165,20 @@ struct RenderDesc {
     clamp_indirect: f32,
     #[serde(default)]
     seed: u64,
+    /// `sobol` or `independent`.
+    #[serde(default)]
+    sampler: Option<Spanned<String>>,
+    /// `tree`, `power` or `uniform`.
+    #[serde(default)]
+    light_selection: Option<Spanned<String>>,
+    /// Adaptive sampling's relative standard error (0: off) and its first samples.
+    #[serde(default)]
+    noise_threshold: Option<Spanned<f32>>,
+    #[serde(default)]
+    min_spp: Option<u32>,
+    /// Path regularisation: specular lobes' roughness after a diffuse bounce (0: off).
+    #[serde(default)]
+    regularize: Option<Spanned<f32>>,
 }
 
 fn default_spp() -> u32 {
@@ -188,7 +202,58 @@ impl Default for RenderDesc {
             clamp_direct: 0.0,
             clamp_indirect: 0.0,
             seed: 0,
+            sampler: None,
+            light_selection: None,
+            noise_threshold: None,
+            min_spp: None,
+            regularize: None,
         }
+    }
+}
+
+/// `[render]`'s named choice `field`, or the default when absent.
+fn choice<T: Default>(
+    src: &Source,
+    field: &str,
+    value: &Option<Spanned<String>>,
+    parse: impl Fn(&str) -> Option<T>,
+    names: &[&str],
+) -> Result<T, SceneError> {
+    match value {
+        None => Ok(T::default()),
+        Some(v) => parse(v.get_ref()).ok_or_else(|| {
+            src.error(
+                Some(v.span()),
+                format!(
+                    "unknown {field} '{}': expected {}",
+                    v.get_ref(),
+                    names.join(" or ")
+                ),
+            )
+        }),
+    }
+}
+
+/// `[render]`'s number `field` in `range`, or `default` when absent.
+fn bounded(
+    src: &Source,
+    field: &str,
+    value: &Option<Spanned<f32>>,
+    range: std::ops::RangeInclusive<f32>,
+    default: f32,
+) -> Result<f32, SceneError> {
+    match value {
+        None => Ok(default),
+        Some(v) if range.contains(v.get_ref()) => Ok(*v.get_ref()),
+        Some(v) => Err(src.error(
+            Some(v.span()),
+            format!(
+                "{field} must be between {} and {}, got {}",
+                range.start(),
+                range.end(),
+                v.get_ref()
+            ),
+        )),
     }
 }
 
@@ -399,6 +464,23 @@ pub fn load(src: &Source) -> Result<d::SceneDesc, SceneError> {
             clamp_direct: r.clamp_direct,
             clamp_indirect: r.clamp_indirect,
             seed: r.seed,
+            sampler: choice(
+                src,
+                "sampler",
+                &r.sampler,
+                crate::sampler::SamplerKind::parse,
+                &crate::sampler::SamplerKind::NAMES,
+            )?,
+            light_selection: choice(
+                src,
+                "light_selection",
+                &r.light_selection,
+                crate::light::select::LightSelection::parse,
+                &crate::light::select::LightSelection::NAMES,
+            )?,
+            noise_threshold: bounded(src, "noise_threshold", &r.noise_threshold, 0.0..=1e6, 0.0)?,
+            min_spp: r.min_spp.unwrap_or(d::DEFAULT_MIN_SPP),
+            regularize: bounded(src, "regularize", &r.regularize, 0.0..=1.0, 0.0)?,
         },
         materials,
         objects,

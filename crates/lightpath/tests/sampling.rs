@@ -1,0 +1,300 @@
+//! Cleaner images sooner without changing what they converge to: lights chosen by the
+//! light tree or by power give the same image as uniform selection within noise (and a
+//! relit image the re-render's), adaptive sampling keeps partitions exact, is the same
+//! for any thread count and merges by per-pixel counts, and the built-in `cornell` has
+//! few fireflies at its defaults.
+
+use glam::Vec3A;
+use lightpath::aov::{self, AovSpec};
+use lightpath::film::Film;
+use lightpath::light::select::LightSelection;
+use lightpath::sampler::SamplerKind;
+use lightpath::scene::desc::SceneDesc;
+use lightpath::{render, RenderOptions, Scene};
+
+const MANY_LIGHTS: &str = include_str!("../../../scenes/many-lights.toml");
+
+fn many_lights() -> lightpath::Source {
+    lightpath::Source {
+        name: "many-lights.toml".into(),
+        text: MANY_LIGHTS.into(),
+        dir: Default::default(),
+    }
+}
+
+fn run(
+    src: &lightpath::Source,
+    edit: impl FnOnce(&mut SceneDesc),
+    aovs: Vec<AovSpec>,
+) -> (Scene, Film) {
+    let mut desc = src.parse().unwrap();
+    edit(&mut desc);
+    let scene = Scene::build(&desc, &aov::assemble(aovs)).unwrap();
+    let (film, _) = render(
+        &scene,
+        &RenderOptions {
+            spp: desc.render.spp,
+            first_sample: 0,
+        },
+    );
+    (scene, film)
+}
+
+fn index(scene: &Scene, name: &str) -> usize {
+    scene
+        .aovs
+        .iter()
+        .position(|a| a.name == name)
+        .unwrap_or_else(|| panic!("no AOV {name}"))
+}
+
+/// Two renders of the same image agree within their noise: in each of 4 × 4 blocks, the
+/// mean per-pixel difference of luminance is within 5 standard errors of zero. Pixels
+/// have independent sample sequences, so the spread of the differences over a block's
+/// pixels estimates the standard error of their mean. Returns the largest |z|.
+fn agree_within_noise(a: &[Vec3A], b: &[Vec3A], width: usize) -> f64 {
+    let height = a.len() / width;
+    let lum = |v: Vec3A| (0.2126 * v.x + 0.7152 * v.y + 0.0722 * v.z) as f64;
+    let mut worst = 0.0f64;
+    for by in 0..4 {
+        for bx in 0..4 {
+            let d: Vec<f64> = (by * height / 4..(by + 1) * height / 4)
+                .flat_map(|y| (bx * width / 4..(bx + 1) * width / 4).map(move |x| y * width + x))
+                .map(|i| lum(a[i]) - lum(b[i]))
+                .collect();
+            let n = d.len() as f64;
+            let mean = d.iter().sum::<f64>() / n;
+            let var = d.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / (n - 1.0);
+            let se = (var / n).sqrt();
+            let z = if se > 0.0 { mean / se } else { 0.0 };
+            assert!(
+                mean.abs() <= 5.0 * se,
+                "block ({bx}, {by}): mean difference {mean} vs standard error {se}"
+            );
+            worst = worst.max(z.abs());
+        }
+    }
+    worst
+}
+
+fn pixels(film: &Film, k: usize) -> Vec<Vec3A> {
+    (0..film.height)
+        .flat_map(|y| (0..film.width).map(move |x| (x, y)))
+        .map(|(x, y)| film.pixel(k, x, y))
+        .collect()
+}
+
+/// The light tree and power selection are unbiased: on a scene with a key, a dim dome
+/// and 48 small lamps (clamps off), their images agree with uniform selection's within
+/// noise, block by block — and a selection pdf left out of a weight would not.
+#[test]
+fn light_selection_is_unbiased_against_uniform() {
+    let src = many_lights();
+    let render_with = |selection: LightSelection, seed: u64| {
+        let (_, film) = run(
+            &src,
+            |d| {
+                d.film.resolution = [48, 48];
+                d.render.spp = 24;
+                d.render.seed = seed;
+                d.render.light_selection = selection;
+                d.render.clamp_direct = 0.0;
+                d.render.clamp_indirect = 0.0;
+            },
+            vec![],
+        );
+        pixels(&film, 0)
+    };
+    let uniform = render_with(LightSelection::Uniform, 1);
+    for selection in [LightSelection::Tree, LightSelection::Power] {
+        agree_within_noise(&render_with(selection, 2), &uniform, 48);
+    }
+}
+
+/// Relighting from light-group AOVs: with uniform selection it is exact (see
+/// tests/workflow.rs); with the tree, making the key 1.5× brighter changes which lights
+/// are sampled, so relit and re-rendered images agree within their noise.
+#[test]
+fn relighting_with_the_tree_matches_a_re_render_within_noise() {
+    let src = lightpath::load_source("cornell").unwrap();
+    let aovs = || vec![AovSpec::new("beauty", "lpe:beauty").split()];
+    let small = |d: &mut SceneDesc| {
+        d.film.resolution = [40, 40];
+        d.render.spp = 16;
+        d.render.clamp_indirect = 0.0;
+    };
+    let (scene, film) = run(&src, small, aovs());
+    let brighter = |d: &mut SceneDesc| {
+        small(d);
+        d.render.seed = 7;
+        for l in &mut d.lights {
+            if l.groups == ["key"] {
+                l.strength = 1.5;
+            }
+        }
+    };
+    let (_, rerendered) = run(&src, brighter, aovs());
+    let key = index(&scene, "beauty_key");
+    let relit: Vec<Vec3A> = pixels(&film, 0)
+        .iter()
+        .zip(pixels(&film, key))
+        .map(|(b, k)| *b + 0.5 * k)
+        .collect();
+    agree_within_noise(&relit, &pixels(&rerendered, 0), 40);
+}
+
+fn adaptive(threshold: f32, spp: u32) -> impl Fn(&mut SceneDesc) {
+    move |d: &mut SceneDesc| {
+        d.film.resolution = [32, 32];
+        d.render.spp = spp;
+        d.render.noise_threshold = threshold;
+        d.render.min_spp = 8;
+    }
+}
+
+/// Adaptive sampling: pixels stop at different counts between `min_spp` and `spp`, all
+/// AOVs of a pixel share its samples (the standard partition and the light-group split
+/// still sum to beauty within 1e-5), and the film is bit-identical for 1 and 3 threads.
+#[test]
+fn adaptive_sampling_keeps_partitions_exact_and_is_deterministic() {
+    let src = lightpath::load_source("cornell").unwrap();
+    let aovs = || {
+        let mut a = aov::standard();
+        a.push(AovSpec::new("beauty", "lpe:beauty").split());
+        a
+    };
+    let render_on = |threads: usize| {
+        rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .unwrap()
+            .install(|| run(&src, adaptive(0.05, 64), aovs()))
+    };
+    let (scene, film) = render_on(3);
+    let counts = film
+        .sample_counts
+        .clone()
+        .expect("adaptive films count samples");
+    let (lo, hi) = (*counts.iter().min().unwrap(), *counts.iter().max().unwrap());
+    assert!(lo >= 8 && hi <= 64 && lo < hi, "counts {lo}..{hi}");
+    assert!(counts.iter().all(|&n| n == 64 || (n - 8) % 8 == 0));
+    let beauty = index(&scene, "beauty");
+    let partitions: Vec<Vec<usize>> = vec![
+        lpe::BEAUTY_PARTITION
+            .iter()
+            .map(|n| index(&scene, n))
+            .collect(),
+        scene
+            .aovs
+            .iter()
+            .enumerate()
+            .filter(|(_, a)| a.part_of == Some(beauty as u32))
+            .map(|(k, _)| k)
+            .collect(),
+    ];
+    for parts in &partitions {
+        assert!(parts.len() >= 2);
+        for y in 0..film.height {
+            for x in 0..film.width {
+                let whole = film.pixel(beauty, x, y);
+                let sum: Vec3A = parts.iter().map(|&k| film.pixel(k, x, y)).sum();
+                assert!(
+                    (sum - whole).abs().max_element() <= 1e-5 * whole.max_element().max(1.0),
+                    "pixel {x},{y}: parts {sum} vs beauty {whole}"
+                );
+            }
+        }
+    }
+    let (_, one) = render_on(1);
+    assert_eq!(one.sample_counts, film.sample_counts);
+    assert!(one
+        .planes
+        .concat()
+        .iter()
+        .zip(&film.planes.concat())
+        .all(|(a, b)| a.to_bits() == b.to_bits()));
+}
+
+/// A lower threshold takes more samples and gives a less noisy image; the mean stays
+/// that of a fixed-count render within noise.
+#[test]
+fn a_lower_noise_threshold_takes_more_samples() {
+    let src = lightpath::load_source("cornell").unwrap();
+    let total = |t: f32| {
+        let (_, film) = run(&src, adaptive(t, 128), vec![]);
+        film.sample_counts
+            .unwrap()
+            .iter()
+            .map(|&n| n as u64)
+            .sum::<u64>()
+    };
+    let (coarse, fine) = (total(0.2), total(0.02));
+    assert!(coarse < fine, "{coarse} vs {fine}");
+    let (_, a) = run(&src, adaptive(0.05, 128), vec![]);
+    let (_, b) = run(
+        &src,
+        |d| {
+            d.film.resolution = [32, 32];
+            d.render.spp = 64;
+            d.render.seed = 3;
+        },
+        vec![],
+    );
+    agree_within_noise(&pixels(&a, 0), &pixels(&b, 0), 32);
+}
+
+/// Adaptive sample ranges merge by their per-pixel counts: the merged film's pixel is
+/// the count-weighted mean of the parts (the sum of their samples over the sum of their
+/// counts), which is what `lightpath merge` computes from the `sampleCount` channels.
+#[test]
+fn adaptive_ranges_merge_by_per_pixel_counts() {
+    let src = lightpath::load_source("cornell").unwrap();
+    let mut desc = src.parse().unwrap();
+    adaptive(0.05, 32)(&mut desc);
+    let scene = Scene::build(&desc, &aov::assemble(vec![])).unwrap();
+    let part = |first_sample| {
+        render(
+            &scene,
+            &RenderOptions {
+                spp: 32,
+                first_sample,
+            },
+        )
+        .0
+    };
+    let (a, b) = (part(0), part(32));
+    let mut merged = a.clone();
+    merged.merge(&b).unwrap();
+    let (ca, cb) = (
+        a.sample_counts.as_ref().unwrap(),
+        b.sample_counts.as_ref().unwrap(),
+    );
+    for y in 0..a.height {
+        for x in 0..a.width {
+            let i = (y * a.width + x) as usize;
+            let (na, nb) = (ca[i] as f32, cb[i] as f32);
+            let expected = (a.pixel(0, x, y) * na + b.pixel(0, x, y) * nb) / (na + nb);
+            let got = merged.pixel(0, x, y);
+            assert!((got - expected).abs().max_element() <= 1e-5 * expected.max_element().max(1.0));
+        }
+    }
+}
+
+/// Determinism for the default sampler and selection, sample ranges included: two
+/// halves of a Sobol render merged equal the whole render (each number depends only on
+/// seed, pixel, sample index and dimension).
+#[test]
+fn sobol_ranges_merge_into_the_whole_render() {
+    let src = lightpath::load_source("cornell").unwrap();
+    let mut desc = src.parse().unwrap();
+    desc.film.resolution = [16, 16];
+    assert_eq!(desc.render.sampler, SamplerKind::Sobol);
+    let scene = Scene::build(&desc, &aov::assemble(vec![])).unwrap();
+    let range = |spp, first_sample| render(&scene, &RenderOptions { spp, first_sample }).0;
+    let whole = range(8, 0);
+    let mut a = range(4, 0);
+    a.merge(&range(4, 4)).unwrap();
+    for (x, y) in whole.planes.concat().iter().zip(&a.planes.concat()) {
+        assert!((x - y).abs() <= 1e-5 * x.abs().max(1.0));
+    }
+}
