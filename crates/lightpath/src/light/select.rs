@@ -702,6 +702,7 @@ mod tests {
                 by_area: Distribution1D::new(&[1.0]),
                 area: 0.5,
                 two_sided: false,
+                mesh: false,
             },
             20.0,
         ));
@@ -832,6 +833,7 @@ mod tests {
                 by_area: Distribution1D::new(&[1.0]),
                 area: 0.5,
                 two_sided: false,
+                mesh: false,
             },
             5.0,
         ));
