@@ -150,7 +150,7 @@ fn identical_renders_are_identical_files_and_the_header_explains_them() {
         ("lightpath/samples", "0-2"),
         ("lightpath/crop", "0,0,8,6"),
         ("lightpath/setting/max_depth", "8"),
-        ("lightpath/setting/sampler", "independent"),
+        ("lightpath/setting/sampler", "sobol"),
         ("lightpath/setting/resolution", "8x6"),
         ("lightpath/setting/clamp_direct", "0"),
         ("lightpath/seed", "0"),
