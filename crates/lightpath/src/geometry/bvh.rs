@@ -914,6 +914,22 @@ mod tests {
     use super::*;
     use crate::sampling::{uniform_sphere, Rng};
 
+    /// A ray from a random point of the cube of side `side` around the origin, in a
+    /// uniform direction, half of them infinite and half `finite` long.
+    fn random_ray(rng: &mut Rng, side: f32, finite: f32) -> Ray {
+        let origin = Vec3A::new(rng.next_f32(), rng.next_f32(), rng.next_f32()) * side
+            - Vec3A::splat(side / 2.0);
+        Ray {
+            origin,
+            dir: uniform_sphere(rng.next_2d()),
+            tmax: if rng.next_f32() < 0.5 {
+                f32::INFINITY
+            } else {
+                finite
+            },
+        }
+    }
+
     /// A soup of triangles and spheres of mixed visibility, some duplicated, in and around a
     /// unit box.
     fn soup(n: usize, rng: &mut Rng) -> (Vec<Prim>, Vec<u32>, Vec<u8>) {
@@ -962,17 +978,7 @@ mod tests {
                 visibility.clone(),
             );
             for _ in 0..400 {
-                let origin = Vec3A::new(rng.next_f32(), rng.next_f32(), rng.next_f32()) * 3.0
-                    - Vec3A::splat(1.5);
-                let ray = Ray {
-                    origin,
-                    dir: uniform_sphere(rng.next_2d()),
-                    tmax: if rng.next_f32() < 0.5 {
-                        f32::INFINITY
-                    } else {
-                        1.0
-                    },
-                };
+                let ray = random_ray(&mut rng, 3.0, 1.0);
                 for mask in [Visibility::CAMERA, Visibility::INDIRECT, Visibility::SHADOW] {
                     let brute = (0..n)
                         .filter(|&i| visibility[i] & mask != 0)
@@ -1163,17 +1169,7 @@ mod tests {
         let flat = Accel::build(flat, flat_objects, Vec::new(), flat_visibility);
         let mut hits = 0;
         for _ in 0..4000 {
-            let origin = Vec3A::new(rng.next_f32(), rng.next_f32(), rng.next_f32()) * 5.0
-                - Vec3A::splat(2.5);
-            let ray = Ray {
-                origin,
-                dir: uniform_sphere(rng.next_2d()),
-                tmax: if rng.next_f32() < 0.5 {
-                    f32::INFINITY
-                } else {
-                    2.0
-                },
-            };
+            let ray = random_ray(&mut rng, 5.0, 2.0);
             for mask in [Visibility::CAMERA, Visibility::INDIRECT] {
                 let a = instanced.intersect(&ray, 0.0, mask);
                 let b = flat.intersect(&ray, 0.0, mask);
