@@ -60,26 +60,37 @@ impl ViewData {
             .all(|c| self.exr.channel(c).is_some())
     }
 
-    /// The partition checks, measured once per generation (and not while a render runs:
-    /// rows not rendered yet are zero in every AOV, so nothing would be learnt).
-    fn checks(&mut self) -> Vec<PartitionCheck> {
-        if self.live {
-            return Vec::new();
+    /// The generation whose partition checks are still to be measured, if any (none while
+    /// a render runs: rows not rendered yet are zero in every AOV).
+    pub fn unmeasured(&self) -> Option<u64> {
+        let measured = matches!(&self.checks, Some((g, _)) if *g == self.generation);
+        (!self.live && !measured).then_some(self.generation)
+    }
+
+    /// Measures the partition checks (a pass over every part: seconds on a 1 GB file,
+    /// so the server runs it on its own thread under a read lock).
+    pub fn measure(&self) -> Vec<PartitionCheck> {
+        check_partitions(&self.exr)
+    }
+
+    /// Keeps the checks measured for `generation`.
+    pub fn set_checks(&mut self, generation: u64, checks: Vec<PartitionCheck>) {
+        if generation == self.generation {
+            self.checks = Some((generation, checks));
         }
+    }
+
+    fn checks(&self) -> &[PartitionCheck] {
         match &self.checks {
-            Some((g, c)) if *g == self.generation => c.clone(),
-            _ => {
-                let c = check_partitions(&self.exr);
-                self.checks = Some((self.generation, c.clone()));
-                c
-            }
+            Some((g, c)) if *g == self.generation => c,
+            _ => &[],
         }
     }
 
     /// Everything the page lays out: the AOVs with their expressions, grouped by the
     /// partitions the header declares with each one's measured error, the light-group
     /// mixers, the Cryptomatte layers and the `_noisy` twins.
-    pub fn info(&mut self) -> Value {
+    pub fn info(&self) -> Value {
         let aovs = self.aovs();
         let parts = naming::parts_from_attributes(&self.exr.attributes);
         let checks = self.checks();

@@ -35,6 +35,7 @@ use http::{Request, Response};
 use serde::Deserialize;
 use std::net::SocketAddr;
 use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{Arc, Mutex, RwLock};
 
 const INDEX_HTML: &str = include_str!("page/index.html");
@@ -49,6 +50,8 @@ pub struct Shared {
     exr: Mutex<Option<PathBuf>>,
     /// The server's port, set once it listens.
     port: Arc<std::sync::OnceLock<u16>>,
+    /// A thread is measuring the partition checks.
+    measuring: AtomicBool,
 }
 
 impl Shared {
@@ -94,6 +97,7 @@ impl Viewer {
             data: RwLock::new(data),
             exr: Mutex::new(exr),
             port: Arc::clone(&port_cell),
+            measuring: AtomicBool::new(false),
         });
         let handler = {
             let shared = Arc::clone(&shared);
@@ -102,6 +106,7 @@ impl Viewer {
         let http = http::Server::bind(port, handler)
             .map_err(|e| format!("cannot listen on 127.0.0.1:{port}: {e}"))?;
         let _ = port_cell.set(http.addr().port());
+        measure_partitions(&shared);
         Ok(Viewer { http, shared })
     }
 
@@ -174,12 +179,12 @@ fn image(img: HalfImage) -> Response {
     }
 }
 
-fn answer(shared: &Shared, request: &Request) -> Response {
+fn answer(shared: &Arc<Shared>, request: &Request) -> Response {
     std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| route(shared, request)))
         .unwrap_or_else(|_| error(500, "internal error"))
 }
 
-fn route(shared: &Shared, request: &Request) -> Response {
+fn route(shared: &Arc<Shared>, request: &Request) -> Response {
     let host = request.header("Host").unwrap_or("");
     let port = shared.port.get().copied().unwrap_or(0);
     if host != format!("127.0.0.1:{port}") && host != format!("localhost:{port}") {
@@ -196,7 +201,8 @@ fn route(shared: &Shared, request: &Request) -> Response {
         ("GET", "/app.js") => text("text/javascript; charset=utf-8", APP_JS),
         ("GET", "/style.css") => text("text/css; charset=utf-8", STYLE_CSS),
         ("GET", "/api/info") => {
-            let mut info = shared.update(|d| d.info());
+            let mut info = read().info();
+            measure_partitions(shared);
             let comp = shared
                 .exr
                 .lock()
@@ -238,6 +244,30 @@ fn route(shared: &Shared, request: &Request) -> Response {
         (_, "/api/comp") => error(405, "POST a comp"),
         _ => error(404, format!("nothing at {path}")),
     }
+}
+
+/// Measures the partition checks on a thread of their own, once per generation: the page
+/// shows them as "not measured yet" meanwhile, and every image request goes on.
+fn measure_partitions(shared: &Arc<Shared>) {
+    let unmeasured = shared
+        .data
+        .read()
+        .unwrap_or_else(|e| e.into_inner())
+        .unmeasured();
+    if unmeasured.is_none() || shared.measuring.swap(true, Ordering::SeqCst) {
+        return;
+    }
+    let shared = Arc::clone(shared);
+    std::thread::spawn(move || {
+        let measured = {
+            let data = shared.data.read().unwrap_or_else(|e| e.into_inner());
+            data.unmeasured().map(|g| (g, data.measure()))
+        };
+        if let Some((g, checks)) = measured {
+            shared.update(|d| d.set_checks(g, checks));
+        }
+        shared.measuring.store(false, Ordering::SeqCst);
+    });
 }
 
 /// What the page posts to save a comp.

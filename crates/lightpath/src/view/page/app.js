@@ -411,11 +411,17 @@ async function saveComp() {
   } catch (e) { setStatus(e.message, true); lpv.saved = { error: e.message }; }
 }
 
-// ---------- live renders ----------
+// ---------- live renders, checks still being measured ----------
+const waiting = (i) => i.live || !i.comp || i.partitions.some((p) => p.max_relative_error === null);
 async function poll() {
   try {
     const info = await getJSON('/api/info');
-    if (info.generation !== lpv.info.generation || info.live !== lpv.info.live) {
+    const checks = (i) => JSON.stringify(i.partitions.map((p) => p.max_relative_error));
+    if (info.generation === lpv.info.generation && info.live === lpv.info.live && checks(info) !== checks(lpv.info)) {
+      lpv.info = info;
+      await buildList(); // the partition checks arrived
+      for (const el of document.querySelectorAll('.card')) el.classList.toggle('selected', (el.dataset.aov || el.dataset.crypto) === lpv.view.name);
+    } else if (info.generation !== lpv.info.generation || info.live !== lpv.info.live) {
       images.clear();
       const structure = info.live !== lpv.info.live;
       lpv.info = info;
@@ -424,7 +430,7 @@ async function poll() {
       if (lpv.mixer) lpv.mixer.loaded = false;
       await drawView();
     }
-    if (info.live || !info.comp) setTimeout(poll, 1000);
+    if (waiting(info)) setTimeout(poll, 1000);
   } catch (e) { setStatus(`lost the server: ${e.message}`, true); }
 }
 
@@ -464,7 +470,7 @@ async function main() {
   lpv.readPixel = (x, y) => lpv.renderer.readPixel(x, y);
   lpv.idle = () => drawing;
   lpv.ready = true;
-  if (lpv.info.live || !lpv.info.comp) setTimeout(poll, 1000);
+  if (waiting(lpv.info)) setTimeout(poll, 1000);
 }
 
 main().catch((e) => { setStatus(e.message, true); lpv.error = e.message; });
