@@ -5,12 +5,18 @@
 //! render as `lightpath render`.
 
 use crate::aov::{self, AovSpec};
+use crate::checkpoint::{self, Checkpoint};
+use crate::film::Film;
 use crate::output;
 use crate::progress::Progress;
 use crate::scene::desc::SceneDesc;
 use crate::scene::{Scene, Source};
-use crate::{Error, RenderOptions, RenderStats};
+use crate::{Error, RenderOptions, RenderStats, Rendered, Resumable};
 use std::path::PathBuf;
+use std::sync::atomic::AtomicBool;
+use std::sync::Arc;
+
+mod checks;
 
 /// Everything `lightpath render` can be told.
 #[derive(Clone, Debug)]
@@ -26,6 +32,14 @@ pub struct RenderJob {
     pub exr: output::ExrOptions,
     /// Exposure of the PNG preview, in stops.
     pub preview_exposure: f32,
+    /// Continue from the checkpoint beside the output (`--resume`): the same command
+    /// that was interrupted, plus this flag.
+    pub resume: bool,
+    /// Write a checkpoint this often while rendering (`--checkpoint-every`).
+    pub checkpoint_every: Option<std::time::Duration>,
+    /// Set (by a SIGINT/SIGTERM handler) to stop after the rows in flight: the outputs
+    /// then hold the rows done and a checkpoint is written beside them.
+    pub cancel: Option<Arc<AtomicBool>>,
 }
 
 /// Render settings the command line overrides; `None` keeps the scene's value.
@@ -60,6 +74,8 @@ pub struct PreparedRender {
     pub scene: Scene,
     pub paths: output::naming::OutputPaths,
     pub warnings: Vec<String>,
+    /// The checkpoint `--resume` continues from.
+    pub resume: Option<Checkpoint>,
 }
 
 /// What a finished render wrote and measured.
@@ -70,18 +86,38 @@ pub struct RenderSummary {
     pub spp: u32,
     pub aovs: usize,
     pub stats: RenderStats,
+    /// Accumulated values that overflowed to infinity (finite contributions too large to
+    /// sum in 32 bits): those pixels are wrong, and the line says so.
+    pub overflowed: u64,
     pub paths: output::naming::OutputPaths,
+    /// Set when the render was stopped: rows finished of all rows, and the checkpoint
+    /// written beside the outputs.
+    pub interrupted: Option<Interrupted>,
+}
+
+/// How far a stopped render got.
+#[derive(Clone, Debug)]
+pub struct Interrupted {
+    pub rows_done: u32,
+    pub rows: u32,
+    pub checkpoint: PathBuf,
 }
 
 impl RenderSummary {
     /// The one line `lightpath render` prints at the end.
     pub fn line(&self) -> String {
         let s = &self.stats;
-        let dropped = if s.nonfinite > 0 {
+        let mut dropped = if s.nonfinite > 0 {
             format!(", {} NaN/Inf contributions dropped", s.nonfinite)
         } else {
             String::new()
         };
+        if self.overflowed > 0 {
+            dropped += &format!(
+                ", WARNING: {} pixel values overflowed to Inf (radiance too large for 32-bit floats)",
+                self.overflowed
+            );
+        }
         format!(
             "{}x{} at {} spp, {} AOVs: {:.2} s, {:.2} M samples/s, {:.2} M rays/s{dropped}",
             self.width,
@@ -109,6 +145,9 @@ impl RenderJob {
             first_sample: 0,
             exr: output::ExrOptions::default(),
             preview_exposure: 0.0,
+            resume: false,
+            checkpoint_every: None,
+            cancel: None,
         }
     }
 
@@ -117,9 +156,49 @@ impl RenderJob {
         let source = crate::load_source(&self.scene)?;
         let mut desc = source.parse()?;
         self.overrides.apply(&mut desc);
+        let paths = output::naming::output_paths(&self.scene, self.output.as_deref());
+        checks::outputs(&paths, &self.scene).map_err(Error::Output)?;
+        checks::settings(&desc, self.first_sample)
+            .map_err(|e| Error::Setting(format!("{}: {e}", desc.source)))?;
         let mut warnings = Vec::new();
         let specs = self.plan(&desc, &mut warnings)?;
+        let limits = crate::limits::Limits::current();
+        limits
+            .check_aovs(specs.len() as u64, "this render's AOV plan")
+            .map_err(Error::Setting)?;
         let scene = Scene::build(&desc, &specs)?;
+        checks::film(&scene).map_err(Error::Setting)?;
+        warnings.extend(checks::scene_warnings(&desc, &scene));
+        let checkpoint_path = checkpoint::path_for(&paths.exr);
+        let resume = if self.resume {
+            if !checkpoint_path.exists() {
+                return Err(Error::Setting(format!(
+                    "--resume: there is no checkpoint {} (it is written when a render is \
+                     interrupted, or with --checkpoint-every)",
+                    checkpoint_path.display()
+                )));
+            }
+            let c = &scene.camera;
+            let checkpoint = checkpoint::read(
+                &checkpoint_path,
+                fingerprint(&source, &scene, self.first_sample),
+                c.width,
+                c.height,
+                scene.aovs.len(),
+                scene.settings.spp,
+            )
+            .map_err(Error::Setting)?;
+            Some(checkpoint)
+        } else {
+            if checkpoint_path.exists() {
+                warnings.push(format!(
+                    "{} is there from an interrupted render: this render starts afresh and \
+                     replaces it (add --resume to continue it instead)",
+                    checkpoint_path.display()
+                ));
+            }
+            None
+        };
         for w in scene.automaton.warnings() {
             let aov = &scene.aovs[w.rule.0 as usize];
             warnings.push(format!(
@@ -127,13 +206,13 @@ impl RenderJob {
                 aov.name, aov.definition, w.message
             ));
         }
-        let paths = output::naming::output_paths(&self.scene, self.output.as_deref());
         Ok(PreparedRender {
             job: self,
             source,
             scene,
             paths,
             warnings,
+            resume,
         })
     }
 
@@ -182,39 +261,144 @@ impl SettingOverrides {
 }
 
 impl PreparedRender {
-    /// Renders and writes the EXR and its PNG preview (each atomically).
+    /// Renders (the rows a resumed checkpoint does not hold), then writes the EXR and its
+    /// PNG preview together. A render stopped through `cancel` writes the rows done and a
+    /// checkpoint beside the outputs; a finished one removes the checkpoint.
     pub fn run(self, progress: &dyn Progress) -> Result<RenderSummary, Error> {
         let PreparedRender {
             job,
             source,
             scene,
             paths,
+            resume,
             ..
         } = self;
         let options = RenderOptions {
             spp: scene.settings.spp,
             first_sample: job.first_sample,
         };
-        let (film, stats) = crate::render_with_progress(&scene, &options, progress);
-        let extra = output::naming::RenderMetadata {
+        let checkpoint_path = checkpoint::path_for(&paths.exr);
+        let fingerprint = fingerprint(&source, &scene, job.first_sample);
+        let mut last_checkpoint = std::time::Instant::now();
+        let mut checkpoint_error = None;
+        let mut save = |film: &Film, rows: &[bool]| {
+            let Some(every) = job.checkpoint_every else {
+                return;
+            };
+            if last_checkpoint.elapsed() >= every && !rows.iter().all(|d| *d) {
+                if let Err(e) = checkpoint::write(&checkpoint_path, fingerprint, film, rows) {
+                    checkpoint_error.get_or_insert(e);
+                }
+                last_checkpoint = std::time::Instant::now();
+            }
+        };
+        let (film, rows_done) = resume.map_or((None, Vec::new()), |c| (Some(c.film), c.rows_done));
+        let rendered = crate::render_resumable(
+            &scene,
+            &options,
+            progress,
+            Resumable {
+                film,
+                rows_done,
+                cancel: job.cancel.as_deref(),
+                after_band: Some(&mut save),
+                // Checkpoints come between bands: about 64 of them per frame.
+                max_band_rows: job
+                    .checkpoint_every
+                    .map(|_| (scene.camera.height as usize).div_ceil(64)),
+            },
+        );
+        if let Some(e) = checkpoint_error {
+            return Err(Error::Output(e));
+        }
+        let Rendered {
+            film,
+            stats,
+            rows_done,
+        } = rendered;
+        let finished = rows_done.iter().filter(|d| **d).count() as u32;
+        let interrupted = (finished < film.height).then(|| Interrupted {
+            rows_done: finished,
+            rows: film.height,
+            checkpoint: checkpoint_path.clone(),
+        });
+        if interrupted.is_some() {
+            checkpoint::write(&checkpoint_path, fingerprint, &film, &rows_done)
+                .map_err(Error::Output)?;
+        }
+        let overflowed = film
+            .planes
+            .iter()
+            .map(|p| p.iter().filter(|v| !v.is_finite()).count() as u64)
+            .sum();
+        let mut extra = output::naming::RenderMetadata {
             scene: source.name.clone(),
             spp: scene.settings.spp,
             first_sample: job.first_sample,
             seed: scene.settings.seed,
         }
         .attributes();
+        if let Some(i) = &interrupted {
+            let per_row = film.width as u64 * film.spp as u64;
+            extra.push((
+                crate::aov::naming::INTERRUPTED_ATTRIBUTE.to_string(),
+                format!(
+                    "{} of {} rows rendered ({} of {} samples); the other rows are empty: \
+                     run the same command with --resume to finish",
+                    i.rows_done,
+                    i.rows,
+                    i.rows_done as u64 * per_row,
+                    i.rows as u64 * per_row
+                ),
+            ));
+        }
         let derived = output::derived_aovs(&film, &scene.aovs);
-        output::write_png(&paths.png, &film, 0, job.preview_exposure).map_err(Error::Output)?;
+        let png =
+            output::stage_png(&paths.png, &film, 0, job.preview_exposure).map_err(Error::Output)?;
         let (width, height, spp) = (film.width, film.height, film.spp);
-        output::write_exr(&paths.exr, film, &scene.aovs, derived, job.exr, &extra)
+        let exr = output::stage_exr(&paths.exr, film, &scene.aovs, derived, job.exr, &extra)
             .map_err(Error::Output)?;
+        output::atomic::commit_pair(exr, png).map_err(Error::Output)?;
+        if interrupted.is_none() {
+            match std::fs::remove_file(&checkpoint_path) {
+                Err(e) if e.kind() != std::io::ErrorKind::NotFound => {
+                    return Err(Error::Output(format!(
+                        "cannot remove the finished render's checkpoint {}: {e}",
+                        checkpoint_path.display()
+                    )))
+                }
+                _ => {}
+            }
+        }
         Ok(RenderSummary {
             width,
             height,
             spp,
             aovs: scene.aovs.len(),
             stats,
+            overflowed,
             paths,
+            interrupted,
         })
     }
+}
+
+/// What a checkpoint must match to be resumed: everything that decides the pixels (the
+/// scene text, the settings after overrides, the film, the sample range, the AOVs).
+fn fingerprint(source: &Source, scene: &Scene, first_sample: u32) -> u64 {
+    let settings = format!(
+        "{:?} {}x{} first {first_sample}",
+        scene.settings, scene.camera.width, scene.camera.height
+    );
+    let aovs: String = scene
+        .aovs
+        .iter()
+        .map(|a| format!("{}={}\n", a.name, a.definition))
+        .collect();
+    checkpoint::fingerprint(&[
+        source.name.as_bytes(),
+        source.text.as_bytes(),
+        settings.as_bytes(),
+        aovs.as_bytes(),
+    ])
 }

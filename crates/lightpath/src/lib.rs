@@ -6,6 +6,7 @@
 
 pub mod aov;
 pub mod camera;
+pub mod checkpoint;
 pub mod error;
 pub mod events;
 pub mod film;
@@ -13,6 +14,7 @@ pub mod geometry;
 pub mod integrator;
 pub mod job;
 pub mod light;
+pub mod limits;
 pub mod lpe_tools;
 pub mod material;
 pub mod output;
@@ -23,7 +25,9 @@ pub mod sampling;
 pub mod scene;
 
 pub use error::Error;
-pub use integrator::{render, render_with_progress, RenderOptions, RenderStats};
+pub use integrator::{
+    render, render_resumable, render_with_progress, RenderOptions, RenderStats, Rendered, Resumable,
+};
 pub use job::RenderJob;
 pub use scene::{Scene, SceneError, Source};
 

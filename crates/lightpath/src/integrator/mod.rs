@@ -19,7 +19,7 @@ use crate::scene::Scene;
 use glam::{Vec2, Vec3A};
 use rayon::prelude::*;
 use routing::Route;
-use std::sync::atomic::{AtomicU64, Ordering};
+use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 
 #[derive(Clone, Debug, Default)]
 pub struct RenderStats {
@@ -93,6 +93,55 @@ pub fn render_with_progress(
     options: &RenderOptions,
     progress: &dyn Progress,
 ) -> (Film, RenderStats) {
+    let done = render_resumable(scene, options, progress, Resumable::default());
+    (done.film, done.stats)
+}
+
+/// How a render can be stopped and continued (`job.rs` drives it from signals and
+/// checkpoints). The default renders every row, as [`render_with_progress`].
+#[derive(Default)]
+pub struct Resumable<'a> {
+    /// A film whose rows marked in `rows_done` are finished (a checkpoint's): those rows
+    /// are kept as they are, the others rendered.
+    pub film: Option<Film>,
+    pub rows_done: Vec<bool>,
+    /// When set, rows not yet started are skipped: the render ends with the rows in
+    /// flight (a row is never left half-rendered).
+    pub cancel: Option<&'a AtomicBool>,
+    /// Called after each band with the film and the rows finished so far (checkpoints).
+    pub after_band: Option<AfterBand<'a>>,
+    /// At most this many rows per band (at least 8), so `after_band` comes often enough
+    /// on a small film; `None`: bands as large as `BAND_BYTES` allows.
+    pub max_band_rows: Option<usize>,
+}
+
+/// What `Resumable::after_band` is given: the film, and which rows are finished.
+pub type AfterBand<'a> = &'a mut dyn FnMut(&Film, &[bool]);
+
+/// A render that may have stopped early.
+pub struct Rendered {
+    pub film: Film,
+    pub stats: RenderStats,
+    /// One entry per row: finished? All true unless the render was cancelled.
+    pub rows_done: Vec<bool>,
+}
+
+/// Renders the rows of the scene that `resume` does not already hold, stopping early if
+/// its `cancel` flag is set. Each row's sums start from zero and add its samples in
+/// order, so a row is the same whichever run renders it.
+pub fn render_resumable(
+    scene: &Scene,
+    options: &RenderOptions,
+    progress: &dyn Progress,
+    resume: Resumable,
+) -> Rendered {
+    let Resumable {
+        film: resumed,
+        rows_done: resumed_rows,
+        cancel,
+        mut after_band,
+        max_band_rows,
+    } = resume;
     let start = std::time::Instant::now();
     let cam = &scene.camera;
     let (w, h) = (cam.width, cam.height);
@@ -100,22 +149,46 @@ pub fn render_with_progress(
     let tracer = Tracer::new(scene);
     let rays = AtomicU64::new(0);
     let nonfinite = AtomicU64::new(0);
-    let samples = w as u64 * h as u64 * options.spp as u64;
-    progress.start(h as u64, samples);
+    let done: Vec<AtomicBool> = (0..h as usize)
+        .map(|y| AtomicBool::new(resumed_rows.get(y).copied().unwrap_or(false)))
+        .collect();
+    let rows_before = done.iter().filter(|d| d.load(Ordering::Relaxed)).count() as u64;
+    let rows_rendered = AtomicU64::new(0);
+    progress.start(h as u64, w as u64 * h as u64 * options.spp as u64);
+    progress.advance(rows_before);
+    let stopped = || cancel.is_some_and(|c| c.load(Ordering::Relaxed));
     // Rows are rendered a band at a time into one reused interleaved buffer (a sample
     // writes one contiguous run), and each band is moved into the film's planes: the
     // peak memory is the film plus one band, with no allocation churn.
     let row_len = stride * w as usize;
-    let band_rows = (BAND_BYTES / (4 * row_len)).clamp(8, h.max(1) as usize);
+    let band_rows = (BAND_BYTES / (4 * row_len))
+        .min(max_band_rows.unwrap_or(usize::MAX))
+        .max(8)
+        .min(h.max(1) as usize);
     let mut band = vec![0.0f32; band_rows * row_len];
-    let mut film = Film::new(w, h, scene.aovs.len(), options.spp);
+    let mut film = resumed
+        .filter(|f| (f.width, f.height, f.aovs) == (w, h, scene.aovs.len()))
+        .unwrap_or_else(|| Film::new(w, h, scene.aovs.len(), options.spp));
     for first_row in (0..h as usize).step_by(band_rows) {
         let rows_here = band_rows.min(h as usize - first_row);
+        let band_done = &done[first_row..first_row + rows_here];
+        if stopped() || band_done.iter().all(|d| d.load(Ordering::Relaxed)) {
+            continue;
+        }
         let band = &mut band[..rows_here * row_len];
-        band.fill(0.0);
+        // The band starts as the film holds it: zero, or a resumed row's finished sums,
+        // which the skipped row leaves as they are.
+        if band_done.iter().any(|d| d.load(Ordering::Relaxed)) {
+            film.load_rows(first_row, band);
+        } else {
+            band.fill(0.0);
+        }
         band.par_chunks_mut(row_len).enumerate().for_each_init(
             || SampleAccumulator::new(scene.aovs.len()),
             |acc, (i, row)| {
+                if band_done[i].load(Ordering::Relaxed) || stopped() {
+                    return;
+                }
                 let y = (first_row + i) as u32;
                 let mut out = Sink {
                     acc,
@@ -139,17 +212,27 @@ pub fn render_with_progress(
                 }
                 rays.fetch_add(out.rays, Ordering::Relaxed);
                 nonfinite.fetch_add(out.nonfinite, Ordering::Relaxed);
+                band_done[i].store(true, Ordering::Relaxed);
+                rows_rendered.fetch_add(1, Ordering::Relaxed);
                 progress.advance(1);
             },
         );
         film.store_rows(first_row, band);
+        if let Some(f) = after_band.as_mut() {
+            let rows: Vec<bool> = done.iter().map(|d| d.load(Ordering::Relaxed)).collect();
+            f(&film, &rows);
+        }
     }
     progress.finish();
     let stats = RenderStats {
-        samples,
+        samples: rows_rendered.into_inner() * w as u64 * options.spp as u64,
         rays: rays.into_inner(),
         nonfinite: nonfinite.into_inner(),
         seconds: start.elapsed().as_secs_f64(),
     };
-    (film, stats)
+    Rendered {
+        film,
+        stats,
+        rows_done: done.into_iter().map(AtomicBool::into_inner).collect(),
+    }
 }

@@ -1,6 +1,6 @@
 //! The single-part EXR: writing a film with its AOVs and header, reading one back.
 
-use super::atomically;
+use super::atomic::{stage, Staged};
 use crate::aov::naming::{self, channel_names, AOV_ATTRIBUTE_PREFIX};
 use crate::film::Film;
 use crate::scene::Aov;
@@ -110,6 +110,18 @@ pub fn write_exr(
     options: ExrOptions,
     extra: &[(String, String)],
 ) -> std::result::Result<(), String> {
+    stage_exr(path, film, aovs, derived, options, extra)?.commit()
+}
+
+/// [`write_exr`] up to the rename: the file written and synced beside `path`.
+pub fn stage_exr(
+    path: &Path,
+    film: Film,
+    aovs: &[Aov],
+    derived: Vec<DerivedAov>,
+    options: ExrOptions,
+    extra: &[(String, String)],
+) -> std::result::Result<Staged, String> {
     let (width, height) = (film.width as usize, film.height as usize);
     let mut planes = film.into_means().into_iter();
     let mut channels = Vec::new();
@@ -139,7 +151,7 @@ pub fn write_exr(
         attributes.push((naming::aov_attribute(&d.name), d.definition));
     }
     attributes.extend(extra.iter().cloned());
-    write_channels(path, width, height, channels, &attributes, options)
+    stage_channels(path, width, height, channels, &attributes, options)
 }
 
 /// Writes named float channels and text attributes as one single-part EXR, atomically.
@@ -151,6 +163,17 @@ pub fn write_channels(
     attributes: &[(String, String)],
     options: ExrOptions,
 ) -> std::result::Result<(), String> {
+    stage_channels(path, width, height, channels, attributes, options)?.commit()
+}
+
+fn stage_channels(
+    path: &Path,
+    width: usize,
+    height: usize,
+    channels: Vec<(String, Vec<f32>)>,
+    attributes: &[(String, String)],
+    options: ExrOptions,
+) -> std::result::Result<Staged, String> {
     let channels: Vec<AnyChannel<FlatSamples>> = channels
         .into_iter()
         .map(|(name, v)| {
@@ -176,11 +199,11 @@ pub fn write_channels(
         AnyChannels::sort(SmallVec::from_vec(channels)),
     );
     let image = Image::from_layer(layer);
-    atomically(path, |tmp| {
+    stage(path, |file| {
         image
             .write()
-            .to_file(tmp)
-            .and_then(|()| sort_header_attributes(tmp).map_err(exr::error::Error::from))
+            .to_unbuffered(&mut *file)
+            .and_then(|()| sort_header_attributes(file).map_err(exr::error::Error::from))
             .map_err(|e| format!("cannot write {}: {e}", path.display()))
     })
 }
@@ -189,15 +212,12 @@ pub fn write_channels(
 /// keeps them in a `HashMap`, so two identical renders wrote the same attributes in a
 /// different order: a farm could not compare outputs by checksum. The set of attributes
 /// is the same either way, so the header keeps its length and nothing after it moves.
-fn sort_header_attributes(path: &Path) -> std::io::Result<()> {
+fn sort_header_attributes(file: &mut std::fs::File) -> std::io::Result<()> {
     use std::io::{Read, Seek, SeekFrom, Write};
-    let mut file = std::fs::OpenOptions::new()
-        .read(true)
-        .write(true)
-        .open(path)?;
+    file.seek(SeekFrom::Start(0))?;
     // Headers are small; one that does not end within this much is left as it is.
     let mut head = Vec::new();
-    (&mut file).take(1 << 22).read_to_end(&mut head)?;
+    (&mut *file).take(1 << 22).read_to_end(&mut head)?;
     let multipart = head.len() >= 8 && head[5] & 0x10 != 0;
     if head.len() < 8 || head[..4] != [0x76, 0x2f, 0x31, 0x01] || multipart {
         return Ok(());
@@ -265,7 +285,37 @@ impl ExrContents {
     }
 }
 
+/// Checks an EXR before reading its pixels: a regular file within the file size limit
+/// whose header declares pixels that fit the memory limit (a crafted header claiming
+/// billions of pixels was allocated, and aborted the process).
+pub fn check_exr_file(path: &Path) -> std::result::Result<(), String> {
+    let cannot = |e: String| format!("cannot read {}: {e}", path.display());
+    let limits = crate::limits::Limits::current();
+    let file = std::fs::File::open(path).map_err(|e| cannot(e.to_string()))?;
+    let meta = file.metadata().map_err(|e| cannot(e.to_string()))?;
+    if !meta.is_file() {
+        return Err(cannot(
+            "not a regular file (a directory, device or pipe)".into(),
+        ));
+    }
+    limits
+        .check_file_bytes(meta.len(), "reading this file")
+        .map_err(cannot)?;
+    let header = ::exr::meta::MetaData::read_from_unbuffered(file, false)
+        .map_err(|e| cannot(e.to_string()))?;
+    let mut bytes = 0u64;
+    for h in header.headers.iter() {
+        let pixels = h.layer_size.width() as u64 * h.layer_size.height() as u64;
+        // Each sample as an f32, and once more while it is converted.
+        bytes = bytes.saturating_add(pixels.saturating_mul(h.channels.list.len() as u64 * 8));
+    }
+    limits
+        .check_memory(bytes, "the pixels its header declares")
+        .map_err(cannot)
+}
+
 pub fn read_exr(path: &Path) -> std::result::Result<ExrContents, String> {
+    check_exr_file(path)?;
     let image = read()
         .no_deep_data()
         .largest_resolution_level()

@@ -1,6 +1,6 @@
 //! `lightpath merge`: EXRs of one frame rendered as different sample ranges become one.
 
-use crate::aov::naming::{FIRST_SAMPLE_ATTRIBUTE, SPP_ATTRIBUTE};
+use crate::aov::naming::{FIRST_SAMPLE_ATTRIBUTE, INTERRUPTED_ATTRIBUTE, SPP_ATTRIBUTE};
 use crate::output::ExrContents;
 
 /// Merges EXRs of one frame rendered as different sample ranges: each channel is the
@@ -11,16 +11,37 @@ pub fn merge(inputs: &[std::path::PathBuf], output: &std::path::Path) -> Result<
     if inputs.is_empty() {
         return Err("give the EXRs to merge".into());
     }
+    crate::output::target::check_exr_name(output, None)?;
+    let input_refs: Vec<&std::path::Path> = inputs.iter().map(|p| p.as_path()).collect();
+    crate::output::target::check(output, &input_refs)?;
     let spp_of = |exr: &ExrContents, path: &std::path::Path| -> Result<u64, String> {
+        if exr
+            .attributes
+            .iter()
+            .any(|(k, _)| k == INTERRUPTED_ATTRIBUTE)
+        {
+            return Err(format!(
+                "{} is an interrupted render (some rows are empty): finish it with --resume first",
+                path.display()
+            ));
+        }
         exr.attributes
             .iter()
             .find(|(k, _)| k == SPP_ATTRIBUTE)
-            .and_then(|(_, v)| v.parse().ok())
             .ok_or_else(|| {
                 format!(
                     "{} has no {SPP_ATTRIBUTE} header: not a Lightpath render",
                     path.display()
                 )
+            })
+            .and_then(|(_, v)| match v.trim().parse::<u32>() {
+                // A render takes 1 ..= 2^32 - 1 samples; 0 would divide by zero.
+                Ok(n) if n > 0 => Ok(n as u64),
+                _ => Err(format!(
+                    "{}: {SPP_ATTRIBUTE} is '{v}': expected a sample count from 1 to {}",
+                    path.display(),
+                    u32::MAX
+                )),
             })
     };
     let first = read_exr(&inputs[0])?;

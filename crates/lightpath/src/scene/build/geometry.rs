@@ -15,10 +15,11 @@ pub fn shape_prims(
     origin: &Origin,
 ) -> Result<ShapePrims, SceneError> {
     let v3 = Vec3A::from;
-    Ok(match shape {
+    check_transform(xf, origin)?;
+    let prims = match shape {
         ShapeDesc::Rectangle => shapes::rectangle(xf),
         ShapeDesc::Cube => shapes::cube(xf),
-        ShapeDesc::Disk { segments } => shapes::disk(xf, (*segments).max(3) as usize),
+        ShapeDesc::Disk { segments } => shapes::disk(xf, disk_segments(*segments, origin)?),
         ShapeDesc::Quad { corners } => shapes::quad(corners.map(v3)),
         ShapeDesc::Sphere { center, radius } => {
             let c = xf.transform_point3a(v3(*center));
@@ -38,11 +39,78 @@ pub fn shape_prims(
             }
             out
         }
-    })
+    };
+    check_finite(&prims, origin)?;
+    Ok(prims)
+}
+
+/// A disk's triangle count, within `Limits::segments` (at least 3).
+pub fn disk_segments(segments: u32, origin: &Origin) -> Result<usize, SceneError> {
+    crate::limits::Limits::current()
+        .check_segments(segments as u64, "this disk")
+        .map_err(|e| origin.error(e))?;
+    Ok(segments.max(3) as usize)
+}
+
+/// A placement whose numbers are not all finite (NaN, inf, or a value like `1e300` that
+/// overflows an f32) is an error here, before it reaches the primitives.
+pub fn check_transform(xf: &Affine3A, origin: &Origin) -> Result<(), SceneError> {
+    if xf.is_finite() {
+        Ok(())
+    } else {
+        Err(origin.error(
+            "the placement (translate, rotate, scale or matrix) has a number that is NaN, \
+             infinite or too large for 32-bit floats",
+        ))
+    }
+}
+
+/// Primitives with a coordinate that is NaN or infinite (also after the transform, or
+/// through overflow of an edge) are an error naming the shape's origin: the BVH builder
+/// and every ray test assume finite bounds.
+pub fn check_finite(shape: &ShapePrims, origin: &Origin) -> Result<(), SceneError> {
+    for (i, p) in shape.prims.iter().enumerate() {
+        let finite = match *p {
+            Prim::Triangle { p0, e1, e2, .. } => {
+                let (lo, hi) = p.bounds();
+                p0.is_finite()
+                    && e1.is_finite()
+                    && e2.is_finite()
+                    && lo.is_finite()
+                    && hi.is_finite()
+            }
+            Prim::Sphere { center, radius } => {
+                let (lo, hi) = p.bounds();
+                center.is_finite() && radius.is_finite() && lo.is_finite() && hi.is_finite()
+            }
+        };
+        if !finite {
+            return Err(origin.error(format!(
+                "primitive {i} has a coordinate that is NaN, infinite or too large for \
+                 32-bit floats once placed: expected finite positions"
+            )));
+        }
+    }
+    if let Some((i, _)) = shape
+        .normals
+        .iter()
+        .find(|(_, n)| n.iter().any(|v| !v.is_finite()))
+    {
+        return Err(origin.error(format!(
+            "triangle {i} has a shading normal that is NaN or infinite"
+        )));
+    }
+    Ok(())
 }
 
 fn mesh(m: &MeshData, xf: &Affine3A, origin: &Origin) -> Result<ShapePrims, SceneError> {
     let pos: Vec<Vec3A> = m.positions.iter().map(|p| Vec3A::from(*p)).collect();
+    if let Some(k) = pos.iter().position(|p| !p.is_finite()) {
+        return Err(origin.error(format!(
+            "mesh position {k} is {:?}: expected finite numbers",
+            m.positions[k]
+        )));
+    }
     if let Some(bad) = m
         .indices
         .iter()
