@@ -6,8 +6,10 @@
 
 use crate::aov::{self, AovSpec};
 use crate::checkpoint::{self, Checkpoint};
-use crate::film::Film;
+use crate::film::{Film, PixelWindow};
+use crate::integrator::FrameRequest;
 use crate::output;
+use crate::post::cryptomatte::MatteTable;
 use crate::progress::Progress;
 use crate::scene::desc::SceneDesc;
 use crate::scene::{Scene, Source};
@@ -32,6 +34,14 @@ pub struct RenderJob {
     pub exr: output::ExrOptions,
     /// Exposure of the PNG preview, in stops.
     pub preview_exposure: f32,
+    /// Render only this window of the frame (`--crop`); the EXR keeps the whole frame
+    /// as its display window.
+    pub crop: Option<PixelWindow>,
+    /// Write Cryptomatte layers with this many ranks (`--cryptomatte`).
+    pub cryptomatte: Option<u32>,
+    /// Record the date in the header (`capDate`); off, identical renders are identical
+    /// files.
+    pub timestamp: bool,
     /// Continue from the checkpoint beside the output (`--resume`): the same command
     /// that was interrupted, plus this flag.
     pub resume: bool,
@@ -74,6 +84,10 @@ pub struct PreparedRender {
     pub scene: Scene,
     pub paths: output::naming::OutputPaths,
     pub warnings: Vec<String>,
+    /// The window and Cryptomatte layers to render.
+    pub frame: FrameRequest,
+    /// The header attributes describing the scene and settings.
+    pub metadata: Vec<(String, String)>,
     /// The checkpoint `--resume` continues from.
     pub resume: Option<Checkpoint>,
 }
@@ -145,6 +159,9 @@ impl RenderJob {
             first_sample: 0,
             exr: output::ExrOptions::default(),
             preview_exposure: 0.0,
+            crop: None,
+            cryptomatte: None,
+            timestamp: false,
             resume: false,
             checkpoint_every: None,
             cancel: None,
@@ -160,17 +177,39 @@ impl RenderJob {
         checks::outputs(&paths, &self.scene).map_err(Error::Output)?;
         checks::settings(&desc, self.first_sample)
             .map_err(|e| Error::Setting(format!("{}: {e}", desc.source)))?;
-        let mut warnings = Vec::new();
+        let mut warnings = desc.warnings.clone();
+        warnings.extend(crate::scene::load::defaults::no_light_warning(&desc));
         let specs = self.plan(&desc, &mut warnings)?;
-        let limits = crate::limits::Limits::current();
-        limits
+        crate::limits::Limits::current()
             .check_aovs(specs.len() as u64, "this render's AOV plan")
             .map_err(Error::Setting)?;
         let scene = Scene::build(&desc, &specs)?;
         checks::film(&scene).map_err(Error::Setting)?;
-        warnings.extend(checks::scene_warnings(&desc, &scene));
+        warnings.extend(checks::scene_warnings(&scene));
+        for w in scene.automaton.warnings() {
+            let aov = &scene.aovs[w.rule.0 as usize];
+            warnings.push(format!(
+                "AOV '{}' ({}): {}",
+                aov.name, aov.definition, w.message
+            ));
+        }
+        let (width, height) = (scene.camera.width, scene.camera.height);
+        let window = self.crop.unwrap_or(PixelWindow::full(width, height));
+        window.check(width, height).map_err(Error::Plan)?;
+        let hash = output::naming::scene_hash(&source.text, &desc).map_err(Error::Plan)?;
+        let metadata = output::naming::settings_attributes(&scene, hash, window);
+        let mattes = self
+            .cryptomatte
+            .map(|ranks| matte_table(&desc, &scene, ranks));
         let checkpoint_path = checkpoint::path_for(&paths.exr);
         let resume = if self.resume {
+            if mattes.is_some() {
+                return Err(Error::Setting(
+                    "--resume with --cryptomatte: a checkpoint does not hold Cryptomatte \
+                     layers; render again without --resume"
+                        .into(),
+                ));
+            }
             if !checkpoint_path.exists() {
                 return Err(Error::Setting(format!(
                     "--resume: there is no checkpoint {} (it is written when a render is \
@@ -178,12 +217,11 @@ impl RenderJob {
                     checkpoint_path.display()
                 )));
             }
-            let c = &scene.camera;
             let checkpoint = checkpoint::read(
                 &checkpoint_path,
-                fingerprint(&source, &scene, self.first_sample),
-                c.width,
-                c.height,
+                fingerprint(&source, &scene, self.first_sample, window),
+                window.width(),
+                window.height(),
                 scene.aovs.len(),
                 scene.settings.spp,
             )
@@ -199,19 +237,14 @@ impl RenderJob {
             }
             None
         };
-        for w in scene.automaton.warnings() {
-            let aov = &scene.aovs[w.rule.0 as usize];
-            warnings.push(format!(
-                "AOV '{}' ({}): {}",
-                aov.name, aov.definition, w.message
-            ));
-        }
         Ok(PreparedRender {
             job: self,
             source,
             scene,
             paths,
             warnings,
+            frame: FrameRequest { window, mattes },
+            metadata,
             resume,
         })
     }
@@ -243,6 +276,38 @@ impl RenderJob {
     }
 }
 
+/// The Cryptomatte table of a scene: each object's name, its material's name and its
+/// asset (the `asset` key, else its own name). Holdouts get none: they are not seen.
+fn matte_table(desc: &SceneDesc, scene: &Scene, ranks: u32) -> MatteTable {
+    use crate::post::cryptomatte::{ASSET, MATERIAL, OBJECT};
+    let material_names: Vec<&String> = desc.materials.keys().collect();
+    let names: Vec<Vec<Option<String>>> = scene
+        .objects
+        .iter()
+        .enumerate()
+        .map(|(i, o)| {
+            if o.holdout {
+                return vec![None, None, None];
+            }
+            let material = o
+                .material
+                .and_then(|m| material_names.get(m as usize))
+                .map(|n| n.to_string());
+            let asset = desc
+                .objects
+                .get(i)
+                .and_then(|d| d.asset.clone())
+                .unwrap_or_else(|| o.name.clone());
+            vec![Some(o.name.clone()), material, Some(asset)]
+        })
+        .collect();
+    MatteTable::new(
+        vec![OBJECT.into(), MATERIAL.into(), ASSET.into()],
+        ranks,
+        &names,
+    )
+}
+
 impl SettingOverrides {
     fn apply(&self, desc: &mut SceneDesc) {
         if let Some(spp) = self.spp {
@@ -270,6 +335,8 @@ impl PreparedRender {
             source,
             scene,
             paths,
+            frame,
+            metadata,
             resume,
             ..
         } = self;
@@ -278,7 +345,7 @@ impl PreparedRender {
             first_sample: job.first_sample,
         };
         let checkpoint_path = checkpoint::path_for(&paths.exr);
-        let fingerprint = fingerprint(&source, &scene, job.first_sample);
+        let fingerprint = fingerprint(&source, &scene, job.first_sample, frame.window);
         let mut last_checkpoint = std::time::Instant::now();
         let mut checkpoint_error = None;
         let mut save = |film: &Film, rows: &[bool]| {
@@ -293,9 +360,10 @@ impl PreparedRender {
             }
         };
         let (film, rows_done) = resume.map_or((None, Vec::new()), |c| (Some(c.film), c.rows_done));
-        let rendered = crate::render_resumable(
+        let rendered = crate::integrator::render_resumable(
             &scene,
             &options,
+            &frame,
             progress,
             Resumable {
                 film,
@@ -305,7 +373,7 @@ impl PreparedRender {
                 // Checkpoints come between bands: about 64 of them per frame.
                 max_band_rows: job
                     .checkpoint_every
-                    .map(|_| (scene.camera.height as usize).div_ceil(64)),
+                    .map(|_| (frame.window.height() as usize).div_ceil(64)),
             },
         );
         if let Some(e) = checkpoint_error {
@@ -331,16 +399,17 @@ impl PreparedRender {
             .iter()
             .map(|p| p.iter().filter(|v| !v.is_finite()).count() as u64)
             .sum();
-        let mut extra = output::naming::RenderMetadata {
+        let mut text = output::naming::RenderMetadata {
             scene: source.name.clone(),
             spp: scene.settings.spp,
             first_sample: job.first_sample,
             seed: scene.settings.seed,
         }
         .attributes();
+        text.extend(metadata);
         if let Some(i) = &interrupted {
             let per_row = film.width as u64 * film.spp as u64;
-            extra.push((
+            text.push((
                 crate::aov::naming::INTERRUPTED_ATTRIBUTE.to_string(),
                 format!(
                     "{} of {} rows rendered ({} of {} samples); the other rows are empty: \
@@ -352,11 +421,24 @@ impl PreparedRender {
                 ),
             ));
         }
+        let capture_date = job.timestamp.then(|| {
+            let now = std::time::SystemTime::now()
+                .duration_since(std::time::UNIX_EPOCH)
+                .map_or(0, |d| d.as_secs());
+            output::naming::capture_date(now)
+        });
+        let header = output::ExrHeader {
+            world_to_camera: Some(scene.camera.world_to_camera().to_cols_array()),
+            world_to_ndc: Some(scene.camera.world_to_ndc().to_cols_array()),
+            capture_date,
+            text,
+            ..output::ExrHeader::default()
+        };
         let derived = output::derived_aovs(&film, &scene.aovs);
         let png =
             output::stage_png(&paths.png, &film, 0, job.preview_exposure).map_err(Error::Output)?;
         let (width, height, spp) = (film.width, film.height, film.spp);
-        let exr = output::stage_exr(&paths.exr, film, &scene.aovs, derived, job.exr, &extra)
+        let exr = output::stage_film(&paths.exr, film, &scene.aovs, derived, job.exr, header)
             .map_err(Error::Output)?;
         output::atomic::commit_pair(exr, png).map_err(Error::Output)?;
         if interrupted.is_none() {
@@ -384,11 +466,12 @@ impl PreparedRender {
 }
 
 /// What a checkpoint must match to be resumed: everything that decides the pixels (the
-/// scene text, the settings after overrides, the film, the sample range, the AOVs).
-fn fingerprint(source: &Source, scene: &Scene, first_sample: u32) -> u64 {
+/// scene text, the settings after overrides, the film and window, the sample range, the
+/// AOVs).
+fn fingerprint(source: &Source, scene: &Scene, first_sample: u32, window: PixelWindow) -> u64 {
     let settings = format!(
-        "{:?} {}x{} first {first_sample}",
-        scene.settings, scene.camera.width, scene.camera.height
+        "{:?} {}x{} first {first_sample} window {:?}",
+        scene.settings, scene.camera.width, scene.camera.height, window
     );
     let aovs: String = scene
         .aovs

@@ -9,6 +9,7 @@ pub mod camera;
 pub mod checkpoint;
 pub mod error;
 pub mod events;
+pub mod farm;
 pub mod film;
 pub mod geometry;
 pub mod integrator;

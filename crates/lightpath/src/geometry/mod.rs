@@ -2,6 +2,7 @@
 //! `intersect` / `occluded` seam; `obvhs` builds the BVH, `bvh` lays it out 4 wide.
 
 mod bvh;
+mod sah;
 pub mod shapes;
 
 pub use bvh::{Accel, Visibility};

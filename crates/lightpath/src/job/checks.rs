@@ -64,20 +64,10 @@ pub fn outputs(paths: &OutputPaths, scene: &str) -> Result<(), String> {
     target::check(&paths.png, &[Path::new(scene)])
 }
 
-/// Things worth a word before rendering: a scene with no light, an LPE label that no
-/// object or light carries.
-pub fn scene_warnings(desc: &SceneDesc, scene: &Scene) -> Vec<String> {
+/// Things worth a word before rendering: an LPE label that no object or light carries
+/// (a scene without light is `scene::load::defaults::no_light_warning`'s).
+pub fn scene_warnings(scene: &Scene) -> Vec<String> {
     let mut out = Vec::new();
-    let glows = desc
-        .objects
-        .iter()
-        .any(|o| o.emission.is_some_and(|e| e.iter().any(|v| *v > 0.0)));
-    if desc.lights.is_empty() && !glows {
-        out.push(format!(
-            "{}: the scene has no light and nothing glows: every beauty pixel will be black",
-            desc.source
-        ));
-    }
     let mut labels: BTreeSet<&str> = BTreeSet::new();
     for o in &scene.objects {
         labels.extend(o.groups.iter().map(String::as_str));

@@ -11,8 +11,8 @@ mod png;
 pub mod target;
 
 pub use self::exr::{
-    check_exr_file, derived_aovs, read_exr, stage_exr, write_channels, write_exr, DerivedAov,
-    ExrCompression, ExrContents, ExrOptions,
+    check_exr_file, derived_aovs, read_exr, software, stage_film, write_channels, write_exr,
+    write_film, write_image, DerivedAov, ExrCompression, ExrContents, ExrHeader, ExrOptions,
 };
 pub use self::png::{stage_png, write_png, write_png_rgb};
 pub use crate::aov::naming::{channel_names, AOV_ATTRIBUTE_PREFIX};

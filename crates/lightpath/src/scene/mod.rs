@@ -73,6 +73,9 @@ pub struct Aov {
 
 pub struct Scene {
     pub accel: Accel,
+    /// The triangles of every mesh light (object id: the light), for the lights-only
+    /// test of `unoccluded`/`shadows` AOVs.
+    pub mesh_lights: Accel,
     pub objects: Vec<Object>,
     pub materials: Vec<Material>,
     pub lights: Vec<Light>,

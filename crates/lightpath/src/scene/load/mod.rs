@@ -2,7 +2,11 @@
 //! text with its name, and maps byte offsets to the lines and columns of `Origin`s.
 
 pub mod builtin;
+pub mod defaults;
+pub mod include;
 pub mod obj;
+pub mod ply;
+mod text;
 pub mod toml;
 
 use super::desc::{Origin, SceneDesc};
@@ -18,8 +22,56 @@ pub struct Source {
     pub dir: PathBuf,
 }
 
+/// Scene file formats, told by the file's extension (anything else is TOML).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Format {
+    Toml,
+    Obj,
+    Ply,
+    Gltf,
+}
+
+impl Format {
+    pub fn of(path: &Path) -> Format {
+        let ext = path.extension().map(|e| e.to_ascii_lowercase());
+        match ext.as_ref().and_then(|e| e.to_str()) {
+            Some("obj") => Format::Obj,
+            Some("ply") => Format::Ply,
+            Some("gltf" | "glb") => Format::Gltf,
+            _ => Format::Toml,
+        }
+    }
+}
+
+/// A scene file of a format other than TOML as its `SceneDesc`, without defaults: what
+/// `[[include]]` merges and what `lightpath render model.obj` completes. `at` is where
+/// the file was named (an error opening it points there).
+pub fn load_file(path: &Path, at: &Origin) -> Result<SceneDesc, SceneError> {
+    match Format::of(path) {
+        Format::Obj => obj::load_scene(path, at),
+        Format::Ply => ply::load_scene(path, at),
+        Format::Gltf => Err(at.error(format!(
+            "{}: glTF files are not supported yet",
+            path.display()
+        ))),
+        Format::Toml => Err(at.error(format!(
+            "{}: only OBJ, PLY and glTF files can be included (.obj, .ply, .gltf, .glb)",
+            path.display()
+        ))),
+    }
+}
+
 impl Source {
+    /// A scene file; OBJ, PLY and glTF files are read by their loader when parsed (their
+    /// `text` stays empty).
     pub fn from_file(path: &Path) -> Result<Source, SceneError> {
+        if Format::of(path) != Format::Toml {
+            return Ok(Source {
+                name: path.display().to_string(),
+                text: String::new(),
+                dir: path.parent().map(Path::to_path_buf).unwrap_or_default(),
+            });
+        }
         let name = path.display().to_string();
         let bytes = crate::limits::read_input(path)
             .map_err(|e| Origin::file(&name).error(format!("cannot read the scene file: {e}")))?;
@@ -68,9 +120,18 @@ impl Source {
         self.origin(span).error(message)
     }
 
-    /// The scene description (TOML).
+    /// The scene description: TOML, or a model file completed with a default camera
+    /// and light where it has none (with warnings in `SceneDesc::warnings`).
     pub fn parse(&self) -> Result<SceneDesc, SceneError> {
-        toml::load(self)
+        let path = Path::new(&self.name);
+        match Format::of(path) {
+            Format::Toml => toml::load(self),
+            _ => {
+                let mut desc = load_file(path, &Origin::file(&self.name))?;
+                defaults::complete(&mut desc);
+                Ok(desc)
+            }
+        }
     }
 }
 
