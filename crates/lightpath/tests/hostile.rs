@@ -416,13 +416,15 @@ fn a_cancelled_render_resumed_from_its_checkpoint_equals_the_uninterrupted_one_b
         first_sample: 0,
     };
     let silent = lightpath::progress::Silent;
-    let whole = render_resumable(&scene, &options, &silent, Resumable::default());
+    let request = lightpath::integrator::FrameRequest::whole(&scene);
+    let whole = render_resumable(&scene, &options, &request, &silent, Resumable::default());
     // Stop after the first band of 8 rows.
     let cancel = AtomicBool::new(false);
     let mut stop = |_: &lightpath::film::Film, _: &[bool]| cancel.store(true, Ordering::SeqCst);
     let part = render_resumable(
         &scene,
         &options,
+        &request,
         &silent,
         Resumable {
             cancel: Some(&cancel),
@@ -443,6 +445,7 @@ fn a_cancelled_render_resumed_from_its_checkpoint_equals_the_uninterrupted_one_b
     let resumed = render_resumable(
         &scene,
         &options,
+        &request,
         &silent,
         Resumable {
             film: Some(back.film),
