@@ -52,13 +52,16 @@ pub enum Error {
     Plan(String),
     /// An output that cannot be written; the message names the file and the OS reason.
     Output(String),
+    /// A render setting that cannot be honoured (`spp = 0`, a sample range past 2^32) or
+    /// a request above one of the `limits`; checked before rendering.
+    Setting(String),
 }
 
 impl fmt::Display for Error {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match self {
             Error::Scene(e) => e.fmt(f),
-            Error::Plan(m) | Error::Output(m) => f.write_str(m),
+            Error::Plan(m) | Error::Output(m) | Error::Setting(m) => f.write_str(m),
         }
     }
 }
@@ -67,7 +70,7 @@ impl std::error::Error for Error {
     fn source(&self) -> Option<&(dyn std::error::Error + 'static)> {
         match self {
             Error::Scene(e) => Some(e),
-            Error::Plan(_) | Error::Output(_) => None,
+            Error::Plan(_) | Error::Output(_) | Error::Setting(_) => None,
         }
     }
 }

@@ -183,6 +183,18 @@ impl Film {
             });
     }
 
+    /// The inverse of [`Film::store_rows`]: copies rows starting at `first_row` from the
+    /// planes into an interleaved band (`width × stride` per row).
+    pub fn load_rows(&self, first_row: usize, rows: &mut [f32]) {
+        let stride = Film::stride_for(self.aovs);
+        let start = first_row * self.width as usize;
+        for (c, plane) in self.planes.iter().enumerate() {
+            for (px, s) in rows.chunks_exact_mut(stride).zip(&plane[start..]) {
+                px[c] = *s;
+            }
+        }
+    }
+
     /// The mean value of AOV `k` at pixel (x, y).
     pub fn pixel(&self, k: usize, x: u32, y: u32) -> Vec3A {
         let i = y as usize * self.width as usize + x as usize;

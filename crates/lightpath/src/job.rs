@@ -5,15 +5,20 @@
 //! render as `lightpath render`.
 
 use crate::aov::{self, AovSpec};
-use crate::film::PixelWindow;
+use crate::checkpoint::{self, Checkpoint};
+use crate::film::{Film, PixelWindow};
 use crate::integrator::FrameRequest;
 use crate::output;
 use crate::post::cryptomatte::MatteTable;
 use crate::progress::Progress;
 use crate::scene::desc::SceneDesc;
 use crate::scene::{Scene, Source};
-use crate::{Error, RenderOptions, RenderStats};
+use crate::{Error, RenderOptions, RenderStats, Rendered, Resumable};
 use std::path::PathBuf;
+use std::sync::atomic::AtomicBool;
+use std::sync::Arc;
+
+mod checks;
 
 /// Everything `lightpath render` can be told.
 #[derive(Clone, Debug)]
@@ -37,6 +42,14 @@ pub struct RenderJob {
     /// Record the date in the header (`capDate`); off, identical renders are identical
     /// files.
     pub timestamp: bool,
+    /// Continue from the checkpoint beside the output (`--resume`): the same command
+    /// that was interrupted, plus this flag.
+    pub resume: bool,
+    /// Write a checkpoint this often while rendering (`--checkpoint-every`).
+    pub checkpoint_every: Option<std::time::Duration>,
+    /// Set (by a SIGINT/SIGTERM handler) to stop after the rows in flight: the outputs
+    /// then hold the rows done and a checkpoint is written beside them.
+    pub cancel: Option<Arc<AtomicBool>>,
 }
 
 /// Render settings the command line overrides; `None` keeps the scene's value.
@@ -82,6 +95,8 @@ pub struct PreparedRender {
     pub frame: FrameRequest,
     /// The header attributes describing the scene and settings.
     pub metadata: Vec<(String, String)>,
+    /// The checkpoint `--resume` continues from.
+    pub resume: Option<Checkpoint>,
 }
 
 /// What a finished render wrote and measured.
@@ -92,18 +107,38 @@ pub struct RenderSummary {
     pub spp: u32,
     pub aovs: usize,
     pub stats: RenderStats,
+    /// Accumulated values that overflowed to infinity (finite contributions too large to
+    /// sum in 32 bits): those pixels are wrong, and the line says so.
+    pub overflowed: u64,
     pub paths: output::naming::OutputPaths,
+    /// Set when the render was stopped: rows finished of all rows, and the checkpoint
+    /// written beside the outputs.
+    pub interrupted: Option<Interrupted>,
+}
+
+/// How far a stopped render got.
+#[derive(Clone, Debug)]
+pub struct Interrupted {
+    pub rows_done: u32,
+    pub rows: u32,
+    pub checkpoint: PathBuf,
 }
 
 impl RenderSummary {
     /// The one line `lightpath render` prints at the end.
     pub fn line(&self) -> String {
         let s = &self.stats;
-        let dropped = if s.nonfinite > 0 {
+        let mut dropped = if s.nonfinite > 0 {
             format!(", {} NaN/Inf contributions dropped", s.nonfinite)
         } else {
             String::new()
         };
+        if self.overflowed > 0 {
+            dropped += &format!(
+                ", WARNING: {} pixel values overflowed to Inf (radiance too large for 32-bit floats)",
+                self.overflowed
+            );
+        }
         format!(
             "{}x{} at {} spp, {} AOVs: {:.2} s, {:.2} M samples/s, {:.2} M rays/s{dropped}",
             self.width,
@@ -134,6 +169,9 @@ impl RenderJob {
             crop: None,
             cryptomatte: None,
             timestamp: false,
+            resume: false,
+            checkpoint_every: None,
+            cancel: None,
         }
     }
 
@@ -142,10 +180,19 @@ impl RenderJob {
         let source = crate::load_source(&self.scene)?;
         let mut desc = source.parse()?;
         self.overrides.apply(&mut desc);
+        let paths = output::naming::output_paths(&self.scene, self.output.as_deref());
+        checks::outputs(&paths, &self.scene).map_err(Error::Output)?;
+        checks::settings(&desc, self.first_sample)
+            .map_err(|e| Error::Setting(format!("{}: {e}", desc.source)))?;
         let mut warnings = desc.warnings.clone();
         warnings.extend(crate::scene::load::defaults::no_light_warning(&desc));
         let specs = self.plan(&desc, &mut warnings)?;
+        crate::limits::Limits::current()
+            .check_aovs(specs.len() as u64, "this render's AOV plan")
+            .map_err(Error::Setting)?;
         let scene = Scene::build(&desc, &specs)?;
+        checks::film(&scene).map_err(Error::Setting)?;
+        warnings.extend(checks::scene_warnings(&scene));
         for w in scene.automaton.warnings() {
             let aov = &scene.aovs[w.rule.0 as usize];
             warnings.push(format!(
@@ -153,7 +200,6 @@ impl RenderJob {
                 aov.name, aov.definition, w.message
             ));
         }
-        let paths = output::naming::output_paths(&self.scene, self.output.as_deref());
         let (width, height) = (scene.camera.width, scene.camera.height);
         let window = self.crop.unwrap_or(PixelWindow::full(width, height));
         window.check(width, height).map_err(Error::Plan)?;
@@ -162,6 +208,49 @@ impl RenderJob {
         let mattes = self
             .cryptomatte
             .map(|ranks| matte_table(&desc, &scene, ranks));
+        let checkpoint_path = checkpoint::path_for(&paths.exr);
+        let resume = if self.resume {
+            if mattes.is_some() {
+                return Err(Error::Setting(
+                    "--resume with --cryptomatte: a checkpoint does not hold Cryptomatte \
+                     layers; render again without --resume"
+                        .into(),
+                ));
+            }
+            if scene.settings.noise_threshold > 0.0 {
+                return Err(Error::Setting(
+                    "--resume with adaptive sampling (--noise-threshold): a checkpoint does \
+                     not hold the per-pixel sample counts; render again without --resume"
+                        .into(),
+                ));
+            }
+            if !checkpoint_path.exists() {
+                return Err(Error::Setting(format!(
+                    "--resume: there is no checkpoint {} (it is written when a render is \
+                     interrupted, or with --checkpoint-every)",
+                    checkpoint_path.display()
+                )));
+            }
+            let checkpoint = checkpoint::read(
+                &checkpoint_path,
+                fingerprint(&source, &scene, self.first_sample, window),
+                window.width(),
+                window.height(),
+                scene.aovs.len(),
+                scene.settings.spp,
+            )
+            .map_err(Error::Setting)?;
+            Some(checkpoint)
+        } else {
+            if checkpoint_path.exists() {
+                warnings.push(format!(
+                    "{} is there from an interrupted render: this render starts afresh and \
+                     replaces it (add --resume to continue it instead)",
+                    checkpoint_path.display()
+                ));
+            }
+            None
+        };
         Ok(PreparedRender {
             job: self,
             source,
@@ -170,6 +259,7 @@ impl RenderJob {
             warnings,
             frame: FrameRequest { window, mattes },
             metadata,
+            resume,
         })
     }
 
@@ -272,7 +362,9 @@ impl SettingOverrides {
 }
 
 impl PreparedRender {
-    /// Renders and writes the EXR and its PNG preview (each atomically).
+    /// Renders (the rows a resumed checkpoint does not hold), then writes the EXR and its
+    /// PNG preview together. A render stopped through `cancel` writes the rows done and a
+    /// checkpoint beside the outputs; a finished one removes the checkpoint.
     pub fn run(self, progress: &dyn Progress) -> Result<RenderSummary, Error> {
         let PreparedRender {
             job,
@@ -281,13 +373,68 @@ impl PreparedRender {
             paths,
             frame,
             metadata,
+            resume,
             ..
         } = self;
         let options = RenderOptions {
             spp: scene.settings.spp,
             first_sample: job.first_sample,
         };
-        let (film, stats) = crate::integrator::render_frame(&scene, &options, &frame, progress);
+        let checkpoint_path = checkpoint::path_for(&paths.exr);
+        let fingerprint = fingerprint(&source, &scene, job.first_sample, frame.window);
+        let mut last_checkpoint = std::time::Instant::now();
+        let mut checkpoint_error = None;
+        let mut save = |film: &Film, rows: &[bool]| {
+            let Some(every) = job.checkpoint_every else {
+                return;
+            };
+            if last_checkpoint.elapsed() >= every && !rows.iter().all(|d| *d) {
+                if let Err(e) = checkpoint::write(&checkpoint_path, fingerprint, film, rows) {
+                    checkpoint_error.get_or_insert(e);
+                }
+                last_checkpoint = std::time::Instant::now();
+            }
+        };
+        let (film, rows_done) = resume.map_or((None, Vec::new()), |c| (Some(c.film), c.rows_done));
+        let rendered = crate::integrator::render_resumable(
+            &scene,
+            &options,
+            &frame,
+            progress,
+            Resumable {
+                film,
+                rows_done,
+                cancel: job.cancel.as_deref(),
+                after_band: Some(&mut save),
+                // Checkpoints come between bands: about 64 of them per frame.
+                max_band_rows: job
+                    .checkpoint_every
+                    .map(|_| (frame.window.height() as usize).div_ceil(64)),
+            },
+        );
+        if let Some(e) = checkpoint_error {
+            return Err(Error::Output(e));
+        }
+        let Rendered {
+            film,
+            stats,
+            rows_done,
+        } = rendered;
+        let finished = rows_done.iter().filter(|d| **d).count() as u32;
+        let interrupted = (finished < film.height).then(|| Interrupted {
+            rows_done: finished,
+            rows: film.height,
+            checkpoint: checkpoint_path.clone(),
+        });
+        if interrupted.is_some() {
+            checkpoint::write(&checkpoint_path, fingerprint, &film, &rows_done)
+                .map_err(Error::Output)?;
+        }
+        let overflowed = film
+            .planes
+            .iter()
+            .map(|p| p.iter().filter(|v| !v.is_finite()).count() as u64)
+            .sum();
         let mut text = output::naming::RenderMetadata {
             scene: source.name.clone(),
             spp: scene.settings.spp,
@@ -296,6 +443,20 @@ impl PreparedRender {
         }
         .attributes();
         text.extend(metadata);
+        if let Some(i) = &interrupted {
+            let per_row = film.width as u64 * film.spp as u64;
+            text.push((
+                crate::aov::naming::INTERRUPTED_ATTRIBUTE.to_string(),
+                format!(
+                    "{} of {} rows rendered ({} of {} samples); the other rows are empty: \
+                     run the same command with --resume to finish",
+                    i.rows_done,
+                    i.rows,
+                    i.rows_done as u64 * per_row,
+                    i.rows as u64 * per_row
+                ),
+            ));
+        }
         let capture_date = job.timestamp.then(|| {
             let now = std::time::SystemTime::now()
                 .duration_since(std::time::UNIX_EPOCH)
@@ -310,17 +471,53 @@ impl PreparedRender {
             ..output::ExrHeader::default()
         };
         let derived = output::derived_aovs(&film, &scene.aovs);
-        output::write_png(&paths.png, &film, 0, job.preview_exposure).map_err(Error::Output)?;
+        let png =
+            output::stage_png(&paths.png, &film, 0, job.preview_exposure).map_err(Error::Output)?;
         let (width, height, spp) = (film.width, film.height, film.spp);
-        output::write_film(&paths.exr, film, &scene.aovs, derived, job.exr, header)
+        let exr = output::stage_film(&paths.exr, film, &scene.aovs, derived, job.exr, header)
             .map_err(Error::Output)?;
+        output::atomic::commit_pair(exr, png).map_err(Error::Output)?;
+        if interrupted.is_none() {
+            match std::fs::remove_file(&checkpoint_path) {
+                Err(e) if e.kind() != std::io::ErrorKind::NotFound => {
+                    return Err(Error::Output(format!(
+                        "cannot remove the finished render's checkpoint {}: {e}",
+                        checkpoint_path.display()
+                    )))
+                }
+                _ => {}
+            }
+        }
         Ok(RenderSummary {
             width,
             height,
             spp,
             aovs: scene.aovs.len(),
             stats,
+            overflowed,
             paths,
+            interrupted,
         })
     }
+}
+
+/// What a checkpoint must match to be resumed: everything that decides the pixels (the
+/// scene text, the settings after overrides, the film and window, the sample range, the
+/// AOVs).
+fn fingerprint(source: &Source, scene: &Scene, first_sample: u32, window: PixelWindow) -> u64 {
+    let settings = format!(
+        "{:?} {}x{} first {first_sample} window {:?}",
+        scene.settings, scene.camera.width, scene.camera.height, window
+    );
+    let aovs: String = scene
+        .aovs
+        .iter()
+        .map(|a| format!("{}={}\n", a.name, a.definition))
+        .collect();
+    checkpoint::fingerprint(&[
+        source.name.as_bytes(),
+        source.text.as_bytes(),
+        settings.as_bytes(),
+        aovs.as_bytes(),
+    ])
 }

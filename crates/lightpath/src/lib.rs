@@ -6,6 +6,7 @@
 
 pub mod aov;
 pub mod camera;
+pub mod checkpoint;
 pub mod error;
 pub mod events;
 pub mod farm;
@@ -14,6 +15,7 @@ pub mod geometry;
 pub mod integrator;
 pub mod job;
 pub mod light;
+pub mod limits;
 pub mod lpe_tools;
 pub mod material;
 pub mod output;
@@ -25,7 +27,9 @@ pub mod scene;
 pub mod view;
 
 pub use error::Error;
-pub use integrator::{render, render_with_progress, RenderOptions, RenderStats};
+pub use integrator::{
+    render, render_resumable, render_with_progress, RenderOptions, RenderStats, Rendered, Resumable,
+};
 pub use job::RenderJob;
 pub use scene::{Scene, SceneError, Source};
 

@@ -11,6 +11,8 @@ use lightpath::view;
 use std::io::{BufRead, IsTerminal, Write};
 use std::path::PathBuf;
 use std::process::ExitCode;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::Arc;
 
 /// `println!` that ignores a closed stdout (`lightpath … | head` must not panic).
 macro_rules! say {
@@ -158,7 +160,8 @@ struct CompArgs {
     /// The EXR holding the AOVs.
     exr: PathBuf,
     /// A sum of scaled AOVs, e.g. "beauty + 0.5*beauty_key - caustics + (1,0.4,0.4)*caustics".
-    /// Default: the --base AOV.
+    /// Default: the --base AOV. One that starts with '-' goes after `--`:
+    /// `comp in.exr -o out.exr -- "-0.5*caustics + beauty"`.
     expression: Option<String>,
     /// Output EXR (beauty as R, G, B, A); a PNG preview is written beside it.
     #[arg(short, long)]
@@ -206,8 +209,9 @@ struct RenderArgs {
     /// Add bounce AOVs bounce0 … bounce<K-1> and bounce<K>plus (they sum to beauty).
     #[arg(long)]
     bounces: Option<u32>,
-    #[arg(long)]
-    threads: Option<usize>,
+    /// Worker threads (1 to 1024; default: one per core).
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..=MAX_THREADS))]
+    threads: Option<u32>,
     #[arg(long)]
     seed: Option<u64>,
     /// Write half-float channels instead of float32.
@@ -272,7 +276,63 @@ struct RenderArgs {
     /// identical files.
     #[arg(long)]
     timestamp: bool,
+    /// Continue an interrupted render from the checkpoint beside its output: the same
+    /// command plus --resume. The finished image equals an uninterrupted render's.
+    #[arg(long)]
+    resume: bool,
+    /// Also write a checkpoint every SECONDS while rendering (a render killed outright
+    /// then loses at most that much).
+    #[arg(long, value_name = "SECONDS", value_parser = parse_seconds)]
+    checkpoint_every: Option<f64>,
 }
+
+fn parse_seconds(s: &str) -> Result<f64, String> {
+    match s.trim().parse::<f64>() {
+        Ok(v) if v > 0.0 && v.is_finite() && v < 1e9 => Ok(v),
+        _ => Err(format!("expected a positive number of seconds, got '{s}'")),
+    }
+}
+
+/// Exit status of a render stopped by SIGINT or SIGTERM (128 + SIGINT, as shells report).
+const EXIT_INTERRUPTED: u8 = 130;
+
+/// SIGINT and SIGTERM set `cancel`: the render finishes the rows in flight and writes what
+/// it has with a checkpoint. A second signal exits at once, removing temporary files.
+fn install_interrupt_handler(cancel: Arc<AtomicBool>) {
+    let result = ctrlc::set_handler(move || {
+        if cancel.swap(true, Ordering::SeqCst) {
+            lightpath::output::atomic::remove_temporary_files();
+            tell!("interrupted again: exiting without writing");
+            std::process::exit(EXIT_INTERRUPTED as i32);
+        }
+        tell!("\ninterrupted: finishing the rows in flight, then writing the rows done and a checkpoint (interrupt again to quit at once)");
+    });
+    if let Err(e) = result {
+        tell!("warning: cannot catch interrupts ({e}): Ctrl-C will lose the render");
+    }
+}
+
+/// A `comp` expression starting with '-' (`-0.5*beauty + …`) reads as an option unless it
+/// follows `--`; clap's own tip names only its first characters, so say it whole.
+fn hyphen_expression_hint(args: impl Iterator<Item = String>) -> Option<String> {
+    let args: Vec<String> = args.take_while(|a| a != "--").collect();
+    if args.first().map(String::as_str) != Some("comp") {
+        return None;
+    }
+    let expression = args.iter().skip(1).find(|a| {
+        let mut c = a.chars();
+        c.next() == Some('-')
+            && c.next()
+                .is_some_and(|c| c.is_ascii_digit() || c == '.' || c == '(')
+    })?;
+    Some(format!(
+        "note: the expression '{expression}' starts with '-': put it after `--`, as in \
+         lightpath comp IN.exr -o OUT.exr -- \"{expression}\""
+    ))
+}
+
+/// `--threads` above this is refused: a pool of 100000 threads could not start.
+const MAX_THREADS: i64 = 1024;
 
 fn parse_resolution(s: &str) -> Result<[u32; 2], String> {
     let (w, h) = s
@@ -306,7 +366,14 @@ enum LpeCommand {
 }
 
 fn main() -> ExitCode {
+    if let Some(hint) = hyphen_expression_hint(std::env::args().skip(1)) {
+        tell!("{hint}");
+    }
     let cli = Cli::parse();
+    if let Err(e) = lightpath::limits::Limits::from_env() {
+        tell!("error: {e}");
+        return ExitCode::FAILURE;
+    }
     match cli.command {
         Command::Render(args) => render(args),
         Command::Lpe(cmd) => lpe_command(cmd),
@@ -514,6 +581,9 @@ fn comp_command(args: CompArgs) -> ExitCode {
         output: args.output.clone(),
         exposure: args.exposure,
     };
+    for w in lightpath::post::comp::warnings(&job) {
+        tell!("warning: {w}");
+    }
     let run = || -> Result<(), String> {
         let png = lightpath::post::comp::run(&job)?;
         say!("wrote {} and {}", args.output.display(), png.display());
@@ -583,10 +653,11 @@ impl Progress for Bar {
 fn render(args: RenderArgs) -> ExitCode {
     if let Some(n) = args.threads {
         if let Err(e) = rayon::ThreadPoolBuilder::new()
-            .num_threads(n.max(1))
+            .num_threads(n as usize)
             .build_global()
         {
-            tell!("warning: cannot set the thread count: {e}");
+            tell!("error: cannot start {n} threads: {e}");
+            return ExitCode::FAILURE;
         }
     }
     let job = RenderJob {
@@ -624,6 +695,11 @@ fn render(args: RenderArgs) -> ExitCode {
         crop: args.crop,
         cryptomatte: args.cryptomatte.then_some(args.cryptomatte_ranks),
         timestamp: args.timestamp,
+        resume: args.resume,
+        checkpoint_every: args
+            .checkpoint_every
+            .map(std::time::Duration::from_secs_f64),
+        cancel: Some(Arc::new(AtomicBool::new(false))),
     };
     let prepared = match job.prepare() {
         Ok(p) => p,
@@ -635,6 +711,9 @@ fn render(args: RenderArgs) -> ExitCode {
     for w in &prepared.warnings {
         tell!("warning: {w}");
     }
+    if let Some(cancel) = &prepared.job.cancel {
+        install_interrupt_handler(cancel.clone());
+    }
     let progress = progress_reporter(choose_progress(args.quiet, std::io::stderr().is_terminal()));
     if args.preview {
         if args.crop.is_some() {
@@ -644,6 +723,21 @@ fn render(args: RenderArgs) -> ExitCode {
         return render_with_preview(prepared, progress.as_ref(), &args.serve);
     }
     match prepared.run(progress.as_ref()) {
+        Ok(lightpath::job::RenderSummary {
+            interrupted: Some(i),
+            paths,
+            ..
+        }) => {
+            say!(
+                "interrupted after {} of {} rows: wrote {} and {} with the rows done, and the checkpoint {}; run the same command with --resume to finish",
+                i.rows_done,
+                i.rows,
+                paths.exr.display(),
+                paths.png.display(),
+                i.checkpoint.display()
+            );
+            ExitCode::from(EXIT_INTERRUPTED)
+        }
         Ok(summary) => {
             say!("{}", summary.line());
             say!(
@@ -730,22 +824,25 @@ fn lpe_command(cmd: LpeCommand) -> ExitCode {
     }
 }
 
-/// The conformance interface: one JSON object per input line, in order.
+/// The conformance interface: one JSON object per input line, in order, each written and
+/// flushed as soon as it is made (a harness reading line by line gets every answer, and
+/// nothing answered is lost if a later line ends the process).
 fn match_jsonl() -> ExitCode {
     let stdin = std::io::stdin();
-    let stdout = std::io::stdout();
-    let mut out = std::io::BufWriter::new(stdout.lock());
+    let mut out = std::io::stdout().lock();
     for line in stdin.lock().lines() {
         let Ok(line) = line else { break };
         if line.trim().is_empty() {
             continue;
         }
         let answer = lpe_tools::answer_case(&line);
-        if writeln!(out, "{answer}").is_err() {
+        if writeln!(out, "{answer}")
+            .and_then(|()| out.flush())
+            .is_err()
+        {
             break;
         }
     }
-    let _ = out.flush();
     ExitCode::SUCCESS
 }
 

@@ -44,6 +44,8 @@ pub const SHADOW_DEFINITION: &str = "derived: 1 - occluded/unoccluded";
 pub const SCENE_ATTRIBUTE: &str = "lightpath/scene";
 pub const SPP_ATTRIBUTE: &str = "lightpath/spp";
 pub const FIRST_SAMPLE_ATTRIBUTE: &str = "lightpath/first_sample";
+/// Present on the EXR of a stopped render: how many rows (and samples) it holds.
+pub const INTERRUPTED_ATTRIBUTE: &str = "lightpath/interrupted";
 pub const SEED_ATTRIBUTE: &str = "lightpath/seed";
 pub const EXPRESSION_ATTRIBUTE_PREFIX: &str = "lightpath/expression/";
 pub const SCENE_HASH_ATTRIBUTE: &str = "lightpath/scene_hash";
@@ -214,9 +216,12 @@ pub fn partition_attributes(aovs: &[PartInfo]) -> Vec<(String, String)> {
             mark(n, BEAUTY, PartitionKind::Standard, None);
         }
     }
+    // A `bounce<k>plus` with k at or above the AOV count cannot have all its parts (and
+    // listing them would allocate k names: `bounce4294967295plus` aborted).
     if let Some(k) = aovs
         .iter()
         .find_map(|a| parse_bounce(a.name).filter(|b| b.1).map(|b| b.0))
+        .filter(|&k| (k as usize) < aovs.len())
     {
         let mut parts: Vec<String> = (0..k).map(bounce_name).collect();
         parts.push(bounce_plus_name(k));

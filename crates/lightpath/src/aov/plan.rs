@@ -9,6 +9,10 @@ use std::fmt;
 /// Above this many AOVs a render warns: each AOV costs film memory and EXR size.
 pub const MANY_AOVS: usize = 64;
 
+/// The largest `--bounces`: `bounce<K>plus` is `C[DS]{K,}[<L.>O]`, and quantifier bounds
+/// stop at 64.
+pub const MAX_BOUNCES: u32 = 63;
+
 /// What was asked for.
 #[derive(Clone, Debug, Default)]
 pub struct PlanRequest {
@@ -43,6 +47,8 @@ pub enum PlanError {
     BadAov { arg: String, message: String },
     /// A light-group split names an AOV the render does not have.
     UnknownSplit(String),
+    /// `--bounces K` outside 1 ..= 63 (a quantifier bound of LPE.md §5 is at most 64).
+    Bounces(u32),
 }
 
 impl fmt::Display for PlanError {
@@ -52,6 +58,10 @@ impl fmt::Display for PlanError {
             PlanError::UnknownSplit(name) => write!(
                 f,
                 "--light-group-aovs names '{name}', which is not an AOV of this render"
+            ),
+            PlanError::Bounces(k) => write!(
+                f,
+                "--bounces {k}: expected 1 to {MAX_BOUNCES} (bounce0 … bounce<K-1> and bounce<K>plus)"
             ),
         }
     }
@@ -86,6 +96,9 @@ impl AovPlan {
         );
         specs.extend(req.extra.iter().cloned());
         if let Some(k) = req.bounces {
+            if !(1..=MAX_BOUNCES).contains(&k) {
+                return Err(PlanError::Bounces(k));
+            }
             specs.extend(bounces(k));
         }
         let mut specs = assemble(specs);

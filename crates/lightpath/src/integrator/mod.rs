@@ -21,7 +21,7 @@ use glam::Vec3A;
 use pixel::PixelJob;
 use rayon::prelude::*;
 use routing::Route;
-use std::sync::atomic::{AtomicU64, Ordering};
+use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 
 #[derive(Clone, Debug, Default)]
 pub struct RenderStats {
@@ -126,6 +126,58 @@ pub fn render_frame(
     request: &FrameRequest,
     progress: &dyn Progress,
 ) -> (Film, RenderStats) {
+    let done = render_resumable(scene, options, request, progress, Resumable::default());
+    (done.film, done.stats)
+}
+
+/// How a render can be stopped and continued (`job.rs` drives it from signals and
+/// checkpoints). The default renders every row, as [`render_frame`].
+#[derive(Default)]
+pub struct Resumable<'a> {
+    /// A film whose rows marked in `rows_done` are finished (a checkpoint's): those rows
+    /// are kept as they are, the others rendered. Not with Cryptomatte layers (a
+    /// checkpoint does not hold them; `job.rs` refuses the combination).
+    pub film: Option<Film>,
+    pub rows_done: Vec<bool>,
+    /// When set, rows not yet started are skipped: the render ends with the rows in
+    /// flight (a row is never left half-rendered).
+    pub cancel: Option<&'a AtomicBool>,
+    /// Called after each band with the film and the rows finished so far (checkpoints).
+    pub after_band: Option<AfterBand<'a>>,
+    /// At most this many rows per band (at least 8), so `after_band` comes often enough
+    /// on a small film; `None`: bands as large as `BAND_BYTES` allows.
+    pub max_band_rows: Option<usize>,
+}
+
+/// What `Resumable::after_band` is given: the film, and which rows are finished.
+pub type AfterBand<'a> = &'a mut dyn FnMut(&Film, &[bool]);
+
+/// A render that may have stopped early.
+pub struct Rendered {
+    pub film: Film,
+    pub stats: RenderStats,
+    /// One entry per row of the window: finished? All true unless the render was
+    /// cancelled.
+    pub rows_done: Vec<bool>,
+}
+
+/// [`render_frame`] of the rows `resume` does not already hold, stopping early if its
+/// `cancel` flag is set. Each row's sums start from zero and add its samples in order,
+/// so a row is the same whichever run renders it.
+pub fn render_resumable(
+    scene: &Scene,
+    options: &RenderOptions,
+    request: &FrameRequest,
+    progress: &dyn Progress,
+    resume: Resumable,
+) -> Rendered {
+    let Resumable {
+        film: resumed,
+        rows_done: resumed_rows,
+        cancel,
+        mut after_band,
+        max_band_rows,
+    } = resume;
     let start = std::time::Instant::now();
     let cam = &scene.camera;
     let (fw, fh) = (cam.width, cam.height);
@@ -136,14 +188,23 @@ pub fn render_frame(
     let tracer = Tracer::new(scene);
     let rays = AtomicU64::new(0);
     let nonfinite = AtomicU64::new(0);
-    let samples = w as u64 * h as u64 * options.spp as u64;
-    progress.start(h as u64, samples);
+    let done: Vec<AtomicBool> = (0..h as usize)
+        .map(|y| AtomicBool::new(resumed_rows.get(y).copied().unwrap_or(false)))
+        .collect();
+    let rows_before = done.iter().filter(|d| d.load(Ordering::Relaxed)).count() as u64;
+    let samples_taken = AtomicU64::new(0);
+    progress.start(h as u64, w as u64 * h as u64 * options.spp as u64);
+    progress.advance(rows_before);
+    let stopped = || cancel.is_some_and(|c| c.load(Ordering::Relaxed));
     // Rows are rendered a band at a time into one reused interleaved buffer (a sample
     // writes one contiguous run), and each band is moved into the film's planes: the
     // peak memory is the film plus one band, with no allocation churn.
     let row_len = stride * w as usize;
     // At least 8 rows (or the whole window when it is shorter).
-    let band_rows = (BAND_BYTES / (4 * row_len)).max(8).min(h.max(1) as usize);
+    let band_rows = (BAND_BYTES / (4 * row_len))
+        .min(max_band_rows.unwrap_or(usize::MAX))
+        .max(8)
+        .min(h.max(1) as usize);
     // A live preview asks for smaller bands, to show rows sooner; pixels do not depend on it.
     let band_rows = progress
         .band_rows()
@@ -151,8 +212,15 @@ pub fn render_frame(
     let mut band = vec![0.0f32; band_rows * row_len];
     let adaptive = scene.settings.noise_threshold > 0.0;
     let mut counts = vec![0u32; if adaptive { band_rows * w as usize } else { 0 }];
-    let mut film = Film::for_window(win, [fw, fh], scene.aovs.len(), options.spp);
-    if adaptive {
+    let mut film = resumed
+        .filter(|f| (f.width, f.height, f.aovs) == (w, h, scene.aovs.len()))
+        .map(|f| Film {
+            window: win,
+            frame: [fw, fh],
+            ..f
+        })
+        .unwrap_or_else(|| Film::for_window(win, [fw, fh], scene.aovs.len(), options.spp));
+    if adaptive && film.sample_counts.is_none() {
         film.sample_counts = Some(vec![0; w as usize * h as usize]);
     }
     // Cryptomatte values, band by band beside the AOVs' (one dummy value per row without).
@@ -165,10 +233,26 @@ pub fn render_frame(
         .collect();
     for first_row in (0..h as usize).step_by(band_rows) {
         let rows_here = band_rows.min(h as usize - first_row);
+        let band_done = &done[first_row..first_row + rows_here];
+        if stopped() || band_done.iter().all(|d| d.load(Ordering::Relaxed)) {
+            continue;
+        }
         let band = &mut band[..rows_here * row_len];
-        band.fill(0.0);
+        // The band starts as the film holds it: zero, or a resumed row's finished sums,
+        // which the skipped row leaves as they are.
+        if band_done.iter().any(|d| d.load(Ordering::Relaxed)) {
+            film.load_rows(first_row, band);
+        } else {
+            band.fill(0.0);
+        }
         let matte_band = &mut matte_band[..rows_here * matte_row];
         // Per row: its sample counts (adaptive sampling), or nothing.
+        // A finished (resumed) row keeps its counts; a row left unrendered keeps the film's.
+        if let Some(film_counts) = &film.sample_counts {
+            let start = first_row * w as usize;
+            let n = rows_here * w as usize;
+            counts[..n].copy_from_slice(&film_counts[start..start + n]);
+        }
         let count_rows: Vec<&mut [u32]> = if adaptive {
             counts[..rows_here * w as usize]
                 .chunks_mut(w as usize)
@@ -188,6 +272,9 @@ pub fn render_frame(
                     )
                 },
                 |(acc, matte), (i, ((row, matte_row), row_counts))| {
+                    if band_done[i].load(Ordering::Relaxed) || stopped() {
+                        return;
+                    }
                     let y = win.y0 + (first_row + i) as u32;
                     let mut out = Sink {
                         acc,
@@ -196,6 +283,7 @@ pub fn render_frame(
                         holdout: false,
                         first_object: None,
                     };
+                    let mut row_samples = 0u64;
                     for (col, x) in (win.x0..win.x1).enumerate() {
                         let mut after_sample = |out: &Sink| {
                             if let Some(t) = table {
@@ -211,6 +299,7 @@ pub fn render_frame(
                             after_sample: &mut after_sample,
                         };
                         let taken = tracer.render_pixel(job, &mut out);
+                        row_samples += taken as u64;
                         if let Some(c) = row_counts.get_mut(col) {
                             *c = taken;
                         }
@@ -221,6 +310,8 @@ pub fn render_frame(
                     }
                     rays.fetch_add(out.rays, Ordering::Relaxed);
                     nonfinite.fetch_add(out.nonfinite, Ordering::Relaxed);
+                    band_done[i].store(true, Ordering::Relaxed);
+                    samples_taken.fetch_add(row_samples, Ordering::Relaxed);
                     progress.advance(1);
                 },
             );
@@ -240,6 +331,10 @@ pub fn render_frame(
             }
         }
         progress.rows_done(&film, first_row..first_row + rows_here);
+        if let Some(f) = after_band.as_mut() {
+            let rows: Vec<bool> = done.iter().map(|d| d.load(Ordering::Relaxed)).collect();
+            f(&film, &rows);
+        }
     }
     if let Some(t) = table {
         film.mattes = Some(Mattes {
@@ -248,15 +343,15 @@ pub fn render_frame(
         });
     }
     progress.finish();
-    let samples = film
-        .sample_counts
-        .as_ref()
-        .map_or(samples, |c| c.iter().map(|&n| n as u64).sum());
     let stats = RenderStats {
-        samples,
+        samples: samples_taken.into_inner(),
         rays: rays.into_inner(),
         nonfinite: nonfinite.into_inner(),
         seconds: start.elapsed().as_secs_f64(),
     };
-    (film, stats)
+    Rendered {
+        film,
+        stats,
+        rows_done: done.into_iter().map(AtomicBool::into_inner).collect(),
+    }
 }

@@ -1,6 +1,6 @@
 //! The single-part EXR: writing a film with its AOVs and header, reading one back.
 
-use super::atomically;
+use super::atomic::{stage, Staged};
 use crate::aov::naming::{self, channel_names, AOV_ATTRIBUTE_PREFIX};
 use crate::film::Film;
 use crate::scene::Aov;
@@ -126,8 +126,20 @@ pub fn write_film(
     aovs: &[Aov],
     derived: Vec<DerivedAov>,
     options: ExrOptions,
-    mut header: ExrHeader,
+    header: ExrHeader,
 ) -> std::result::Result<(), String> {
+    stage_film(path, film, aovs, derived, options, header)?.commit()
+}
+
+/// [`write_film`] up to the rename: the file written and synced beside `path`.
+pub fn stage_film(
+    path: &Path,
+    film: Film,
+    aovs: &[Aov],
+    derived: Vec<DerivedAov>,
+    options: ExrOptions,
+    mut header: ExrHeader,
+) -> std::result::Result<Staged, String> {
     let (width, height) = (film.width as usize, film.height as usize);
     let counts = film
         .sample_counts
@@ -160,7 +172,7 @@ pub fn write_film(
     }
     attributes.append(&mut header.text);
     header.text = attributes;
-    write_image(path, width, height, channels, &header, options)
+    stage_image(path, width, height, channels, &header, options)
 }
 
 /// The header attributes describing a render's AOVs: each one's definition and compiled
@@ -240,6 +252,18 @@ pub fn write_image(
     header: &ExrHeader,
     options: ExrOptions,
 ) -> std::result::Result<(), String> {
+    stage_image(path, width, height, channels, header, options)?.commit()
+}
+
+/// [`write_image`] up to the rename.
+fn stage_image(
+    path: &Path,
+    width: usize,
+    height: usize,
+    channels: Vec<(String, Vec<f32>)>,
+    header: &ExrHeader,
+    options: ExrOptions,
+) -> std::result::Result<Staged, String> {
     let layers = crate::post::cryptomatte::layers_in(&header.text);
     let channels: Vec<AnyChannel<FlatSamples>> = channels
         .into_iter()
@@ -290,11 +314,11 @@ pub fn write_image(
         white: Vec2(0.3127, 0.3290),
     });
     let image = Image::new(image_attributes, layer);
-    atomically(path, |tmp| {
+    stage(path, |file| {
         image
             .write()
-            .to_file(tmp)
-            .and_then(|()| sort_header_attributes(tmp).map_err(exr::error::Error::from))
+            .to_unbuffered(&mut *file)
+            .and_then(|()| sort_header_attributes(file).map_err(exr::error::Error::from))
             .map_err(|e| format!("cannot write {}: {e}", path.display()))
     })
 }
@@ -303,15 +327,12 @@ pub fn write_image(
 /// keeps them in a `HashMap`, so two identical renders wrote the same attributes in a
 /// different order: a farm could not compare outputs by checksum. The set of attributes
 /// is the same either way, so the header keeps its length and nothing after it moves.
-fn sort_header_attributes(path: &Path) -> std::io::Result<()> {
+fn sort_header_attributes(file: &mut std::fs::File) -> std::io::Result<()> {
     use std::io::{Read, Seek, SeekFrom, Write};
-    let mut file = std::fs::OpenOptions::new()
-        .read(true)
-        .write(true)
-        .open(path)?;
+    file.seek(SeekFrom::Start(0))?;
     // Headers are small; one that does not end within this much is left as it is.
     let mut head = Vec::new();
-    (&mut file).take(1 << 22).read_to_end(&mut head)?;
+    (&mut *file).take(1 << 22).read_to_end(&mut head)?;
     let multipart = head.len() >= 8 && head[5] & 0x10 != 0;
     if head.len() < 8 || head[..4] != [0x76, 0x2f, 0x31, 0x01] || multipart {
         return Ok(());
@@ -385,7 +406,37 @@ impl ExrContents {
     }
 }
 
+/// Checks an EXR before reading its pixels: a regular file within the file size limit
+/// whose header declares pixels that fit the memory limit (a crafted header claiming
+/// billions of pixels was allocated, and aborted the process).
+pub fn check_exr_file(path: &Path) -> std::result::Result<(), String> {
+    let cannot = |e: String| format!("cannot read {}: {e}", path.display());
+    let limits = crate::limits::Limits::current();
+    let file = std::fs::File::open(path).map_err(|e| cannot(e.to_string()))?;
+    let meta = file.metadata().map_err(|e| cannot(e.to_string()))?;
+    if !meta.is_file() {
+        return Err(cannot(
+            "not a regular file (a directory, device or pipe)".into(),
+        ));
+    }
+    limits
+        .check_file_bytes(meta.len(), "reading this file")
+        .map_err(cannot)?;
+    let header = ::exr::meta::MetaData::read_from_unbuffered(file, false)
+        .map_err(|e| cannot(e.to_string()))?;
+    let mut bytes = 0u64;
+    for h in header.headers.iter() {
+        let pixels = h.layer_size.width() as u64 * h.layer_size.height() as u64;
+        // Each sample as an f32, and once more while it is converted.
+        bytes = bytes.saturating_add(pixels.saturating_mul(h.channels.list.len() as u64 * 8));
+    }
+    limits
+        .check_memory(bytes, "the pixels its header declares")
+        .map_err(cannot)
+}
+
 pub fn read_exr(path: &Path) -> std::result::Result<ExrContents, String> {
+    check_exr_file(path)?;
     let image = read()
         .no_deep_data()
         .largest_resolution_level()

@@ -1,6 +1,6 @@
 //! The PNG preview: sRGB, scaled by an exposure.
 
-use super::atomically;
+use super::atomic::{stage, Staged};
 use crate::film::Film;
 use std::path::Path;
 
@@ -21,8 +21,18 @@ pub fn write_png(
     k: usize,
     exposure: f32,
 ) -> std::result::Result<(), String> {
+    stage_png(path, film, k, exposure)?.commit()
+}
+
+/// [`write_png`] up to the rename: the file written and synced beside `path`.
+pub fn stage_png(
+    path: &Path,
+    film: &Film,
+    k: usize,
+    exposure: f32,
+) -> std::result::Result<Staged, String> {
     let rgb = [film.channel(k, 0), film.channel(k, 1), film.channel(k, 2)];
-    write_png_rgb(path, film.width, film.height, &rgb, exposure)
+    stage_png_rgb(path, film.width, film.height, &rgb, exposure)
 }
 
 /// A PNG of three linear planes in sRGB, scaled by 2^`exposure`.
@@ -33,20 +43,33 @@ pub fn write_png_rgb(
     rgb: &[Vec<f32>; 3],
     exposure: f32,
 ) -> std::result::Result<(), String> {
+    stage_png_rgb(path, width, height, rgb, exposure)?.commit()
+}
+
+fn stage_png_rgb(
+    path: &Path,
+    width: u32,
+    height: u32,
+    rgb: &[Vec<f32>; 3],
+    exposure: f32,
+) -> std::result::Result<Staged, String> {
     let scale = 2f32.powf(exposure);
     let mut bytes = Vec::with_capacity(rgb[0].len() * 3);
     for ((r, g), b) in rgb[0].iter().zip(&rgb[1]).zip(&rgb[2]) {
         bytes.extend_from_slice(&[srgb(r * scale), srgb(g * scale), srgb(b * scale)]);
     }
-    atomically(path, |tmp| {
-        image::save_buffer_with_format(
-            tmp,
+    stage(path, |file| {
+        let mut out = std::io::BufWriter::new(file);
+        image::write_buffer_with_format(
+            &mut out,
             &bytes,
             width,
             height,
             image::ColorType::Rgb8,
             image::ImageFormat::Png,
         )
+        .map_err(|e| e.to_string())
+        .and_then(|()| std::io::Write::flush(&mut out).map_err(|e| e.to_string()))
         .map_err(|e| format!("cannot write {}: {e}", path.display()))
     })
 }

@@ -238,9 +238,30 @@ pub struct CompJob {
     pub exposure: f32,
 }
 
+/// What to tell the user about a comp before running it: gains given with an expression
+/// add `(gain − 1) · <base>_<group>` terms to it, which the expression may already hold.
+pub fn warnings(job: &CompJob) -> Vec<String> {
+    match (&job.expression, job.gains.is_empty()) {
+        (Some(e), false) => vec![format!(
+            "--gain with an expression: the gains add (gain - 1) x {base}_<group> terms to \
+             \"{e}\" (they assume the expression holds {base} once; write the terms yourself \
+             to be explicit)",
+            base = job.base
+        )],
+        _ => Vec::new(),
+    }
+}
+
 /// Runs a comp: writes the output EXR (R, G, B and the input's A) and a PNG beside it,
 /// whose path it returns.
 pub fn run(job: &CompJob) -> Result<PathBuf, String> {
+    // Beside the output, its extension replaced (unlike a render's preview, see
+    // `output::naming::preview_path`).
+    let png = job.output.with_extension("png");
+    crate::output::target::check_exr_name(&job.output, Some(&png))?;
+    for out in [&job.output, &png] {
+        crate::output::target::check(out, &[&job.exr])?;
+    }
     let exr = read_exr(&job.exr)?;
     let mut terms = match &job.expression {
         Some(e) => parse(e).map_err(|m| format!("in the expression {e:?}: {m}"))?,
@@ -282,9 +303,6 @@ pub fn run(job: &CompJob) -> Result<PathBuf, String> {
         &attributes,
         Default::default(),
     )?;
-    // Beside the output, its extension replaced (unlike a render's preview, see
-    // `output::naming::preview_path`).
-    let png = job.output.with_extension("png");
     write_png_rgb(
         &png,
         exr.width as u32,

@@ -16,8 +16,8 @@
 //! one at a time: the memory is one part plus the merged window's sums.
 
 use crate::aov::naming::{
-    format_ranges, parse_ranges, CROP_ATTRIBUTE, FIRST_SAMPLE_ATTRIBUTE, SAMPLES_ATTRIBUTE,
-    SAMPLE_COUNT_CHANNEL, SCENE_ATTRIBUTE, SPP_ATTRIBUTE,
+    format_ranges, parse_ranges, CROP_ATTRIBUTE, FIRST_SAMPLE_ATTRIBUTE, INTERRUPTED_ATTRIBUTE,
+    SAMPLES_ATTRIBUTE, SAMPLE_COUNT_CHANNEL, SCENE_ATTRIBUTE, SPP_ATTRIBUTE,
 };
 use crate::film::PixelWindow;
 use crate::output::{read_exr, write_image, ExrHeader, ExrOptions};
@@ -98,6 +98,12 @@ impl Part {
                 _ => None,
             })
             .collect();
+        if text.contains_key(INTERRUPTED_ATTRIBUTE) {
+            return Err(format!(
+                "{} is an interrupted render (some rows are empty): finish it with --resume first",
+                path.display()
+            ));
+        }
         let ranges = match text.get(SAMPLES_ATTRIBUTE) {
             Some(s) => parse_ranges(s).ok_or_else(|| {
                 format!(
@@ -208,6 +214,9 @@ pub fn merge(inputs: &[PathBuf], output: &Path) -> Result<Merged, String> {
     if inputs.is_empty() {
         return Err("give the EXRs to merge".into());
     }
+    crate::output::target::check_exr_name(output, None)?;
+    let input_refs: Vec<&Path> = inputs.iter().map(|p| p.as_path()).collect();
+    crate::output::target::check(output, &input_refs)?;
     let parts: Vec<Part> = inputs
         .iter()
         .map(|p| Part::read(p))

@@ -31,11 +31,18 @@ pub fn report(path: &Path, tolerance: f32) -> Result<(String, bool), String> {
     for (name, def) in &aovs {
         let _ = writeln!(out, "  {name:<24} {def}");
     }
+    let mut ok = true;
+    for (name, values) in &exr.channels {
+        let bad = values.iter().filter(|v| !v.is_finite()).count();
+        if bad > 0 {
+            ok = false;
+            let _ = writeln!(out, "FAIL channel {name}: {bad} NaN or infinite values");
+        }
+    }
     let checks = check_partitions(&exr);
     if checks.is_empty() {
         out.push_str("no known partitions (standard set, light groups, bounces) to check\n");
     }
-    let mut ok = true;
     for c in &checks {
         let pass = c.max_relative_error <= tolerance;
         ok &= pass;
@@ -91,7 +98,13 @@ pub fn check_partitions(exr: &ExrContents) -> Vec<PartitionCheck> {
             let mut worst = 0.0f32;
             for c in 0..3 {
                 for (s, v) in sum[c].iter().zip(w[c]) {
-                    worst = worst.max((s - v).abs() / v.abs().max(1e-3));
+                    let error = (s - v).abs() / v.abs().max(1e-3);
+                    // `max` ignores NaN: a NaN pixel must fail the check, not pass it.
+                    worst = if error.is_nan() {
+                        f32::INFINITY
+                    } else {
+                        worst.max(error)
+                    };
                 }
             }
             Some(PartitionCheck {

@@ -16,6 +16,25 @@ pub fn camera(desc: &SceneDesc) -> Result<Camera, SceneError> {
     };
     let c = desc.camera.as_ref().unwrap_or(&default_camera);
     let v3 = Vec3A::from;
+    let vectors = [c.position, c.look_at, c.up];
+    let mut numbers = vectors
+        .iter()
+        .flatten()
+        .chain([&c.aperture_radius])
+        .chain(c.focus_distance.as_ref());
+    if numbers.any(|v| !v.is_finite()) || c.aperture_radius < 0.0 {
+        return Err(c.origin.error(
+            "[camera]: position, look_at, up, aperture_radius and focus_distance must be \
+             finite (and the aperture not negative)",
+        ));
+    }
+    if let FilterDesc::Gaussian { stddev } = desc.film.filter {
+        if !(stddev > 0.0 && stddev.is_finite()) {
+            return Err(Origin::file(&desc.source).error(format!(
+                "[film]: filter_stddev must be a positive number, got {stddev}"
+            )));
+        }
+    }
     let position = v3(c.position);
     let look_at = v3(c.look_at);
     let forward = look_at - position;

@@ -18,10 +18,11 @@ pub fn shape_prims(
     origin: &Origin,
 ) -> Result<ShapePrims, SceneError> {
     let v3 = Vec3A::from;
-    Ok(match shape {
+    check_transform(xf, origin)?;
+    let prims = match shape {
         ShapeDesc::Rectangle => shapes::rectangle(xf),
         ShapeDesc::Cube => shapes::cube(xf),
-        ShapeDesc::Disk { segments } => shapes::disk(xf, (*segments).max(3) as usize),
+        ShapeDesc::Disk { segments } => shapes::disk(xf, disk_segments(*segments, origin)?),
         ShapeDesc::Quad { corners } => shapes::quad(corners.map(v3)),
         ShapeDesc::Sphere { center, radius } => {
             let c = xf.transform_point3a(v3(*center));
@@ -32,7 +33,72 @@ pub fn shape_prims(
         }
         ShapeDesc::Mesh { parts } => mesh_parts(parts, xf, origin)?,
         ShapeDesc::SharedMesh { parts } => mesh_parts(parts, xf, origin)?,
-    })
+    };
+    check_finite(&prims, origin)?;
+    Ok(prims)
+}
+
+/// A disk's triangle count, within `Limits::segments` (at least 3).
+pub fn disk_segments(segments: u32, origin: &Origin) -> Result<usize, SceneError> {
+    crate::limits::Limits::current()
+        .check_segments(segments as u64, "this disk")
+        .map_err(|e| origin.error(e))?;
+    Ok(segments.max(3) as usize)
+}
+
+/// A placement whose numbers are not all finite (NaN, inf, or a value like `1e300` that
+/// overflows an f32) is an error here, before it reaches the primitives.
+pub fn check_transform(xf: &Affine3A, origin: &Origin) -> Result<(), SceneError> {
+    if xf.is_finite() {
+        Ok(())
+    } else {
+        Err(origin.error(
+            "the placement (translate, rotate, scale or matrix) has a number that is NaN, \
+             infinite or too large for 32-bit floats",
+        ))
+    }
+}
+
+/// Primitives with a coordinate that is NaN or infinite (also after the transform, or
+/// through overflow of an edge) are an error naming the shape's origin: the BVH builder
+/// and every ray test assume finite bounds.
+pub fn check_finite(shape: &ShapePrims, origin: &Origin) -> Result<(), SceneError> {
+    for (i, p) in shape.prims.iter().enumerate() {
+        let finite = match *p {
+            Prim::Triangle { p0, e1, e2, .. } => {
+                let (lo, hi) = p.bounds();
+                p0.is_finite()
+                    && e1.is_finite()
+                    && e2.is_finite()
+                    && lo.is_finite()
+                    && hi.is_finite()
+            }
+            Prim::Sphere { center, radius } => {
+                let (lo, hi) = p.bounds();
+                center.is_finite() && radius.is_finite() && lo.is_finite() && hi.is_finite()
+            }
+            Prim::Instance { .. } => {
+                let (lo, hi) = p.bounds();
+                lo.is_finite() && hi.is_finite()
+            }
+        };
+        if !finite {
+            return Err(origin.error(format!(
+                "primitive {i} has a coordinate that is NaN, infinite or too large for \
+                 32-bit floats once placed: expected finite positions"
+            )));
+        }
+    }
+    if let Some((i, _)) = shape
+        .normals
+        .iter()
+        .find(|(_, n)| n.iter().any(|v| !v.is_finite()))
+    {
+        return Err(origin.error(format!(
+            "triangle {i} has a shading normal that is NaN or infinite"
+        )));
+    }
+    Ok(())
 }
 
 /// The triangles of mesh parts placed by `xf`.
@@ -54,6 +120,12 @@ fn mesh_parts(
 
 fn mesh(m: &MeshData, xf: &Affine3A, origin: &Origin) -> Result<ShapePrims, SceneError> {
     let pos: Vec<Vec3A> = m.positions.iter().map(|p| Vec3A::from(*p)).collect();
+    if let Some(k) = pos.iter().position(|p| !p.is_finite()) {
+        return Err(origin.error(format!(
+            "mesh position {k} is {:?}: expected finite numbers",
+            m.positions[k]
+        )));
+    }
     if let Some(bad) = m
         .indices
         .iter()
@@ -149,16 +221,15 @@ impl GeometryBuilder {
         visibility: u8,
         origin: &Origin,
     ) -> Result<(), SceneError> {
+        check_transform(xf, origin)?;
         let key = mesh_key(parts);
         let mesh = match self.mesh_ids.get(&key) {
             Some(&id) => id,
             None => {
                 let mut local = GeometryBuilder::default();
-                local.add(
-                    0,
-                    mesh_parts(parts, &Affine3A::IDENTITY, origin)?,
-                    Visibility::ALL,
-                );
+                let shape = mesh_parts(parts, &Affine3A::IDENTITY, origin)?;
+                check_finite(&shape, origin)?;
+                local.add(0, shape, Visibility::ALL);
                 let bounds = local.prims.iter().fold(
                     (Vec3A::splat(f32::INFINITY), Vec3A::splat(f32::NEG_INFINITY)),
                     |(lo, hi), p| {
@@ -181,6 +252,12 @@ impl GeometryBuilder {
             origin.error("the object's transform is not invertible (a zero scale?)")
         })?;
         let (lo, hi) = instance.world_bounds(*lo, *hi);
+        if !(lo.is_finite() && hi.is_finite()) {
+            return Err(origin.error(
+                "the placed mesh has a coordinate too large for 32-bit floats: expected \
+                 finite positions",
+            ));
+        }
         let index = self.instances.len() as u32;
         self.instances.push(instance);
         self.prims.push(Prim::Instance { lo, hi, index });

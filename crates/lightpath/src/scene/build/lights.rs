@@ -16,7 +16,9 @@ pub fn light_shape(l: &LightDesc) -> Result<(LightShape, Option<ShapePrims>, Vec
     let v3 = Vec3A::from;
     let xf = &l.transform;
     let color = v3(l.color) * l.strength;
-    let area = |prims: ShapePrims| {
+    check_light_numbers(l)?;
+    let area = |prims: ShapePrims| -> Result<_, SceneError> {
+        super::geometry::check_finite(&prims, &l.origin)?;
         let areas: Vec<f32> = prims.prims.iter().map(Prim::area).collect();
         let normals = prims.prims.iter().map(Prim::face_normal).collect();
         let shape = LightShape::Triangles {
@@ -29,12 +31,15 @@ pub fn light_shape(l: &LightDesc) -> Result<(LightShape, Option<ShapePrims>, Vec
             two_sided: l.two_sided,
             mesh: false,
         };
-        (shape, Some(prims), color)
+        Ok((shape, Some(prims), color))
     };
     Ok(match &l.kind {
-        LightKind::Rectangle => area(shapes::rectangle(xf)),
-        LightKind::Quad { corners } => area(shapes::quad(corners.map(v3))),
-        LightKind::Disk { segments } => area(shapes::disk(xf, (*segments).max(3) as usize)),
+        LightKind::Rectangle => area(shapes::rectangle(xf))?,
+        LightKind::Quad { corners } => area(shapes::quad(corners.map(v3)))?,
+        LightKind::Disk { segments } => area(shapes::disk(
+            xf,
+            super::geometry::disk_segments(*segments, &l.origin)?,
+        ))?,
         LightKind::Sphere { center, radius } => {
             let center = xf.transform_point3a(v3(*center));
             let radius = *radius;
@@ -44,6 +49,7 @@ pub fn light_shape(l: &LightDesc) -> Result<(LightShape, Option<ShapePrims>, Vec
                 )));
             }
             let prims = shapes::sphere(center, radius);
+            super::geometry::check_finite(&prims, &l.origin)?;
             (LightShape::Sphere { center, radius }, Some(prims), color)
         }
         LightKind::Point { position } => (
@@ -103,6 +109,40 @@ pub fn light_shape(l: &LightDesc) -> Result<(LightShape, Option<ShapePrims>, Vec
             (LightShape::Dome { map }, None, color)
         }
     })
+}
+
+/// Every number of a light finite (colour × strength too, and not negative), and its
+/// surface's primitives once placed: NaN or infinite geometry panicked the BVH builder.
+fn check_light_numbers(l: &LightDesc) -> Result<(), SceneError> {
+    let color = Vec3A::from(l.color) * l.strength;
+    super::materials::check_color(color.into(), "the light's colour × strength")
+        .map_err(|e| l.origin.error(e))?;
+    super::geometry::check_transform(&l.transform, &l.origin)?;
+    let finite = |v: &[f32]| v.iter().all(|x| x.is_finite());
+    let ok = match &l.kind {
+        LightKind::Rectangle
+        | LightKind::Disk { .. }
+        | LightKind::Dome { .. }
+        | LightKind::Mesh { .. } => true,
+        LightKind::Quad { corners } => corners.iter().all(|c| finite(c)),
+        LightKind::Sphere { center, .. } => finite(center),
+        LightKind::Point { position } => finite(position),
+        LightKind::Spot {
+            position,
+            direction,
+            cone_angle,
+            cone_softness,
+        } => finite(position) && finite(direction) && finite(&[*cone_angle, *cone_softness]),
+        LightKind::Distant { direction } => finite(direction),
+    };
+    if ok {
+        Ok(())
+    } else {
+        Err(l.origin.error(
+            "the light has a position, direction, corner or angle that is NaN, infinite or \
+             too large for 32-bit floats",
+        ))
+    }
 }
 
 /// The rotation of a dome's `rotate`/`matrix` (None: none). Scale is divided out and the
@@ -226,6 +266,7 @@ fn parallelogram(prims: &[Prim]) -> Option<[Vec3A; 3]> {
 
 fn load_env(path: &Path, origin: &Origin) -> Result<EnvMap, SceneError> {
     use exr::prelude::*;
+    crate::output::check_exr_file(path).map_err(|e| origin.error(e))?;
     let image = read_first_rgba_layer_from_file(
         path,
         |res, _| (res.width(), vec![Vec3A::ZERO; res.width() * res.height()]),

@@ -34,6 +34,18 @@ pub fn build(desc: &SceneDesc) -> Result<(Vec<Material>, HashMap<String, u32>), 
     Ok((materials, ids))
 }
 
+/// A colour must be finite and not negative: a NaN albedo reached the `albedo` AOV and
+/// every pixel that saw it.
+pub fn check_color(c: [f32; 3], what: &str) -> Result<(), String> {
+    if c.iter().all(|v| v.is_finite() && *v >= 0.0) {
+        Ok(())
+    } else {
+        Err(format!(
+            "{what} is {c:?}: expected finite, non-negative numbers"
+        ))
+    }
+}
+
 /// Resolves a material reference, pointing at it if the scene has no such material.
 pub fn find(
     desc: &SceneDesc,
@@ -54,6 +66,26 @@ pub fn find(
 
 fn material(name: &str, m: &MaterialDesc) -> Result<Material, SceneError> {
     let v3 = Vec3A::from;
+    let mut colors = match &m.kind {
+        MaterialKind::Diffuse { albedo } | MaterialKind::Plastic { albedo, .. } => {
+            vec![("albedo", *albedo)]
+        }
+        MaterialKind::Translucent { reflect, transmit } => {
+            vec![("reflect", *reflect), ("transmit", *transmit)]
+        }
+        MaterialKind::Conductor { f0 } => vec![("f0", *f0)],
+        MaterialKind::Dielectric { tint, .. } => tint.map(|t| ("tint", t)).into_iter().collect(),
+    };
+    colors.extend(m.user_color.map(|c| ("user_color", c)));
+    for (what, c) in colors {
+        check_color(c, &format!("material '{name}': {what}")).map_err(|e| m.origin.error(e))?;
+    }
+    if !(m.roughness.is_finite() && m.roughness >= 0.0) {
+        return Err(m.origin.error(format!(
+            "material '{name}': roughness must be a number from 0 up, got {}",
+            m.roughness
+        )));
+    }
     let alpha = roughness_to_alpha(m.roughness);
     let ior = |ior: Option<f32>| match ior.unwrap_or(1.5) {
         eta if eta > 0.0 && eta.is_finite() => Ok(eta),

@@ -115,6 +115,16 @@ fn add_objects(
             .name
             .clone()
             .unwrap_or_else(|| format!("object{}", objects.len()));
+        // An infinite emission is allowed: it is what the `noinfinitecheck` prefix is
+        // for (the NaN/Inf filter drops it from every other AOV). NaN is not.
+        if let Some(e) = o
+            .emission
+            .filter(|e| e.iter().any(|v| v.is_nan() || *v < 0.0))
+        {
+            return Err(o.origin.error(format!(
+                "emission is {e:?}: expected non-negative numbers (not NaN)"
+            )));
+        }
         let id = objects.len() as u32;
         let visibility = (o.visible_camera as u8 * Visibility::CAMERA)
             | (o.visible_indirect as u8 * Visibility::INDIRECT)

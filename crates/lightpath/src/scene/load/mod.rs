@@ -72,12 +72,26 @@ impl Source {
                 dir: path.parent().map(Path::to_path_buf).unwrap_or_default(),
             });
         }
-        let text = std::fs::read_to_string(path).map_err(|e| {
-            Origin::file(path.display().to_string())
-                .error(format!("cannot read the scene file: {e}"))
+        let name = path.display().to_string();
+        let bytes = crate::limits::read_input(path)
+            .map_err(|e| Origin::file(&name).error(format!("cannot read the scene file: {e}")))?;
+        let text = String::from_utf8(bytes).map_err(|e| {
+            let valid = &e.as_bytes()[..e.utf8_error().valid_up_to()];
+            let line = valid.iter().filter(|&&b| b == b'\n').count() + 1;
+            let line_start = valid.iter().rposition(|&b| b == b'\n').map_or(0, |i| i + 1);
+            let col = String::from_utf8_lossy(&valid[line_start..])
+                .chars()
+                .count()
+                + 1;
+            Origin {
+                file: name.clone(),
+                line,
+                col,
+            }
+            .error("invalid UTF-8: a scene file is UTF-8 text")
         })?;
         Ok(Source {
-            name: path.display().to_string(),
+            name,
             text,
             dir: path.parent().map(Path::to_path_buf).unwrap_or_default(),
         })

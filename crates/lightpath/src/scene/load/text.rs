@@ -16,11 +16,8 @@ pub fn read(path: &Path, at: &Origin, what: &str) -> Result<Vec<u8>, SceneError>
             path.display()
         ))
     };
-    let meta = std::fs::metadata(path).map_err(|e| cannot(e.to_string()))?;
-    if !meta.is_file() {
-        return Err(cannot("not a regular file".into()));
-    }
-    std::fs::read(path).map_err(|e| cannot(e.to_string()))
+    // Regular files only, within `Limits::file_bytes` (`/dev/zero` named as an OBJ).
+    crate::limits::read_input(path).map_err(cannot)
 }
 
 /// Refuses a file that is not text, naming what it looks like instead.

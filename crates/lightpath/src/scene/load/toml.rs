@@ -300,11 +300,49 @@ fn placement(
     Affine3A::from_scale_rotation_translation(s, q, Vec3::from(translate.unwrap_or([0.0; 3])))
 }
 
-#[derive(Debug, Deserialize, Clone, Copy)]
-#[serde(untagged)]
+#[derive(Debug, Clone, Copy)]
 enum ScaleDesc {
     Uniform(f32),
     PerAxis([f32; 3]),
+}
+
+/// `scale = 2` or `scale = [1, 2, 1]`, with an error that says so (serde's untagged enums
+/// only say "data did not match any variant of untagged enum ScaleDesc").
+impl<'de> Deserialize<'de> for ScaleDesc {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<ScaleDesc, D::Error> {
+        struct Scale;
+        impl<'de> serde::de::Visitor<'de> for Scale {
+            type Value = ScaleDesc;
+            fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+                f.write_str("one number or three, as in scale = 2 or scale = [1, 2, 1]")
+            }
+            fn visit_f64<E: serde::de::Error>(self, v: f64) -> Result<ScaleDesc, E> {
+                Ok(ScaleDesc::Uniform(v as f32))
+            }
+            fn visit_i64<E: serde::de::Error>(self, v: i64) -> Result<ScaleDesc, E> {
+                Ok(ScaleDesc::Uniform(v as f32))
+            }
+            fn visit_u64<E: serde::de::Error>(self, v: u64) -> Result<ScaleDesc, E> {
+                Ok(ScaleDesc::Uniform(v as f32))
+            }
+            fn visit_seq<A: serde::de::SeqAccess<'de>>(
+                self,
+                mut seq: A,
+            ) -> Result<ScaleDesc, A::Error> {
+                let mut v = [0.0f32; 3];
+                for (i, slot) in v.iter_mut().enumerate() {
+                    *slot = seq
+                        .next_element()?
+                        .ok_or_else(|| serde::de::Error::invalid_length(i, &self))?;
+                }
+                if seq.next_element::<serde::de::IgnoredAny>()?.is_some() {
+                    return Err(serde::de::Error::invalid_length(4, &self));
+                }
+                Ok(ScaleDesc::PerAxis(v))
+            }
+        }
+        d.deserialize_any(Scale)
+    }
 }
 
 #[derive(Debug, Deserialize)]
@@ -397,8 +435,14 @@ fn yes() -> bool {
 
 /// Parses a TOML scene into the neutral description; OBJ files it names are loaded too.
 pub fn load(src: &Source) -> Result<d::SceneDesc, SceneError> {
-    let file: SceneFile =
-        toml::from_str(&src.text).map_err(|e| src.error(e.span(), e.message().to_string()))?;
+    let file: SceneFile = toml::from_str(&src.text).map_err(|e| {
+        let message = match e.message().trim() {
+            // The parser has nothing to say about a key with no value at the end of a file.
+            "" => "expected a value here (a number, string, array or table)",
+            m => m,
+        };
+        src.error(e.span(), message)
+    })?;
     let at = |span: Range<usize>| src.origin(Some(span));
     // Included files first: their materials are renamed where this file's take a name.
     let mut scene = d::SceneDesc::default();
@@ -698,7 +742,12 @@ fn light(src: &Source, l: &Spanned<LightDesc>) -> Result<d::LightDesc, SceneErro
     Ok(d::LightDesc {
         kind: shape,
         name: l.name.clone(),
-        groups: l.groups.clone(),
+        // A named light without `groups` is its own light group (docs/scene-format.md).
+        groups: if l.groups.is_empty() {
+            l.name.iter().cloned().collect()
+        } else {
+            l.groups.clone()
+        },
         color,
         strength: l.strength,
         camera_visible: l.camera_visible,
