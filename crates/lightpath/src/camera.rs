@@ -103,6 +103,12 @@ impl Camera {
         }
     }
 
+    /// The angle one pixel subtends at the image centre (radians): the spread of the
+    /// ray cones that choose texture mip levels.
+    pub fn pixel_spread(&self) -> f32 {
+        2.0 * self.tan_half.y / self.height as f32
+    }
+
     /// The primary ray through film position `film` (in pixels, origin top-left).
     pub fn ray(&self, film: Vec2, lens: Vec2) -> Ray {
         let ndc = Vec2::new(

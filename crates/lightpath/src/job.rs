@@ -26,6 +26,9 @@ pub struct RenderJob {
     pub exr: output::ExrOptions,
     /// Exposure of the PNG preview, in stops.
     pub preview_exposure: f32,
+    /// Which of the scene file's named cameras to render through (glTF); `None`: its
+    /// first.
+    pub camera: Option<String>,
 }
 
 /// Render settings the command line overrides; `None` keeps the scene's value.
@@ -109,6 +112,7 @@ impl RenderJob {
             first_sample: 0,
             exr: output::ExrOptions::default(),
             preview_exposure: 0.0,
+            camera: None,
         }
     }
 
@@ -116,8 +120,11 @@ impl RenderJob {
     pub fn prepare(self) -> Result<PreparedRender, Error> {
         let source = crate::load_source(&self.scene)?;
         let mut desc = source.parse()?;
+        if let Some(name) = &self.camera {
+            desc.use_camera(name)?;
+        }
         self.overrides.apply(&mut desc);
-        let mut warnings = Vec::new();
+        let mut warnings = std::mem::take(&mut desc.warnings);
         let specs = self.plan(&desc, &mut warnings)?;
         let scene = Scene::build(&desc, &specs)?;
         for w in scene.automaton.warnings() {

@@ -90,7 +90,7 @@ struct CompArgs {
 
 #[derive(clap::Args)]
 struct RenderArgs {
-    /// A scene file (TOML) or the name of a built-in scene.
+    /// A scene file (TOML, glTF .gltf/.glb) or the name of a built-in scene.
     #[arg(default_value = "cornell")]
     scene: String,
     /// Output EXR; the PNG preview goes beside it. Default: <scene>.exr in this directory.
@@ -137,6 +137,9 @@ struct RenderArgs {
     /// Exposure of the PNG preview, in stops.
     #[arg(long, default_value_t = 0.0)]
     exposure: f32,
+    /// Render through this camera of a glTF scene (default: its first).
+    #[arg(long)]
+    camera: Option<String>,
     /// No progress bar.
     #[arg(short, long)]
     quiet: bool,
@@ -316,6 +319,7 @@ fn render(args: RenderArgs) -> ExitCode {
             compression: args.compression,
         },
         preview_exposure: args.exposure,
+        camera: args.camera,
     };
     let prepared = match job.prepare() {
         Ok(p) => p,

@@ -1,9 +1,11 @@
 //! Primitives (triangles and spheres) and the acceleration structure behind a small
 //! `intersect` / `occluded` seam; `obvhs` builds the BVH, `bvh` lays it out 4 wide.
 
+pub mod attrs;
 mod bvh;
 pub mod shapes;
 
+pub use attrs::{SurfaceAttrs, SurfaceUv};
 pub use bvh::{Accel, Visibility};
 
 use glam::Vec3A;

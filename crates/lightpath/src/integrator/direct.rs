@@ -112,7 +112,7 @@ impl Tracer<'_> {
         let bounce = dim::bounce(path.depth);
         let u_light = sampler.get_1d(bounce + dim::LIGHT_CHOICE);
         let u_point = sampler.get_2d(bounce + dim::LIGHT_POINT);
-        let bsdf = &v.material.bsdf;
+        let bsdf = v.bsdf;
         let lobes = bsdf.lobes();
         if scene.lights.is_empty() || lobes.iter().all(|l| l.delta) {
             return;

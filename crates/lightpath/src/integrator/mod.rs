@@ -10,6 +10,7 @@
 mod direct;
 mod path;
 mod routing;
+mod shading;
 
 use crate::film::{Film, SampleAccumulator};
 use crate::geometry::{Hit, Ray};
@@ -106,7 +107,7 @@ pub fn render_with_progress(
     // writes one contiguous run), and each band is moved into the film's planes: the
     // peak memory is the film plus one band, with no allocation churn.
     let row_len = stride * w as usize;
-    let band_rows = (BAND_BYTES / (4 * row_len)).clamp(8, h.max(1) as usize);
+    let band_rows = (BAND_BYTES / (4 * row_len)).max(8).min(h.max(1) as usize);
     let mut band = vec![0.0f32; band_rows * row_len];
     let mut film = Film::new(w, h, scene.aovs.len(), options.spp);
     for first_row in (0..h as usize).step_by(band_rows) {

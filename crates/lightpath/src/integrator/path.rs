@@ -5,7 +5,7 @@
 use super::routing::{Origin, Via};
 use super::{Sink, Tracer};
 use crate::geometry::{Hit, Ray, Visibility};
-use crate::material::Shading;
+use crate::material::{Bsdf, Shading};
 use crate::sampler::{dim, Sampler};
 use crate::scene::{DataLobe, Material, Object};
 use glam::Vec3A;
@@ -29,6 +29,10 @@ pub(super) struct PathState {
     pub specular: u32,
     /// Scattering vertices so far.
     pub depth: u32,
+    /// The ray cone that picks texture mip levels: its width at the last vertex and its
+    /// spread angle (shading.rs).
+    pub cone_width: f32,
+    pub cone_spread: f32,
 }
 
 /// A scattering vertex: the hit and what is there.
@@ -36,6 +40,8 @@ pub(super) struct Vertex<'a> {
     pub hit: &'a Hit,
     pub obj: &'a Object,
     pub material: &'a Material,
+    /// The material's BSDF here (textures evaluated).
+    pub bsdf: &'a Bsdf,
     pub sh: Shading,
 }
 
@@ -55,6 +61,8 @@ impl Tracer<'_> {
             diffuse: 0,
             specular: 0,
             depth: 0,
+            cone_width: 0.0,
+            cone_spread: scene.camera.pixel_spread(),
         };
         let mut alpha = 0.0;
         out.holdout = false;
@@ -83,6 +91,7 @@ impl Tracer<'_> {
                 break;
             };
             let obj = &scene.objects[hit.object as usize];
+            path.cone_width += path.cone_spread * hit.t;
             self.emission_at_hit(out, &path, &ray, &hit, obj);
 
             // Mitsuba's convention: `max_depth` counts segments; scattering here adds one.
@@ -92,7 +101,15 @@ impl Tracer<'_> {
             let Some(material) = obj.material.map(|m| &scene.materials[m as usize]) else {
                 break;
             };
-            let sh = Shading::new(&material.bsdf, hit.ns, hit.ng, -ray.dir);
+            let textured;
+            let (bsdf, ns) = match &material.textured {
+                None => (&material.bsdf, hit.ns),
+                Some(t) => {
+                    textured = self.textured(t, &hit, ray.dir, path.cone_width);
+                    (&textured.0, textured.1)
+                }
+            };
+            let sh = Shading::new(bsdf, ns, hit.ng, -ray.dir);
             if sh.wo.z == 0.0 {
                 break;
             }
@@ -100,6 +117,7 @@ impl Tracer<'_> {
                 hit: &hit,
                 obj,
                 material,
+                bsdf,
                 sh,
             };
             self.data_lobes(out, &path, &v);
@@ -149,6 +167,7 @@ impl Tracer<'_> {
             }
         } else if let Some(glow) = obj.glow_class {
             let s = scene.automaton.step(path.state, glow);
+            let emission = obj.emission * self.glow_texture(obj, hit, ray.dir, path.cone_width);
             let via = Via::Hit {
                 light_sampled: false,
                 light_after_scatter: false,
@@ -158,7 +177,7 @@ impl Tracer<'_> {
                 scatters: path.depth,
                 part: self.default_part,
             };
-            self.contribute(out, s, path.throughput, obj.emission, 1.0, origin);
+            self.contribute(out, s, path.throughput, emission, 1.0, origin);
         }
     }
 
@@ -179,7 +198,7 @@ impl Tracer<'_> {
                 continue;
             }
             let value = match kind {
-                DataLobe::Albedo => v.material.bsdf.albedo(),
+                DataLobe::Albedo => v.bsdf.albedo(),
                 DataLobe::Position => v.hit.p,
                 DataLobe::Normal => v.sh.frame.n,
                 DataLobe::UserColor => v.material.user_color.unwrap_or(Vec3A::ZERO),
@@ -206,8 +225,8 @@ impl Tracer<'_> {
         let bounce = dim::bounce(path.depth);
         let u_lobe = sampler.get_1d(bounce + dim::LOBE_CHOICE);
         let u_dir = sampler.get_2d(bounce + dim::DIRECTION);
-        let bs = v.material.bsdf.sample(&v.sh, u_lobe, u_dir)?;
-        match v.material.bsdf.lobes()[bs.lobe].scatter.class {
+        let bs = v.bsdf.sample(&v.sh, u_lobe, u_dir)?;
+        match v.bsdf.lobes()[bs.lobe].scatter.class {
             ScatterClass::Diffuse => {
                 path.diffuse += 1;
                 if path.diffuse > settings.max_diffuse_depth {
@@ -233,6 +252,9 @@ impl Tracer<'_> {
         path.prev_pdf = bs.pdf;
         path.prev_delta = bs.delta;
         path.prev_object = v.hit.object;
+        if !bs.delta {
+            path.cone_spread = path.cone_spread.max(super::shading::SCATTERED_SPREAD);
+        }
         path.depth += 1;
         Some(self.spawn(v.hit, bs.wi, f32::INFINITY))
     }

@@ -11,8 +11,9 @@ pub use crate::events::DataLobe;
 pub use load::Source;
 
 use crate::camera::{Camera, PixelFilter};
-use crate::geometry::Accel;
+use crate::geometry::{Accel, SurfaceAttrs};
 use crate::light::Light;
+use crate::material::textured::Textured;
 use crate::material::Bsdf;
 use crate::sampling::Distribution1D;
 use glam::Vec3A;
@@ -21,8 +22,11 @@ use lpe::{Automaton, ClassId, Flags};
 /// A material: its BSDF and the colour of its `U4` user lobe.
 #[derive(Clone, Debug)]
 pub struct Material {
+    /// The BSDF (a textured material's lobes and events, with untextured values).
     pub bsdf: Bsdf,
     pub user_color: Option<Vec3A>,
+    /// Textures, if any: the BSDF is then rebuilt at each hit.
+    pub textured: Option<Box<Textured>>,
 }
 
 /// One scene object after building: what it is made of and its precomputed LPE classes.
@@ -73,6 +77,8 @@ pub struct Aov {
 
 pub struct Scene {
     pub accel: Accel,
+    /// UVs and tangents of textured meshes (read only by textured materials).
+    pub surface: SurfaceAttrs,
     pub objects: Vec<Object>,
     pub materials: Vec<Material>,
     pub lights: Vec<Light>,

@@ -1,18 +1,55 @@
 //! Materials: each description becomes a BSDF (a list of lobes) and a user colour.
 
+use crate::material::pbr::{PbrParams, MIN_TEXTURED_ROUGHNESS};
+use crate::material::texture::{ColorSpace, MipMap, Texture};
+use crate::material::textured::{MaterialTextures, ShadeModel, Textured};
 use crate::material::{roughness_to_alpha, Bsdf};
-use crate::scene::desc::{MaterialDesc, MaterialKind, NameRef, SceneDesc};
+use crate::scene::desc::{
+    ImageSource, MaterialDesc, MaterialKind, NameRef, SceneDesc, TextureDesc,
+};
 use crate::scene::{Material, SceneError};
 use glam::Vec3A;
 use std::collections::HashMap;
+use std::sync::Arc;
+
+/// Decoded images, each read once however many materials use it.
+#[derive(Default)]
+struct Images {
+    decoded: HashMap<(String, bool), Arc<MipMap>>,
+}
+
+impl Images {
+    fn texture(&mut self, t: &TextureDesc, space: ColorSpace) -> Result<Texture, SceneError> {
+        let key = (t.image.to_string(), space == ColorSpace::Srgb);
+        let image = match self.decoded.get(&key) {
+            Some(image) => image.clone(),
+            None => {
+                let decoded = match &t.image {
+                    ImageSource::File(path) => MipMap::read(path, space),
+                    ImageSource::Bytes { bytes, .. } => MipMap::decode(bytes, space),
+                }
+                .map_err(|e| t.origin.error(format!("texture {}: {e}", t.image)))?;
+                let image = Arc::new(decoded);
+                self.decoded.insert(key, image.clone());
+                image
+            }
+        };
+        Ok(Texture {
+            image,
+            wrap: t.wrap,
+            transform: t.transform,
+        })
+    }
+}
 
 /// The scene's materials in name order, and each name's index.
 pub fn build(desc: &SceneDesc) -> Result<(Vec<Material>, HashMap<String, u32>), SceneError> {
     let mut materials = Vec::new();
     let mut ids = HashMap::new();
+    let mut images = Images::default();
     for (name, m) in &desc.materials {
         ids.insert(name.clone(), materials.len() as u32);
-        materials.push(material(name, m)?);
+        materials.push(material(name, m, &mut images)?);
     }
     Ok((materials, ids))
 }
@@ -35,9 +72,20 @@ pub fn find(
     }
 }
 
-fn material(name: &str, m: &MaterialDesc) -> Result<Material, SceneError> {
+fn material(name: &str, m: &MaterialDesc, images: &mut Images) -> Result<Material, SceneError> {
     let v3 = Vec3A::from;
-    let alpha = roughness_to_alpha(m.roughness);
+    let t = &m.textures;
+    let textured = t.base_color.is_some()
+        || t.metallic_roughness.is_some()
+        || t.normal.is_some()
+        || t.emissive.is_some();
+    // A roughness texture keeps the lobes rough everywhere (their events are fixed).
+    let roughness = if t.metallic_roughness.is_some() {
+        m.roughness.max(MIN_TEXTURED_ROUGHNESS)
+    } else {
+        m.roughness
+    };
+    let alpha = roughness_to_alpha(roughness);
     let ior = |ior: Option<f32>| match ior.unwrap_or(1.5) {
         eta if eta > 0.0 && eta.is_finite() => Ok(eta),
         eta => Err(m.origin.error(format!(
@@ -54,9 +102,92 @@ fn material(name: &str, m: &MaterialDesc) -> Result<Material, SceneError> {
             Bsdf::dielectric(ior(*eta)?, alpha, tint.map(v3).unwrap_or(Vec3A::ONE))
         }
         MaterialKind::Plastic { albedo, ior: eta } => Bsdf::plastic(v3(*albedo), ior(*eta)?, alpha),
+        MaterialKind::Pbr { .. } => Bsdf::pbr(&pbr_params(m, alpha, ior(pbr_ior(m))?)),
+    };
+    let textured = if textured {
+        let model = match &m.kind {
+            MaterialKind::Diffuse { albedo } => ShadeModel::Diffuse {
+                albedo: v3(*albedo),
+            },
+            MaterialKind::Translucent { reflect, transmit } => ShadeModel::Translucent {
+                reflect: v3(*reflect),
+                transmit: v3(*transmit),
+            },
+            MaterialKind::Conductor { f0 } => ShadeModel::Conductor {
+                f0: v3(*f0),
+                roughness,
+            },
+            MaterialKind::Dielectric { ior: eta, tint } => ShadeModel::Dielectric {
+                eta: ior(*eta)?,
+                roughness,
+                tint: tint.map(v3).unwrap_or(Vec3A::ONE),
+            },
+            MaterialKind::Plastic { albedo, ior: eta } => ShadeModel::Plastic {
+                albedo: v3(*albedo),
+                eta: ior(*eta)?,
+                roughness,
+            },
+            MaterialKind::Pbr {
+                clearcoat_roughness,
+                ..
+            } => ShadeModel::Pbr {
+                params: pbr_params(m, alpha, ior(pbr_ior(m))?),
+                roughness,
+                clearcoat_roughness: *clearcoat_roughness,
+            },
+        };
+        let tex = |images: &mut Images, d: &Option<TextureDesc>, space| {
+            d.as_ref().map(|d| images.texture(d, space)).transpose()
+        };
+        Some(Box::new(Textured {
+            model,
+            textures: MaterialTextures {
+                base_color: tex(images, &t.base_color, ColorSpace::Srgb)?,
+                metallic_roughness: tex(images, &t.metallic_roughness, ColorSpace::Linear)?,
+                normal: match &t.normal {
+                    Some((d, scale)) => Some((images.texture(d, ColorSpace::Linear)?, *scale)),
+                    None => None,
+                },
+                emissive: tex(images, &t.emissive, ColorSpace::Srgb)?,
+            },
+        }))
+    } else {
+        None
     };
     Ok(Material {
         bsdf,
         user_color: m.user_color.map(v3),
+        textured,
     })
+}
+
+fn pbr_ior(m: &MaterialDesc) -> Option<f32> {
+    match &m.kind {
+        MaterialKind::Pbr { ior, .. } => *ior,
+        _ => None,
+    }
+}
+
+/// The untextured parameters of a metallic-roughness material.
+fn pbr_params(m: &MaterialDesc, alpha: f32, ior: f32) -> PbrParams {
+    let MaterialKind::Pbr {
+        base_color,
+        metallic,
+        transmission,
+        clearcoat,
+        clearcoat_roughness,
+        ..
+    } = &m.kind
+    else {
+        unreachable!("pbr_params of a metallic-roughness material")
+    };
+    PbrParams {
+        base: Vec3A::from(*base_color),
+        metallic: *metallic,
+        alpha,
+        ior,
+        glass: *transmission >= 0.5,
+        clearcoat: *clearcoat,
+        clearcoat_alpha: roughness_to_alpha(*clearcoat_roughness),
+    }
 }

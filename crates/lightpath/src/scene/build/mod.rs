@@ -26,7 +26,7 @@ impl Scene {
         let mut objects = add_objects(desc, &material_ids, &mut geometry)?;
         let (mut lights, light_prims) =
             add_lights(desc, &material_ids, &mut geometry, &mut objects)?;
-        let accel = geometry.build();
+        let (accel, surface) = geometry.build();
         lights::locate_prims(&mut lights, &light_prims, &accel);
         lights::link(&desc.lights, &mut objects);
         let (scene_radius, epsilon) = geometry::scene_size(&accel);
@@ -44,6 +44,7 @@ impl Scene {
         });
         Ok(Scene {
             accel,
+            surface,
             objects,
             materials,
             light_classes: classes.lights,

@@ -2,6 +2,7 @@
 //! text with its name, and maps byte offsets to the lines and columns of `Origin`s.
 
 pub mod builtin;
+pub mod gltf;
 pub mod obj;
 pub mod toml;
 
@@ -20,6 +21,14 @@ pub struct Source {
 
 impl Source {
     pub fn from_file(path: &Path) -> Result<Source, SceneError> {
+        // A glTF file is read (text or binary) by its own loader when parsed.
+        if gltf::is_gltf(path) {
+            return Ok(Source {
+                name: path.display().to_string(),
+                text: String::new(),
+                dir: path.parent().map(Path::to_path_buf).unwrap_or_default(),
+            });
+        }
         let text = std::fs::read_to_string(path).map_err(|e| {
             Origin::file(path.display().to_string())
                 .error(format!("cannot read the scene file: {e}"))
@@ -54,8 +63,12 @@ impl Source {
         self.origin(span).error(message)
     }
 
-    /// The scene description (TOML).
+    /// The scene description: glTF (`.gltf`, `.glb`) or TOML.
     pub fn parse(&self) -> Result<SceneDesc, SceneError> {
+        let path = Path::new(&self.name);
+        if gltf::is_gltf(path) {
+            return gltf::load(path);
+        }
         toml::load(self)
     }
 }

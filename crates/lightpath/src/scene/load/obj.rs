@@ -25,6 +25,7 @@ pub fn load(path: &Path) -> Result<Vec<MeshData>, String> {
                 normals: (m.normals.len() == n).then(|| triples(&m.normals)),
                 uvs: (m.texcoords.len() / 2 == n / 3 && !m.texcoords.is_empty())
                     .then(|| m.texcoords.chunks_exact(2).map(|t| [t[0], t[1]]).collect()),
+                tangents: None,
             }
         })
         .collect();
