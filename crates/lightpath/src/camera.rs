@@ -109,6 +109,56 @@ impl Camera {
         2.0 * self.tan_half.y / self.height as f32
     }
 
+    /// OpenEXR's `worldToCamera` as a column-vector matrix: camera space has x right, y
+    /// up and z along the view direction (left-handed; what the camera sees has z > 0).
+    pub fn world_to_camera(&self) -> glam::Mat4 {
+        let (r, u, f, p) = (self.right, self.up, self.forward, self.position);
+        glam::Mat4::from_cols_array(&[
+            r.x,
+            u.x,
+            f.x,
+            0.0,
+            r.y,
+            u.y,
+            f.y,
+            0.0,
+            r.z,
+            u.z,
+            f.z,
+            0.0,
+            -r.dot(p),
+            -u.dot(p),
+            -f.dot(p),
+            1.0,
+        ])
+    }
+
+    /// OpenEXR's `worldToNDC` as a column-vector matrix: after the divide by w, x and y
+    /// run from (0, 0) at the frame's top-left corner to (1, 1) at its bottom-right, as
+    /// the pixel at film position (fx, fy) has (fx / width, fy / height); z is 1 − 1/depth.
+    pub fn world_to_ndc(&self) -> glam::Mat4 {
+        let (tx, ty) = (self.tan_half.x, self.tan_half.y);
+        let projection = glam::Mat4::from_cols_array(&[
+            0.5 / tx,
+            0.0,
+            0.0,
+            0.0,
+            0.0,
+            -0.5 / ty,
+            0.0,
+            0.0,
+            0.5,
+            0.5,
+            1.0,
+            1.0,
+            0.0,
+            0.0,
+            -1.0,
+            0.0,
+        ]);
+        projection * self.world_to_camera()
+    }
+
     /// The primary ray through film position `film` (in pixels, origin top-left).
     pub fn ray(&self, film: Vec2, lens: Vec2) -> Ray {
         let ndc = Vec2::new(
@@ -162,5 +212,35 @@ mod tests {
         // The smaller axis (y here) spans the field of view.
         let top = c.ray(Vec2::new(50.0, 0.0), Vec2::ZERO).dir;
         assert!((top.y.atan2(-top.z).to_degrees() - 20.0).abs() < 1e-3);
+    }
+
+    #[test]
+    fn world_to_ndc_maps_a_point_on_a_pixels_ray_to_that_pixel() {
+        let c = Camera::new(
+            Vec3A::new(1.0, 2.0, 3.9),
+            Vec3A::new(0.2, -0.3, 0.0),
+            Vec3A::Y,
+            50.0,
+            FovAxis::X,
+            64,
+            48,
+            0.0,
+            1.0,
+        );
+        let (w2c, w2n) = (c.world_to_camera(), c.world_to_ndc());
+        for (fx, fy) in [(0.0, 0.0), (64.0, 48.0), (10.5, 40.25), (32.0, 24.0)] {
+            let ray = c.ray(Vec2::new(fx, fy), Vec2::ZERO);
+            for t in [0.5, 3.0] {
+                let p = glam::Vec3::from(ray.origin + ray.dir * t);
+                let cam = w2c.transform_point3(p);
+                assert!((cam.z - t * ray.dir.dot(c.forward)).abs() < 1e-4, "{cam}");
+                let ndc = w2n.project_point3(p);
+                assert!((ndc.x - fx / 64.0).abs() < 1e-5, "{ndc} for ({fx}, {fy})");
+                assert!((ndc.y - fy / 48.0).abs() < 1e-5, "{ndc} for ({fx}, {fy})");
+            }
+        }
+        // The camera sits at the origin of camera space.
+        let origin = w2c.transform_point3(glam::Vec3::from(c.position));
+        assert!(origin.length() < 1e-5);
     }
 }

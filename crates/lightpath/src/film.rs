@@ -14,6 +14,92 @@ pub struct Film {
     pub spp: u32,
     /// `3 × aovs + 1` planes of `width × height` sums: R, G, B of each AOV, then alpha.
     pub planes: Vec<Vec<f32>>,
+    /// The pixels of the frame this film holds (a `--crop` window; else the whole frame).
+    pub window: PixelWindow,
+    /// The whole frame's size (the EXR's display window).
+    pub frame: [u32; 2],
+    /// Cryptomatte layers, if the render asked for them: ranked (id, coverage) values,
+    /// `table.stride()` planes of `width × height` (final values, not sums).
+    pub mattes: Option<Mattes>,
+}
+
+/// Cryptomatte output of a render: the table it was made with and its planes.
+#[derive(Clone, Debug)]
+pub struct Mattes {
+    pub table: crate::post::cryptomatte::MatteTable,
+    pub planes: Vec<Vec<f32>>,
+}
+
+/// A rectangle of a frame's pixels, end exclusive: what a render covers (`--crop
+/// X0,Y0,X1,Y1`). Pixel (x, y) of a window is pixel (x0 + x, y0 + y) of the frame, with
+/// the frame's sample numbers, so tiles of a frame join into exactly the whole render.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub struct PixelWindow {
+    pub x0: u32,
+    pub y0: u32,
+    pub x1: u32,
+    pub y1: u32,
+}
+
+impl PixelWindow {
+    /// The whole of a `width × height` frame.
+    pub fn full(width: u32, height: u32) -> PixelWindow {
+        PixelWindow {
+            x0: 0,
+            y0: 0,
+            x1: width,
+            y1: height,
+        }
+    }
+
+    pub fn width(&self) -> u32 {
+        self.x1.saturating_sub(self.x0)
+    }
+
+    pub fn height(&self) -> u32 {
+        self.y1.saturating_sub(self.y0)
+    }
+
+    /// Parses `X0,Y0,X1,Y1`.
+    pub fn parse(s: &str) -> Result<PixelWindow, String> {
+        let v: Vec<&str> = s.split(',').map(str::trim).collect();
+        let bad = || format!("expected X0,Y0,X1,Y1 (pixels, end exclusive), got '{s}'");
+        if v.len() != 4 {
+            return Err(bad());
+        }
+        let mut n = [0u32; 4];
+        for (slot, text) in n.iter_mut().zip(&v) {
+            *slot = text.parse().map_err(|_| bad())?;
+        }
+        let w = PixelWindow {
+            x0: n[0],
+            y0: n[1],
+            x1: n[2],
+            y1: n[3],
+        };
+        if w.x1 <= w.x0 || w.y1 <= w.y0 {
+            return Err(format!(
+                "crop {s} is empty: X1 must exceed X0 and Y1 must exceed Y0"
+            ));
+        }
+        Ok(w)
+    }
+
+    /// Checks that the window lies in a `width × height` frame and is not empty.
+    pub fn check(&self, width: u32, height: u32) -> Result<(), String> {
+        if self.width() == 0 || self.height() == 0 || self.x1 > width || self.y1 > height {
+            return Err(format!(
+                "crop {self} is not a non-empty window of the {width}x{height} frame"
+            ));
+        }
+        Ok(())
+    }
+}
+
+impl std::fmt::Display for PixelWindow {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "{},{},{},{}", self.x0, self.y0, self.x1, self.y1)
+    }
 }
 
 impl Film {
@@ -38,6 +124,18 @@ impl Film {
             aovs,
             spp,
             planes,
+            window: PixelWindow::full(width, height),
+            frame: [width, height],
+            mattes: None,
+        }
+    }
+
+    /// An empty film for `window` of a `frame`-sized frame.
+    pub fn for_window(window: PixelWindow, frame: [u32; 2], aovs: usize, spp: u32) -> Film {
+        Film {
+            window,
+            frame,
+            ..Film::new(window.width(), window.height(), aovs, spp)
         }
     }
 
@@ -95,12 +193,35 @@ impl Film {
     /// Merges a film of the same frame rendered with other samples (a farm's sample
     /// ranges): the result is the film of all samples.
     pub fn merge(&mut self, other: &Film) -> Result<(), String> {
-        if (self.width, self.height, self.aovs) != (other.width, other.height, other.aovs) {
-            return Err("films differ in size or AOV count".into());
+        if (self.width, self.height, self.aovs) != (other.width, other.height, other.aovs)
+            || (self.window, self.frame) != (other.window, other.frame)
+        {
+            return Err("films differ in size, window or AOV count".into());
         }
         for (a, b) in self.planes.iter_mut().zip(&other.planes) {
             for (x, y) in a.iter_mut().zip(b) {
                 *x += y;
+            }
+        }
+        if let (Some(m), Some(o)) = (&mut self.mattes, &other.mattes) {
+            let total = (self.spp + other.spp).max(1) as f64;
+            let (wa, wb) = (self.spp as f64 / total, other.spp as f64 / total);
+            let per_layer = m.table.stride() / m.table.layers.len().max(1);
+            let mut a = vec![0.0; per_layer];
+            let mut b = vec![0.0; per_layer];
+            let mut out = vec![0.0; per_layer];
+            for layer in 0..m.table.layers.len() {
+                let planes = layer * per_layer..(layer + 1) * per_layer;
+                for i in 0..(self.width as usize * self.height as usize) {
+                    for (k, p) in planes.clone().enumerate() {
+                        a[k] = m.planes[p][i];
+                        b[k] = o.planes[p][i];
+                    }
+                    crate::post::cryptomatte::merge_ranked(&[(&a, wa), (&b, wb)], &mut out);
+                    for (k, p) in planes.clone().enumerate() {
+                        m.planes[p][i] = out[k];
+                    }
+                }
             }
         }
         self.spp += other.spp;

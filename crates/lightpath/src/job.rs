@@ -5,7 +5,10 @@
 //! render as `lightpath render`.
 
 use crate::aov::{self, AovSpec};
+use crate::film::PixelWindow;
+use crate::integrator::FrameRequest;
 use crate::output;
+use crate::post::cryptomatte::MatteTable;
 use crate::progress::Progress;
 use crate::scene::desc::SceneDesc;
 use crate::scene::{Scene, Source};
@@ -29,6 +32,14 @@ pub struct RenderJob {
     /// Which of the scene file's named cameras to render through (glTF); `None`: its
     /// first.
     pub camera: Option<String>,
+    /// Render only this window of the frame (`--crop`); the EXR keeps the whole frame
+    /// as its display window.
+    pub crop: Option<PixelWindow>,
+    /// Write Cryptomatte layers with this many ranks (`--cryptomatte`).
+    pub cryptomatte: Option<u32>,
+    /// Record the date in the header (`capDate`); off, identical renders are identical
+    /// files.
+    pub timestamp: bool,
 }
 
 /// Render settings the command line overrides; `None` keeps the scene's value.
@@ -63,6 +74,10 @@ pub struct PreparedRender {
     pub scene: Scene,
     pub paths: output::naming::OutputPaths,
     pub warnings: Vec<String>,
+    /// The window and Cryptomatte layers to render.
+    pub frame: FrameRequest,
+    /// The header attributes describing the scene and settings.
+    pub metadata: Vec<(String, String)>,
 }
 
 /// What a finished render wrote and measured.
@@ -113,6 +128,9 @@ impl RenderJob {
             exr: output::ExrOptions::default(),
             preview_exposure: 0.0,
             camera: None,
+            crop: None,
+            cryptomatte: None,
+            timestamp: false,
         }
     }
 
@@ -124,7 +142,8 @@ impl RenderJob {
             desc.use_camera(name)?;
         }
         self.overrides.apply(&mut desc);
-        let mut warnings = std::mem::take(&mut desc.warnings);
+        let mut warnings = desc.warnings.clone();
+        warnings.extend(crate::scene::load::defaults::no_light_warning(&desc));
         let specs = self.plan(&desc, &mut warnings)?;
         let scene = Scene::build(&desc, &specs)?;
         for w in scene.automaton.warnings() {
@@ -135,12 +154,22 @@ impl RenderJob {
             ));
         }
         let paths = output::naming::output_paths(&self.scene, self.output.as_deref());
+        let (width, height) = (scene.camera.width, scene.camera.height);
+        let window = self.crop.unwrap_or(PixelWindow::full(width, height));
+        window.check(width, height).map_err(Error::Plan)?;
+        let hash = output::naming::scene_hash(&source.text, &desc).map_err(Error::Plan)?;
+        let metadata = output::naming::settings_attributes(&scene, hash, window);
+        let mattes = self
+            .cryptomatte
+            .map(|ranks| matte_table(&desc, &scene, ranks));
         Ok(PreparedRender {
             job: self,
             source,
             scene,
             paths,
             warnings,
+            frame: FrameRequest { window, mattes },
+            metadata,
         })
     }
 
@@ -171,6 +200,38 @@ impl RenderJob {
     }
 }
 
+/// The Cryptomatte table of a scene: each object's name, its material's name and its
+/// asset (the `asset` key, else its own name). Holdouts get none: they are not seen.
+fn matte_table(desc: &SceneDesc, scene: &Scene, ranks: u32) -> MatteTable {
+    use crate::post::cryptomatte::{ASSET, MATERIAL, OBJECT};
+    let material_names: Vec<&String> = desc.materials.keys().collect();
+    let names: Vec<Vec<Option<String>>> = scene
+        .objects
+        .iter()
+        .enumerate()
+        .map(|(i, o)| {
+            if o.holdout {
+                return vec![None, None, None];
+            }
+            let material = o
+                .material
+                .and_then(|m| material_names.get(m as usize))
+                .map(|n| n.to_string());
+            let asset = desc
+                .objects
+                .get(i)
+                .and_then(|d| d.asset.clone())
+                .unwrap_or_else(|| o.name.clone());
+            vec![Some(o.name.clone()), material, Some(asset)]
+        })
+        .collect();
+    MatteTable::new(
+        vec![OBJECT.into(), MATERIAL.into(), ASSET.into()],
+        ranks,
+        &names,
+    )
+}
+
 impl SettingOverrides {
     fn apply(&self, desc: &mut SceneDesc) {
         if let Some(spp) = self.spp {
@@ -196,24 +257,40 @@ impl PreparedRender {
             source,
             scene,
             paths,
+            frame,
+            metadata,
             ..
         } = self;
         let options = RenderOptions {
             spp: scene.settings.spp,
             first_sample: job.first_sample,
         };
-        let (film, stats) = crate::render_with_progress(&scene, &options, progress);
-        let extra = output::naming::RenderMetadata {
+        let (film, stats) = crate::integrator::render_frame(&scene, &options, &frame, progress);
+        let mut text = output::naming::RenderMetadata {
             scene: source.name.clone(),
             spp: scene.settings.spp,
             first_sample: job.first_sample,
             seed: scene.settings.seed,
         }
         .attributes();
+        text.extend(metadata);
+        let capture_date = job.timestamp.then(|| {
+            let now = std::time::SystemTime::now()
+                .duration_since(std::time::UNIX_EPOCH)
+                .map_or(0, |d| d.as_secs());
+            output::naming::capture_date(now)
+        });
+        let header = output::ExrHeader {
+            world_to_camera: Some(scene.camera.world_to_camera().to_cols_array()),
+            world_to_ndc: Some(scene.camera.world_to_ndc().to_cols_array()),
+            capture_date,
+            text,
+            ..output::ExrHeader::default()
+        };
         let derived = output::derived_aovs(&film, &scene.aovs);
         output::write_png(&paths.png, &film, 0, job.preview_exposure).map_err(Error::Output)?;
         let (width, height, spp) = (film.width, film.height, film.spp);
-        output::write_exr(&paths.exr, film, &scene.aovs, derived, job.exr, &extra)
+        output::write_film(&paths.exr, film, &scene.aovs, derived, job.exr, header)
             .map_err(Error::Output)?;
         Ok(RenderSummary {
             width,

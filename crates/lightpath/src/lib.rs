@@ -8,6 +8,7 @@ pub mod aov;
 pub mod camera;
 pub mod error;
 pub mod events;
+pub mod farm;
 pub mod film;
 pub mod geometry;
 pub mod integrator;

@@ -16,7 +16,7 @@ use crate::geometry::Prim;
 use crate::sampling::{
     uniform_cone, uniform_cone_pdf, uniform_sphere, uniform_triangle, Distribution1D, Frame,
 };
-use glam::{Vec2, Vec3A};
+use glam::{Mat3A, Vec2, Vec3A};
 use std::f32::consts::PI;
 
 /// An equirectangular environment map with a 2D sampling distribution.
@@ -27,6 +27,8 @@ pub struct EnvMap {
     pub texels: Vec<Vec3A>,
     rows: Distribution1D,
     columns: Vec<Distribution1D>,
+    /// The map's frame to world (a rotation, possibly with a mirror), or None: identity.
+    to_world: Option<Mat3A>,
 }
 
 impl EnvMap {
@@ -50,6 +52,25 @@ impl EnvMap {
             texels,
             rows: Distribution1D::new(&row_weights),
             columns,
+            to_world: None,
+        }
+    }
+
+    /// The same map turned by `to_world` (orthonormal: rotations and mirrors keep solid
+    /// angles, so the sampling density is unchanged).
+    pub fn rotated(self, to_world: Mat3A) -> EnvMap {
+        EnvMap {
+            to_world: Some(to_world),
+            ..self
+        }
+    }
+
+    /// A world direction in the map's frame.
+    #[inline]
+    fn local(&self, d: Vec3A) -> Vec3A {
+        match &self.to_world {
+            None => d,
+            Some(m) => m.transpose() * d,
         }
     }
 
@@ -71,7 +92,7 @@ impl EnvMap {
     }
 
     fn lookup(&self, d: Vec3A) -> Vec3A {
-        let uv = Self::uv(d);
+        let uv = Self::uv(self.local(d));
         let x = ((uv.x * self.width as f32) as usize).min(self.width - 1);
         let y = ((uv.y * self.height as f32) as usize).min(self.height - 1);
         self.texels[y * self.width + x]
@@ -84,7 +105,10 @@ impl EnvMap {
             (x as f32 + rx) / self.width as f32,
             (y as f32 + 0.5) / self.height as f32,
         );
-        let d = Self::dir(uv);
+        let d = match &self.to_world {
+            None => Self::dir(uv),
+            Some(m) => *m * Self::dir(uv),
+        };
         let sin_t = (PI * uv.y).sin().max(1e-6);
         // Texel probability over its solid angle: (2π/W)(π/H) sin θ.
         let pdf = py * px * (self.width * self.height) as f32 / (2.0 * PI * PI * sin_t);
@@ -92,7 +116,7 @@ impl EnvMap {
     }
 
     fn pdf(&self, d: Vec3A) -> f32 {
-        let uv = Self::uv(d);
+        let uv = Self::uv(self.local(d));
         let x = ((uv.x * self.width as f32) as usize).min(self.width - 1);
         let y = ((uv.y * self.height as f32) as usize).min(self.height - 1);
         let sin_t = (PI * (y as f32 + 0.5) / self.height as f32).sin().max(1e-6);
@@ -133,6 +157,10 @@ pub enum LightShape {
         by_area: Distribution1D,
         area: f32,
         two_sided: bool,
+        /// A mesh light (an object's own triangles): they may shadow one another, so
+        /// shadow rays do not pass through its object, and the lights-only test finds
+        /// them in `Scene::mesh_lights` instead of trying each.
+        mesh: bool,
     },
     Sphere {
         center: Vec3A,
@@ -241,6 +269,7 @@ impl Light {
                 by_area,
                 area,
                 two_sided,
+                ..
             } => {
                 let shape = TriangleLight {
                     ids,
@@ -391,6 +420,16 @@ impl Light {
         })
     }
 
+    /// The object a shadow ray towards this light may pass through: an area light's own
+    /// surface (planar, it cannot hide itself); none for a mesh light, whose triangles
+    /// can shadow one another.
+    pub fn shadow_exempt(&self) -> u32 {
+        match self.shape {
+            LightShape::Triangles { mesh: true, .. } => u32::MAX,
+            _ => self.object.unwrap_or(u32::MAX),
+        }
+    }
+
     /// Radiance leaving a point of the light's surface with normal `ng` towards `-dir`
     /// (the ray direction that hit it).
     pub fn emitted_at(&self, ng: Vec3A, dir: Vec3A) -> Vec3A {
@@ -481,5 +520,35 @@ mod tests {
             .sum::<f32>()
             / n as f32;
         assert!((integral - 1.0).abs() < 0.02, "{integral}");
+    }
+
+    /// A turned map is the same map seen through the rotation: lookups, densities and
+    /// samples all move with it.
+    #[test]
+    fn a_rotated_env_map_moves_its_radiance_and_its_sampling() {
+        let (w, h) = (16, 8);
+        let texels: Vec<Vec3A> = (0..w * h)
+            .map(|i| Vec3A::splat(1.0 + (i * 5 % 11) as f32))
+            .collect();
+        let plain = EnvMap::new(w, h, texels);
+        let r = Mat3A::from_rotation_y(0.7) * Mat3A::from_rotation_x(-0.4);
+        let turned = plain.clone().rotated(r);
+        let mut rng = Rng::for_sample(3, 2, 1);
+        for _ in 0..200 {
+            let d = uniform_sphere(rng.next_2d());
+            assert_eq!(turned.lookup(r * d), plain.lookup(d));
+            let (p, q) = (turned.pdf(r * d), plain.pdf(d));
+            assert!((p - q).abs() <= 1e-4 * q, "{p} vs {q}");
+            let u = rng.next_2d();
+            let ((dt, pt), (dp, pp)) = (turned.sample(u), plain.sample(u));
+            assert!((dt - r * dp).length() < 1e-5, "{dt} vs {}", r * dp);
+            assert_eq!(pt, pp);
+        }
+        // Something actually moved: the brightest direction is not where it was.
+        let moved = (0..200)
+            .map(|_| uniform_sphere(rng.next_2d()))
+            .filter(|d| turned.lookup(*d) != plain.lookup(*d))
+            .count();
+        assert!(moved > 100, "{moved}");
     }
 }

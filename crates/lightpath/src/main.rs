@@ -58,13 +58,78 @@ enum Command {
     },
     /// Composite AOVs by addition: relight without re-rendering.
     Comp(CompArgs),
-    /// Join EXRs of one frame rendered as different sample ranges (--first-sample) into
-    /// the EXR of all their samples.
+    /// Join the parts of one frame (sample ranges from --first-sample, tiles from --crop)
+    /// into one EXR; refuses parts of different scenes or settings, overlapping sample
+    /// ranges and overlapping tiles, naming what differs.
     Merge {
         inputs: Vec<PathBuf>,
         #[arg(short, long)]
         output: PathBuf,
     },
+    /// Compare two EXRs of one frame channel by channel: print the largest relative
+    /// difference; exit 1 if it exceeds --tolerance (0: every value's bits must match).
+    Diff {
+        a: PathBuf,
+        b: PathBuf,
+        #[arg(long, default_value_t = 0.0)]
+        tolerance: f64,
+    },
+    /// Split a frame over a farm: print a script that renders its parts and merges them.
+    #[command(subcommand)]
+    Farm(FarmCommand),
+}
+
+#[derive(Subcommand)]
+enum FarmCommand {
+    /// Print a script that submits the parts as an sbatch job array and a merge job that
+    /// depends on it: `lightpath farm slurm SCENE --tasks N -o OUT.exr [render options] >
+    /// submit.sh && bash submit.sh`.
+    Slurm {
+        #[command(flatten)]
+        farm: FarmArgs,
+        /// An extra sbatch option for both jobs, e.g. --sbatch=--partition=render
+        /// (repeatable).
+        #[arg(long = "sbatch")]
+        sbatch: Vec<String>,
+        /// Render options every part shares (--spp, --aov, --cryptomatte, …), last.
+        #[arg(trailing_var_arg = true, allow_hyphen_values = true)]
+        render: Vec<String>,
+    },
+    /// Print a script that renders the parts with GNU parallel on this machine and
+    /// merges them.
+    Parallel {
+        #[command(flatten)]
+        farm: FarmArgs,
+        /// Parts rendered at once.
+        #[arg(long, default_value_t = 2)]
+        jobs: u32,
+        /// Render options every part shares (--spp, --aov, --cryptomatte, …), last.
+        #[arg(trailing_var_arg = true, allow_hyphen_values = true)]
+        render: Vec<String>,
+    },
+}
+
+#[derive(clap::Args)]
+struct FarmArgs {
+    /// A scene file (TOML) or the name of a built-in scene.
+    scene: String,
+    /// Number of parts.
+    #[arg(long)]
+    tasks: u32,
+    /// Split by sample ranges or by tiles (strips of rows).
+    #[arg(long, default_value = "samples", value_parser = lightpath::farm::SplitBy::parse)]
+    by: lightpath::farm::SplitBy,
+    /// The merged EXR; the parts and logs go in <OUT stem>.parts/ beside it.
+    #[arg(short, long)]
+    output: PathBuf,
+}
+
+/// `lightpath render`'s options alone, to check a farm's shared render options.
+#[derive(Parser)]
+#[command(name = "lightpath render")]
+struct RenderOnly {
+    #[command(flatten)]
+    args: RenderArgs,
 }
 
 #[derive(clap::Args)]
@@ -143,6 +208,21 @@ struct RenderArgs {
     /// No progress bar.
     #[arg(short, long)]
     quiet: bool,
+    /// Render only the window X0,Y0,X1,Y1 of the frame (pixels, end exclusive), with
+    /// the frame's own sample numbers: the EXR's data window, inside the whole frame's
+    /// display window. `lightpath merge` stitches tiles into the frame.
+    #[arg(long, value_parser = lightpath::film::PixelWindow::parse)]
+    crop: Option<lightpath::film::PixelWindow>,
+    /// Write Cryptomatte layers CryptoObject, CryptoMaterial and CryptoAsset.
+    #[arg(long)]
+    cryptomatte: bool,
+    /// Ranks (id/coverage pairs) per Cryptomatte layer.
+    #[arg(long, default_value_t = 6, value_parser = clap::value_parser!(u32).range(1..=16))]
+    cryptomatte_ranks: u32,
+    /// Record the render's date in the header (capDate); without it identical renders are
+    /// identical files.
+    #[arg(long)]
+    timestamp: bool,
 }
 
 fn parse_resolution(s: &str) -> Result<[u32; 2], String> {
@@ -183,9 +263,52 @@ fn main() -> ExitCode {
         Command::Lpe(cmd) => lpe_command(cmd),
         Command::Aovs { exr, tolerance } => aovs_command(&exr, tolerance),
         Command::Comp(args) => comp_command(args),
+        Command::Farm(cmd) => match farm_command(cmd) {
+            Ok(script) => {
+                let _ = write!(std::io::stdout(), "{script}");
+                ExitCode::SUCCESS
+            }
+            Err(e) => {
+                tell!("error: {e}");
+                ExitCode::FAILURE
+            }
+        },
+        Command::Diff { a, b, tolerance } => match lightpath::post::diff::diff(&a, &b) {
+            Ok(d) => {
+                say!(
+                    "{} channels, {} values differ; largest relative difference {:e}{}",
+                    d.channels,
+                    d.differing_values,
+                    d.worst,
+                    if d.differing_values > 0 {
+                        format!(" (in {})", d.worst_channel)
+                    } else {
+                        String::new()
+                    }
+                );
+                if d.worst <= tolerance {
+                    ExitCode::SUCCESS
+                } else {
+                    tell!("error: the difference exceeds {tolerance:e}");
+                    ExitCode::FAILURE
+                }
+            }
+            Err(e) => {
+                tell!("error: {e}");
+                ExitCode::FAILURE
+            }
+        },
         Command::Merge { inputs, output } => match lightpath::post::merge(&inputs, &output) {
-            Ok(spp) => {
-                say!("wrote {} ({} samples per pixel)", output.display(), spp);
+            Ok(m) => {
+                say!(
+                    "wrote {} ({} samples per pixel: {}; window {} from {} tile{})",
+                    output.display(),
+                    m.spp,
+                    lightpath::aov::naming::format_ranges(&m.ranges),
+                    m.window,
+                    m.tiles,
+                    if m.tiles == 1 { "" } else { "s" }
+                );
                 ExitCode::SUCCESS
             }
             Err(e) => {
@@ -194,6 +317,75 @@ fn main() -> ExitCode {
             }
         },
     }
+}
+
+/// The farm script: the parts of the frame and the commands rendering and merging them.
+fn farm_command(cmd: FarmCommand) -> Result<String, String> {
+    use lightpath::farm::{absolute, split, FarmJob};
+    type Printer = Box<dyn Fn(&FarmJob) -> String>;
+    let (farm, render, script): (FarmArgs, Vec<String>, Printer) = match cmd {
+        FarmCommand::Slurm {
+            farm,
+            sbatch,
+            render,
+        } => (
+            farm,
+            render,
+            Box::new(move |job: &FarmJob| {
+                FarmJob {
+                    sbatch_args: sbatch.clone(),
+                    ..job.clone()
+                }
+                .slurm_script()
+            }),
+        ),
+        FarmCommand::Parallel { farm, jobs, render } => (
+            farm,
+            render,
+            Box::new(move |job: &FarmJob| job.parallel_script(jobs.max(1))),
+        ),
+    };
+    // The shared options must be valid render options, and leave the split to the farm.
+    let parsed = RenderOnly::try_parse_from(
+        ["lightpath render".to_string(), farm.scene.clone()]
+            .into_iter()
+            .chain(render.iter().cloned()),
+    )
+    .map_err(|e| format!("in the render options: {e}"))?
+    .args;
+    if parsed.output.is_some() || parsed.crop.is_some() || parsed.first_sample != 0 {
+        return Err(
+            "the farm chooses each part's --output, --crop and --first-sample: leave them out of the render options"
+                .into(),
+        );
+    }
+    let desc = lightpath::load_scene(&farm.scene).map_err(|e| e.to_string())?;
+    let spp = parsed.spp.unwrap_or(desc.render.spp).max(1);
+    let resolution = parsed.resolution.unwrap_or(desc.film.resolution);
+    let parts = split(farm.by, farm.tasks, spp, resolution)?;
+    // Each sample range sets its own --spp; tiles all render the frame's.
+    let mut render = lightpath::farm::without_option(&render, "--spp");
+    if farm.by == lightpath::farm::SplitBy::Tiles {
+        render.extend(["--spp".to_string(), spp.to_string()]);
+    }
+    // A built-in scene's name stays a name; a file becomes an absolute path.
+    let scene = if std::path::Path::new(&farm.scene).exists() {
+        absolute(std::path::Path::new(&farm.scene))
+            .display()
+            .to_string()
+    } else {
+        farm.scene.clone()
+    };
+    let job = FarmJob {
+        lightpath: std::env::current_exe()
+            .map_err(|e| format!("cannot locate the lightpath binary: {e}"))?,
+        scene,
+        render_args: render,
+        parts,
+        output: absolute(&farm.output),
+        sbatch_args: Vec::new(),
+    };
+    Ok(script(&job))
 }
 
 fn aovs_command(path: &std::path::Path, tolerance: f32) -> ExitCode {
@@ -320,6 +512,9 @@ fn render(args: RenderArgs) -> ExitCode {
         },
         preview_exposure: args.exposure,
         camera: args.camera,
+        crop: args.crop,
+        cryptomatte: args.cryptomatte.then_some(args.cryptomatte_ranks),
+        timestamp: args.timestamp,
     };
     let prepared = match job.prepare() {
         Ok(p) => p,

@@ -55,6 +55,10 @@ pub trait Sampler {
     fn get_2d(&mut self, dim: u32) -> Vec2;
 }
 
+/// The name of the sampler renders use, as the header's `lightpath/setting/sampler`
+/// records it.
+pub const NAME: &str = "independent";
+
 /// Independent uniform numbers: one PCG32 stream per camera sample, read in dimension
 /// order (which is why the layout forbids asking out of order). This is the sequence
 /// renders have always used, so its pixels are those of earlier versions.

@@ -379,7 +379,7 @@ fn a_file_without_camera_or_lights_gets_defaults_and_warnings() {
     assert!((Vec3::from(c.look_at) - Vec3::new(10.0, 0.0, 0.0)).length() < 1e-5);
     assert!(matches!(desc.lights[0].kind, LightKind::Dome { .. }));
     let w = desc.warnings.join("\n");
-    assert!(w.contains("no camera") && w.contains("no lights"), "{w}");
+    assert!(w.contains("no camera") && w.contains("no light"), "{w}");
     // The default camera sees the card in the middle of the frame.
     let (_, film) = render_desc(&desc, 16, 1, vec![]);
     assert!(film.alpha()[8 * 16 + 8] > 0.5);

@@ -715,3 +715,58 @@ fn shadows_are_exactly_zero_where_nothing_occludes() {
         }
     }
 }
+
+#[test]
+fn a_rotated_dome_turns_its_map() {
+    // A map bright (radiance 1) where +Y is and black below the horizon, around the grey
+    // plane facing +Z: unturned, half the plane's hemisphere is lit (ρ/2 = 0.25); turned
+    // 90° about X the bright half faces the plane (ρ = 0.5), turned −90° it faces away (0);
+    // turned about Y nothing changes.
+    let dir = std::env::temp_dir().join(format!("lightpath-dome-rot-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let (w, h) = (32usize, 16usize);
+    let half: Vec<f32> = (0..w * h)
+        .map(|i| if i / w < h / 2 { 1.0 } else { 0.0 })
+        .collect();
+    let planes = ["R", "G", "B", "A"].map(|c| (c.to_string(), half.clone()));
+    lightpath::output::write_channels(
+        &dir.join("half.exr"),
+        w,
+        h,
+        planes.to_vec(),
+        &[],
+        Default::default(),
+    )
+    .unwrap();
+    let mean = |placement: &str| {
+        let text = format!(
+            "{PLANE}\n[[lights]]\ntype = \"dome\"\nmap = \"half.exr\"\ncamera_visible = false\n{placement}\n"
+        );
+        let src = Source {
+            name: "dome".into(),
+            text,
+            dir: dir.clone(),
+        };
+        let (_, film) = render_aovs(&src, 16, 64, Some(2), vec![]);
+        let mut sum = 0.0;
+        for y in 6..10 {
+            for x in 6..10 {
+                sum += film.pixel(0, x, y).x;
+            }
+        }
+        sum / 16.0
+    };
+    // 64 spp × 16 pixels of MIS-weighted dome samples: 3 % is many standard errors.
+    for (placement, expected) in [
+        ("", 0.25),
+        ("rotate = [0, 70, 0]", 0.25),
+        ("rotate = [90, 0, 0]", 0.5),
+        ("matrix = [1,0,0,0, 0,0,-1,0, 0,1,0,0, 0,0,0,1]", 0.5),
+    ] {
+        let m = mean(placement);
+        assert!((m - expected).abs() < 0.03 * expected, "{placement}: {m}");
+    }
+    let away = mean("rotate = [-90, 0, 0]");
+    assert!(away.abs() < 1e-3, "{away}");
+    std::fs::remove_dir_all(&dir).unwrap();
+}

@@ -190,9 +190,9 @@ impl Compiler {
         self
     }
 
-    /// Whether the alphabet includes the default events (every event of the shapes a
-    /// renderer emits, LPE.md §1: `C`, `L`, `O`, `V`, `B` without scatter, `R`/`T` with
-    /// any lobe; each with no label or one label the rules name). A renderer that passes
+    /// Whether the alphabet includes the default events (every event of the shapes the
+    /// profile emits, LPE.md §1: `C`, `L`, `O` (and `V`, `B` if it emits them) without
+    /// scatter, `R`/`T` with any lobe; each with no label or one label the rules name). A renderer that passes
     /// its whole scene as the vocabulary turns this off for the smallest table.
     pub fn default_alphabet(mut self, on: bool) -> Compiler {
         self.default_alphabet = on;
@@ -256,7 +256,11 @@ impl Compiler {
             ))
         })?;
 
-        let alphabet = Alphabet::new(&nfa.preds, &self.vocabulary, self.default_alphabet);
+        let alphabet = Alphabet::new(
+            &nfa.preds,
+            &self.vocabulary,
+            self.default_alphabet.then_some(self.profile),
+        );
         let dfa = determinize(&nfa, &alphabet.classes, self.state_limit)
             .map_err(|_| {
                 too_large(format!(
@@ -386,7 +390,9 @@ struct Alphabet {
 }
 
 impl Alphabet {
-    fn new(preds: &[Pred], vocabulary: &[Event], default_events: bool) -> Alphabet {
+    /// `default_events`: the profile whose event types the default alphabet covers (None:
+    /// the vocabulary alone).
+    fn new(preds: &[Pred], vocabulary: &[Event], default_events: Option<Profile>) -> Alphabet {
         let words = preds.len().div_ceil(64).max(1);
         let mut a = Alphabet {
             words,
@@ -397,12 +403,10 @@ impl Alphabet {
         let mut labels: Vec<&str> = preds.iter().flat_map(|p| p.mentioned_labels()).collect();
         labels.sort_unstable();
         labels.dedup();
-        let types = if default_events {
-            &EventType::ALL[..]
-        } else {
-            &[]
-        };
-        for &ty in types {
+        let types = EventType::ALL
+            .into_iter()
+            .filter(|&ty| default_events.is_some_and(|p| p.emits(ty)));
+        for ty in types {
             let scattering = matches!(ty, EventType::Reflect | EventType::Transmit);
             for scatter in all_scatters().filter(|s| s.is_some() == scattering) {
                 a.insert(preds, &Event::new::<&str>(ty, scatter, []));

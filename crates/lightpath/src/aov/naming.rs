@@ -8,7 +8,16 @@
 //!   `standard` (LPE.md §7 set), `bounces` or `lightgroups`.
 //! - `lightpath/lightgroup/<name>`: for a `lightgroups` part, its light group, or
 //!   `__default` for lights without a group (and glowing objects).
+//! - `lightpath/expression/<name>`: the AOV's expression as compiled (a standard name
+//!   expanded, prefixes included) beside what the user wrote.
 //! - `lightpath/scene`, `lightpath/spp`, `lightpath/first_sample`, `lightpath/seed`.
+//! - `lightpath/scene_hash`: FNV-1a 64 of the scene's content (its text, meshes and maps).
+//! - `lightpath/samples`: the sample ranges the file holds (`0-64` or, merged,
+//!   `0-64 64-128`); `lightpath/crop`: the pixel window rendered (`X0,Y0,X1,Y1`).
+//! - `lightpath/setting/<name>`: every other render setting (depth limits, clamps,
+//!   sampler, filter, resolution): parts of one frame must agree on all of them.
+//! - Standard attributes: `software`, `chromaticities`, `worldToCamera`, `worldToNDC`,
+//!   and `capDate` only with `--timestamp`; `cryptomatte/<key>/…` for Cryptomatte layers.
 
 /// The beauty AOV, stored as the plain `R, G, B` channels (plus `A`).
 pub const BEAUTY: &str = "beauty";
@@ -25,10 +34,54 @@ pub const PART_ATTRIBUTE_PREFIX: &str = "lightpath/part/";
 pub const PARTITION_ATTRIBUTE_PREFIX: &str = "lightpath/partition/";
 pub const LIGHTGROUP_ATTRIBUTE_PREFIX: &str = "lightpath/lightgroup/";
 /// Render metadata attributes.
+/// The holdout pair RenderMan's shadow matte is derived from (LPE.md §7), and the matte.
+pub const OCCLUDED: &str = "occluded";
+pub const UNOCCLUDED: &str = "unoccluded";
+pub const SHADOW: &str = "shadow";
+/// The definition written for the derived shadow matte.
+pub const SHADOW_DEFINITION: &str = "derived: 1 - occluded/unoccluded";
+
 pub const SCENE_ATTRIBUTE: &str = "lightpath/scene";
 pub const SPP_ATTRIBUTE: &str = "lightpath/spp";
 pub const FIRST_SAMPLE_ATTRIBUTE: &str = "lightpath/first_sample";
 pub const SEED_ATTRIBUTE: &str = "lightpath/seed";
+pub const EXPRESSION_ATTRIBUTE_PREFIX: &str = "lightpath/expression/";
+pub const SCENE_HASH_ATTRIBUTE: &str = "lightpath/scene_hash";
+pub const SAMPLES_ATTRIBUTE: &str = "lightpath/samples";
+pub const CROP_ATTRIBUTE: &str = "lightpath/crop";
+pub const SETTING_ATTRIBUTE_PREFIX: &str = "lightpath/setting/";
+/// The per-pixel sample count channel of adaptive renders: merges weigh by it.
+pub const SAMPLE_COUNT_CHANNEL: &str = "sampleCount";
+
+/// Attribute name holding AOV `name`'s compiled expression.
+pub fn expression_attribute(name: &str) -> String {
+    format!("{EXPRESSION_ATTRIBUTE_PREFIX}{name}")
+}
+
+/// Attribute name of render setting `name`.
+pub fn setting_attribute(name: &str) -> String {
+    format!("{SETTING_ATTRIBUTE_PREFIX}{name}")
+}
+
+/// A sample range as `lightpath/samples` lists it: `first-end` (end exclusive).
+pub fn format_ranges(ranges: &[(u64, u64)]) -> String {
+    ranges
+        .iter()
+        .map(|(a, b)| format!("{a}-{b}"))
+        .collect::<Vec<_>>()
+        .join(" ")
+}
+
+/// `lightpath/samples` parsed back; `None` if malformed.
+pub fn parse_ranges(s: &str) -> Option<Vec<(u64, u64)>> {
+    s.split_whitespace()
+        .map(|r| {
+            let (a, b) = r.split_once('-')?;
+            let (a, b) = (a.parse().ok()?, b.parse().ok()?);
+            (a < b).then_some((a, b))
+        })
+        .collect()
+}
 
 /// A kind of partition an AOV can be a part of.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]

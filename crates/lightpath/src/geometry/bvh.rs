@@ -12,8 +12,9 @@ use super::{Hit, Prim, Ray};
 use glam::{Vec3A, Vec4};
 use obvhs::aabb::Aabb;
 use obvhs::bvh2::builder::build_bvh2;
-use obvhs::bvh2::Bvh2;
+use obvhs::bvh2::node::Bvh2Node;
 use obvhs::{Boundable, BvhBuildParams};
+use rayon::prelude::*;
 
 struct Bounded(Aabb);
 
@@ -43,6 +44,36 @@ thread_local! {
     // Grown once per thread, so rays through a very deep tree still allocate nothing.
     static DEEP_CLOSEST: std::cell::RefCell<Vec<(u32, f32)>> = const { std::cell::RefCell::new(Vec::new()) };
     static DEEP_ANY: std::cell::RefCell<Vec<u32>> = const { std::cell::RefCell::new(Vec::new()) };
+}
+
+/// Below this many boxes obvhs's PLOC builder (with spatial splits and reinsertion: the
+/// best trees) is fast whatever the input.
+const PLOC_ALWAYS_BELOW: usize = 4096;
+/// Above this many, or when boxes overlap like a fan's (the mean box more than this
+/// fraction of the root's area), the binned-SAH builder on every core (`sah`): PLOC's
+/// rounds can merge only a few pairs each when everything overlaps (quadratic time).
+const SAH_ABOVE: usize = 50_000;
+const SAH_OVERLAP: f32 = 0.02;
+
+/// A binary tree over `boxes` (obvhs's layout): nodes and primitive order.
+fn build_tree(boxes: &[Bounded]) -> (Vec<Bvh2Node>, Vec<u32>) {
+    let n = boxes.len();
+    let use_sah = n > SAH_ABOVE
+        || (n >= PLOC_ALWAYS_BELOW && {
+            let root = boxes.iter().fold(Aabb::INVALID, |a, b| a.union(&b.0));
+            let mean = boxes.iter().map(|b| b.0.half_area() as f64).sum::<f64>() / n as f64;
+            mean > (SAH_OVERLAP * root.half_area()) as f64
+        });
+    if use_sah {
+        let aabbs: Vec<Aabb> = boxes.iter().map(|b| b.0).collect();
+        return super::sah::build(&aabbs);
+    }
+    let params = BvhBuildParams {
+        max_prims_per_leaf: 4,
+        ..BvhBuildParams::slow_build()
+    };
+    let bvh = build_bvh2(boxes, params, &mut Default::default());
+    (bvh.nodes, bvh.primitive_indices)
 }
 
 /// An inner node: up to four children, their boxes one lane each.
@@ -207,30 +238,37 @@ impl Accel {
             .collect();
         let key =
             |b: &Aabb| [b.min.x, b.min.y, b.min.z, b.max.x, b.max.y, b.max.z].map(f32::to_bits);
-        let mut copies: std::collections::HashMap<[u32; 6], (u32, u32)> = Default::default();
-        for b in &bounds {
-            copies.entry(key(b)).or_insert((0, u32::MAX)).0 += 1;
-        }
-        let mut boxes: Vec<Bounded> = Vec::new();
-        let group: Vec<u32> = bounds
-            .iter()
-            .map(|b| {
-                let mut new_box = || {
-                    boxes.push(Bounded(*b));
-                    boxes.len() as u32 - 1
-                };
-                match copies.get_mut(&key(b)) {
-                    Some((count, shared)) if *count > MERGE_ABOVE => {
-                        if *shared == u32::MAX {
-                            *shared = new_box();
-                        }
-                        *shared
-                    }
-                    _ => new_box(),
-                }
-            })
+        // Copies found by sorting (key, index) pairs, in parallel and in memory order (a
+        // hash map's random probes were a third of a million-triangle build): for each
+        // primitive with more than MERGE_ABOVE copies, the first of them.
+        let mut keyed: Vec<([u32; 6], u32)> = bounds
+            .par_iter()
+            .enumerate()
+            .map(|(i, b)| (key(b), i as u32))
             .collect();
-        drop(copies);
+        keyed.par_sort_unstable();
+        let mut first_copy = vec![u32::MAX; bounds.len()];
+        for run in keyed.chunk_by(|a, b| a.0 == b.0) {
+            if run.len() > MERGE_ABOVE as usize {
+                for &(_, i) in run {
+                    first_copy[i as usize] = run[0].1;
+                }
+            }
+        }
+        drop(keyed);
+        // Boxes numbered in the order of their first primitive.
+        let mut boxes: Vec<Bounded> = Vec::new();
+        let mut group = vec![0u32; bounds.len()];
+        for (i, b) in bounds.iter().enumerate() {
+            let first = first_copy[i];
+            group[i] = if first == u32::MAX || first == i as u32 {
+                boxes.push(Bounded(*b));
+                boxes.len() as u32 - 1
+            } else {
+                group[first as usize]
+            };
+        }
+        drop(first_copy);
         // Primitives listed group by group (a counting sort).
         let mut group_start = vec![0u32; boxes.len() + 1];
         for &g in &group {
@@ -245,21 +283,12 @@ impl Accel {
             by_group[fill[g as usize] as usize] = i as u32;
             fill[g as usize] += 1;
         }
-        let params = BvhBuildParams {
-            max_prims_per_leaf: 4,
-            // Past a few hundred thousand primitives a better tree is not worth the build.
-            ..if boxes.len() < 200_000 {
-                BvhBuildParams::slow_build()
-            } else {
-                BvhBuildParams::medium_build()
-            }
-        };
-        let bvh = build_bvh2(&boxes, params, &mut Default::default());
+        let (tree, tree_indices) = build_tree(&boxes);
         // Lay the primitives out in leaf order so leaves address them by range:
         // `slot_start[k]` is the first slot of the k-th box in obvhs's order.
         let mut order = Vec::with_capacity(prims.len());
-        let mut slot_start = Vec::with_capacity(bvh.primitive_indices.len() + 1);
-        for &g in &bvh.primitive_indices {
+        let mut slot_start = Vec::with_capacity(tree_indices.len() + 1);
+        for &g in &tree_indices {
             slot_start.push(order.len() as u32);
             let g = g as usize;
             order
@@ -275,7 +304,7 @@ impl Accel {
         let visibility: Vec<u8> = order.iter().map(|&i| visibility[i as usize]).collect();
         accel.face_normals = accel.prims.iter().map(Prim::face_normal).collect();
 
-        let root = &bvh.nodes[0];
+        let root = &tree[0];
         let depth = if root.is_leaf() {
             // A lone leaf still goes under a node, so traversal always starts at node 0.
             accel.nodes.push(Node {
@@ -287,7 +316,7 @@ impl Accel {
             accel.nodes[0] = node_of(&[(root.aabb, leaf)]);
             1
         } else {
-            accel.add_nodes(&bvh, &slot_start, &visibility)
+            accel.add_nodes(&tree, &slot_start, &visibility)
         };
         accel.stack_need = 3 * depth + 1;
         accel
@@ -296,7 +325,7 @@ impl Accel {
     /// Flattens the binary tree (its root an inner node) into 4-wide nodes, node 0 its
     /// root; returns its depth in 4-wide nodes. Iterative: a degenerate input (many
     /// identical primitives) can make a binary tree thousands of levels deep.
-    fn add_nodes(&mut self, bvh: &Bvh2, slot_start: &[u32], visibility: &[u8]) -> usize {
+    fn add_nodes(&mut self, tree: &[Bvh2Node], slot_start: &[u32], visibility: &[u8]) -> usize {
         let empty = Node {
             bounds: [Vec4::ZERO; 6],
             child: [0; 4],
@@ -309,26 +338,26 @@ impl Accel {
         while let Some((index, slot, depth)) = work.pop() {
             deepest = deepest.max(depth);
             // Open the largest inner grandchildren until there are four children.
-            let first = bvh.nodes[index].first_index as usize;
+            let first = tree[index].first_index as usize;
             let mut kids = vec![first, first + 1];
             while kids.len() < 4 {
                 let widest = kids
                     .iter()
                     .enumerate()
-                    .filter(|(_, &k)| !bvh.nodes[k].is_leaf())
+                    .filter(|(_, &k)| !tree[k].is_leaf())
                     .max_by(|a, b| {
-                        let area = |k: usize| bvh.nodes[k].aabb.half_area();
+                        let area = |k: usize| tree[k].aabb.half_area();
                         area(*a.1).total_cmp(&area(*b.1))
                     })
                     .map(|(at, _)| at);
                 let Some(at) = widest else { break };
-                let k = bvh.nodes[kids[at]].first_index as usize;
+                let k = tree[kids[at]].first_index as usize;
                 kids[at] = k;
                 kids.push(k + 1);
             }
             let mut children = Vec::with_capacity(4);
             for &k in &kids {
-                let n = &bvh.nodes[k];
+                let n = &tree[k];
                 let reference = if n.is_leaf() {
                     self.add_leaf(slot_start, n.first_index, n.prim_count, visibility)
                 } else {
@@ -886,6 +915,41 @@ mod tests {
             let fixed = accel.any_hit(&ray, 0.0, 2, &mut Stack::<u32, STACK>::new());
             let heap = accel.any_hit(&ray, 0.0, 2, &mut vec![0; accel.stack_need]);
             assert_eq!(fixed, heap);
+        }
+    }
+
+    /// Inputs the binned-SAH builder takes (a fan, whose boxes all overlap, and a soup
+    /// above its size threshold) answer as testing every primitive does.
+    #[test]
+    fn sah_built_trees_match_brute_force() {
+        let mut rng = Rng::for_sample(9, 8, 7);
+        let fan = crate::geometry::shapes::disk(&glam::Affine3A::IDENTITY, 6000).prims;
+        let (soup, _, _) = soup(SAH_ABOVE + 1, &mut rng);
+        for prims in [fan, soup] {
+            let n = prims.len();
+            let objects: Vec<u32> = (0..n as u32).map(|i| i % 3).collect();
+            let accel = Accel::build(prims.clone(), objects.clone(), Vec::new(), vec![7; n]);
+            for _ in 0..300 {
+                let origin = Vec3A::new(rng.next_f32(), rng.next_f32(), rng.next_f32()) * 3.0
+                    - Vec3A::splat(1.5);
+                let ray = Ray {
+                    origin,
+                    dir: uniform_sphere(rng.next_2d()),
+                    tmax: f32::INFINITY,
+                };
+                let brute = prims
+                    .iter()
+                    .map(|p| p.intersect(ray.origin, ray.dir, 0.0, ray.tmax))
+                    .fold(f32::INFINITY, f32::min);
+                let got = accel
+                    .intersect(&ray, 0.0, Visibility::ALL)
+                    .map_or(f32::INFINITY, |h| h.t);
+                assert!(got == brute, "n {n}: bvh {got} brute {brute}");
+                let blocked = prims.iter().zip(&objects).any(|(p, &o)| {
+                    o != 1 && p.intersect(ray.origin, ray.dir, 0.0, ray.tmax).is_finite()
+                });
+                assert_eq!(accel.occluded(&ray, 0.0, 1), blocked, "n {n}");
+            }
         }
     }
 

@@ -3,6 +3,7 @@
 
 pub mod attrs;
 mod bvh;
+mod sah;
 pub mod shapes;
 
 pub use attrs::{SurfaceAttrs, SurfaceUv};

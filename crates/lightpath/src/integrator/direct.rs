@@ -6,7 +6,7 @@
 use super::path::{PathState, Vertex};
 use super::routing::{Origin, Via};
 use super::{Sink, Tracer};
-use crate::geometry::{Hit, Prim, Ray};
+use crate::geometry::{Hit, Prim, Ray, Visibility};
 use crate::light::{Light, LightShape};
 use crate::sampler::{dim, Sampler};
 use glam::Vec3A;
@@ -159,11 +159,12 @@ impl Tracer<'_> {
                 } else {
                     f32::INFINITY
                 };
-                let ignore = light.object.unwrap_or(u32::MAX);
                 tmax <= 0.0
-                    || !scene
-                        .accel
-                        .occluded(&self.spawn(v.hit, ls.wi, tmax), 0.0, ignore)
+                    || !scene.accel.occluded(
+                        &self.spawn(v.hit, ls.wi, tmax),
+                        0.0,
+                        light.shadow_exempt(),
+                    )
             });
             let origin = Origin {
                 via: Via::LightSample { visible: vis },
@@ -176,11 +177,17 @@ impl Tracer<'_> {
     }
 
     /// The nearest light surface along `ray`, ignoring everything else: (light, t,
-    /// normal).
+    /// normal). Mesh lights are found in their own BVH (their triangles are many); the
+    /// few triangles of area lights are tried one by one.
     fn nearest_light(&self, ray: &Ray) -> Option<(usize, f32, Vec3A)> {
-        let mut best: Option<(usize, f32, Vec3A)> = None;
+        let mut best: Option<(usize, f32, Vec3A)> = self
+            .scene
+            .mesh_lights
+            .intersect(ray, 0.0, Visibility::ALL)
+            .map(|h| (h.object as usize, h.t, h.ng));
         for (li, light) in self.scene.lights.iter().enumerate() {
             match &light.shape {
+                LightShape::Triangles { mesh: true, .. } => {}
                 LightShape::Triangles { prims, normals, .. } => {
                     for (&i, n) in prims.iter().zip(normals) {
                         let p = &self.scene.accel.prims()[i as usize];

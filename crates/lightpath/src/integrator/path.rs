@@ -66,6 +66,7 @@ impl Tracer<'_> {
         };
         let mut alpha = 0.0;
         out.holdout = false;
+        out.first_object = None;
         loop {
             out.rays += 1;
             let mask = if path.depth == 0 {
@@ -78,6 +79,7 @@ impl Tracer<'_> {
                 let holdout = scene.objects[hit.object as usize].holdout;
                 if path.depth == 0 {
                     alpha = if holdout { 0.0 } else { 1.0 };
+                    out.first_object = (!holdout).then_some(hit.object);
                 }
                 out.holdout |= holdout;
             }

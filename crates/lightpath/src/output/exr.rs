@@ -75,10 +75,10 @@ pub struct DerivedAov {
 /// the matte a compositor multiplies a background plate by.
 pub fn derived_aovs(film: &Film, aovs: &[Aov]) -> Vec<DerivedAov> {
     let find = |n: &str| aovs.iter().position(|a| a.name == n);
-    let (Some(occ), Some(unocc)) = (find("occluded"), find("unoccluded")) else {
+    let (Some(occ), Some(unocc)) = (find(naming::OCCLUDED), find(naming::UNOCCLUDED)) else {
         return Vec::new();
     };
-    if find("shadow").is_some() {
+    if find(naming::SHADOW).is_some() {
         return Vec::new();
     }
     let rgb = [0, 1, 2].map(|c| {
@@ -95,8 +95,8 @@ pub fn derived_aovs(film: &Film, aovs: &[Aov]) -> Vec<DerivedAov> {
             .collect()
     });
     vec![DerivedAov {
-        name: "shadow".into(),
-        definition: "derived: 1 - occluded/unoccluded".into(),
+        name: naming::SHADOW.into(),
+        definition: naming::SHADOW_DEFINITION.into(),
         rgb,
     }]
 }
@@ -110,7 +110,28 @@ pub fn write_exr(
     options: ExrOptions,
     extra: &[(String, String)],
 ) -> std::result::Result<(), String> {
+    let header = ExrHeader {
+        text: extra.to_vec(),
+        ..ExrHeader::default()
+    };
+    write_film(path, film, aovs, derived, options, header)
+}
+
+/// Writes the film with a header: a film of a window of the frame gets the frame as its
+/// display window and the window as its data window; Cryptomatte layers, if rendered,
+/// their channels and manifests.
+pub fn write_film(
+    path: &Path,
+    film: Film,
+    aovs: &[Aov],
+    derived: Vec<DerivedAov>,
+    options: ExrOptions,
+    mut header: ExrHeader,
+) -> std::result::Result<(), String> {
     let (width, height) = (film.width as usize, film.height as usize);
+    header.frame = Some(film.frame);
+    header.origin = [film.window.x0, film.window.y0];
+    let mattes = film.mattes.clone();
     let mut planes = film.into_means().into_iter();
     let mut channels = Vec::new();
     let mut attributes = Vec::new();
@@ -119,6 +140,10 @@ pub fn write_exr(
             channels.push((name, planes.next().unwrap_or_default()));
         }
         attributes.push((naming::aov_attribute(&aov.name), aov.definition.clone()));
+        attributes.push((
+            naming::expression_attribute(&aov.name),
+            aov.expression.clone(),
+        ));
     }
     let parts: Vec<naming::PartInfo> = aovs
         .iter()
@@ -138,8 +163,36 @@ pub fn write_exr(
         }
         attributes.push((naming::aov_attribute(&d.name), d.definition));
     }
-    attributes.extend(extra.iter().cloned());
-    write_channels(path, width, height, channels, &attributes, options)
+    if let Some(m) = mattes {
+        attributes.extend(m.table.attributes());
+        channels.extend(m.table.channel_names().into_iter().zip(m.planes));
+    }
+    attributes.append(&mut header.text);
+    header.text = attributes;
+    write_image(path, width, height, channels, &header, options)
+}
+
+/// What an EXR's header says besides its channels and their definitions.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct ExrHeader {
+    /// The whole frame's size (display window); `None`: the data's own size.
+    pub frame: Option<[u32; 2]>,
+    /// Where the data window starts in the frame (a crop's corner).
+    pub origin: [u32; 2],
+    /// `worldToCamera` and `worldToNDC`, as OpenEXR lays them out (row vectors: a point
+    /// times the matrix).
+    pub world_to_camera: Option<[f32; 16]>,
+    pub world_to_ndc: Option<[f32; 16]>,
+    /// `capDate` (`YYYY:MM:DD hh:mm:ss`, UTC, with `utcOffset` 0): only when asked, so
+    /// identical renders stay identical files.
+    pub capture_date: Option<String>,
+    /// Text attributes (`lightpath/…`, `cryptomatte/…`).
+    pub text: Vec<(String, String)>,
+}
+
+/// The `software` attribute of every file Lightpath writes.
+pub fn software() -> String {
+    format!("Lightpath {}", env!("CARGO_PKG_VERSION"))
 }
 
 /// Writes named float channels and text attributes as one single-part EXR, atomically.
@@ -151,19 +204,54 @@ pub fn write_channels(
     attributes: &[(String, String)],
     options: ExrOptions,
 ) -> std::result::Result<(), String> {
+    let header = ExrHeader {
+        text: attributes.to_vec(),
+        ..ExrHeader::default()
+    };
+    write_image(path, width, height, channels, &header, options)
+}
+
+/// Writes named float channels (a `width × height` data window) with a header, as one
+/// single-part EXR, atomically. Every file gets `software` and Rec.709/D65
+/// `chromaticities`; every channel `pLinear` 0 (OpenEXR's default, and right for
+/// scene-linear light: the `exr` crate's guess gave `R` 0 but `diffuse.R` 1). Cryptomatte
+/// channels stay 32-bit floats under `--half`: their ids are hashes.
+pub fn write_image(
+    path: &Path,
+    width: usize,
+    height: usize,
+    channels: Vec<(String, Vec<f32>)>,
+    header: &ExrHeader,
+    options: ExrOptions,
+) -> std::result::Result<(), String> {
+    let layers = crate::post::cryptomatte::layers_in(&header.text);
     let channels: Vec<AnyChannel<FlatSamples>> = channels
         .into_iter()
         .map(|(name, v)| {
-            let samples = if options.half {
+            let is_id = layers
+                .iter()
+                .any(|l| crate::post::cryptomatte::is_layer_channel(l, &name));
+            let samples = if options.half && !is_id {
                 FlatSamples::F16(v.into_iter().map(f16::from_f32).collect())
             } else {
                 FlatSamples::F32(v)
             };
-            AnyChannel::new(name.as_str(), samples)
+            AnyChannel {
+                quantize_linearly: false,
+                ..AnyChannel::new(name.as_str(), samples)
+            }
         })
         .collect();
-    let mut layer_attributes = LayerAttributes::default();
-    for (k, v) in attributes {
+    let mut layer_attributes = LayerAttributes {
+        software_name: Some(Text::from(software().as_str())),
+        world_to_camera: header.world_to_camera,
+        world_to_normalized_device: header.world_to_ndc,
+        capture_date: header.capture_date.as_deref().map(Text::from),
+        utc_offset: header.capture_date.as_ref().map(|_| 0.0),
+        layer_position: Vec2(header.origin[0] as i32, header.origin[1] as i32),
+        ..LayerAttributes::default()
+    };
+    for (k, v) in &header.text {
         layer_attributes.other.insert(
             Text::from(k.as_str()),
             AttributeValue::Text(Text::from(v.as_str())),
@@ -175,7 +263,17 @@ pub fn write_channels(
         options.compression.encoding(),
         AnyChannels::sort(SmallVec::from_vec(channels)),
     );
-    let image = Image::from_layer(layer);
+    let frame = header
+        .frame
+        .map_or((width, height), |f| (f[0] as usize, f[1] as usize));
+    let mut image_attributes = ImageAttributes::new(IntegerBounds::from_dimensions(frame));
+    image_attributes.chromaticities = Some(::exr::meta::attribute::Chromaticities {
+        red: Vec2(0.64, 0.33),
+        green: Vec2(0.30, 0.60),
+        blue: Vec2(0.15, 0.06),
+        white: Vec2(0.3127, 0.3290),
+    });
+    let image = Image::new(image_attributes, layer);
     atomically(path, |tmp| {
         image
             .write()
@@ -244,6 +342,12 @@ pub struct ExrContents {
     pub height: usize,
     pub channels: Vec<(String, Vec<f32>)>,
     pub attributes: Vec<(String, String)>,
+    /// The display window's size and where the data window starts in it.
+    pub frame: [u32; 2],
+    pub origin: [u32; 2],
+    pub world_to_camera: Option<[f32; 16]>,
+    pub world_to_ndc: Option<[f32; 16]>,
+    pub capture_date: Option<String>,
 }
 
 impl ExrContents {
@@ -290,10 +394,38 @@ pub fn read_exr(path: &Path) -> std::result::Result<ExrContents, String> {
             _ => None,
         })
         .collect();
+    let display = image.attributes.display_window;
+    let position = Vec2(
+        layer.attributes.layer_position.x() - display.position.x(),
+        layer.attributes.layer_position.y() - display.position.y(),
+    );
+    if position.x() < 0
+        || position.y() < 0
+        || position.x() as usize + layer.size.width() > display.size.width()
+        || position.y() as usize + layer.size.height() > display.size.height()
+    {
+        return Err(format!(
+            "{}: the data window ({:?} + {:?}) does not lie inside the display window ({:?} + {:?})",
+            path.display(),
+            layer.attributes.layer_position,
+            layer.size,
+            display.position,
+            display.size
+        ));
+    }
     Ok(ExrContents {
         width: layer.size.width(),
         height: layer.size.height(),
         channels,
         attributes,
+        frame: [display.size.width() as u32, display.size.height() as u32],
+        origin: [position.x() as u32, position.y() as u32],
+        world_to_camera: layer.attributes.world_to_camera,
+        world_to_ndc: layer.attributes.world_to_normalized_device,
+        capture_date: layer
+            .attributes
+            .capture_date
+            .as_ref()
+            .map(|t| t.to_string()),
     })
 }

@@ -1,103 +1,465 @@
-//! `lightpath merge`: EXRs of one frame rendered as different sample ranges become one.
+//! `lightpath merge`: the parts of one frame — sample ranges (`--first-sample`), tiles
+//! (`--crop`), or both — become the EXR of the whole.
+//!
+//! Every part's header is read and checked before any pixel is: the parts must show the
+//! same frame (display window), the same channels and every header attribute but the
+//! ones that say which part it is (`lightpath/spp`, `first_sample`, `samples`, `crop`,
+//! `scene`: the path may differ between machines; the scene's hash may not). Parts with
+//! the same window are sample ranges of it: their ranges may not overlap (a merged file
+//! lists every range it holds, so merging it again with one of its parts is refused).
+//! Parts with different windows are tiles: they may not overlap, must hold the same
+//! samples, and must leave no hole in the rectangle they cover.
+//!
+//! Channels are averaged with weights: each part's per-pixel `sampleCount` where the
+//! parts have that channel (adaptive sampling), else its sample count. `sampleCount`
+//! itself adds up, and Cryptomatte pairs are merged by id and ranked again. Parts are read
+//! one at a time: the memory is one part plus the merged window's sums.
 
-use crate::aov::naming::{FIRST_SAMPLE_ATTRIBUTE, SPP_ATTRIBUTE};
-use crate::output::ExrContents;
+use crate::aov::naming::{
+    format_ranges, parse_ranges, CROP_ATTRIBUTE, FIRST_SAMPLE_ATTRIBUTE, SAMPLES_ATTRIBUTE,
+    SAMPLE_COUNT_CHANNEL, SCENE_ATTRIBUTE, SPP_ATTRIBUTE,
+};
+use crate::film::PixelWindow;
+use crate::output::{read_exr, write_image, ExrHeader, ExrOptions};
+use crate::post::cryptomatte;
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
 
-/// Merges EXRs of one frame rendered as different sample ranges: each channel is the
-/// average of the inputs weighted by their sample counts (header `lightpath/spp`).
-/// Returns the merged sample count.
-pub fn merge(inputs: &[std::path::PathBuf], output: &std::path::Path) -> Result<u64, String> {
-    use crate::output::{read_exr, write_channels, ExrOptions};
+/// Attributes that differ from part to part of one frame by design.
+const PER_PART: [&str; 5] = [
+    SPP_ATTRIBUTE,
+    FIRST_SAMPLE_ATTRIBUTE,
+    SAMPLES_ATTRIBUTE,
+    CROP_ATTRIBUTE,
+    SCENE_ATTRIBUTE,
+];
+
+/// What `merge` wrote.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct Merged {
+    /// Samples per pixel of the result.
+    pub spp: u64,
+    /// The sample ranges it holds.
+    pub ranges: Vec<(u64, u64)>,
+    /// Its data window, and how many tiles it was stitched from.
+    pub window: PixelWindow,
+    pub tiles: usize,
+}
+
+/// One input as its header describes it.
+struct Part {
+    path: PathBuf,
+    frame: [u32; 2],
+    window: PixelWindow,
+    ranges: Vec<(u64, u64)>,
+    channels: Vec<String>,
+    text: BTreeMap<String, String>,
+}
+
+impl Part {
+    fn read(path: &Path) -> Result<Part, String> {
+        let meta = ::exr::meta::MetaData::read_from_file(path, false)
+            .map_err(|e| format!("cannot read {}: {e}", path.display()))?;
+        let header = meta
+            .headers
+            .first()
+            .ok_or_else(|| format!("{}: no image in the file", path.display()))?;
+        let display = header.shared_attributes.display_window;
+        let pos = header.own_attributes.layer_position;
+        let (x0, y0) = (
+            pos.x() - display.position.x(),
+            pos.y() - display.position.y(),
+        );
+        let size = header.layer_size;
+        if x0 < 0
+            || y0 < 0
+            || x0 as usize + size.width() > display.size.width()
+            || y0 as usize + size.height() > display.size.height()
+        {
+            return Err(format!(
+                "{}: its data window is not inside its display window",
+                path.display()
+            ));
+        }
+        let window = PixelWindow {
+            x0: x0 as u32,
+            y0: y0 as u32,
+            x1: x0 as u32 + size.width() as u32,
+            y1: y0 as u32 + size.height() as u32,
+        };
+        let text: BTreeMap<String, String> = header
+            .own_attributes
+            .other
+            .iter()
+            .filter_map(|(k, v)| match v {
+                ::exr::meta::attribute::AttributeValue::Text(t) => {
+                    Some((k.to_string(), t.to_string()))
+                }
+                _ => None,
+            })
+            .collect();
+        let ranges = match text.get(SAMPLES_ATTRIBUTE) {
+            Some(s) => parse_ranges(s).ok_or_else(|| {
+                format!(
+                    "{}: {SAMPLES_ATTRIBUTE} is '{s}', expected ranges like '0-64 64-128'",
+                    path.display()
+                )
+            })?,
+            // Files written before sample ranges were recorded: first_sample and spp.
+            None => {
+                let get = |k: &str| text.get(k).and_then(|v| v.parse::<u64>().ok());
+                let spp = get(SPP_ATTRIBUTE).ok_or_else(|| {
+                    format!(
+                        "{} has no {SPP_ATTRIBUTE} header: not a Lightpath render",
+                        path.display()
+                    )
+                })?;
+                let first = get(FIRST_SAMPLE_ATTRIBUTE).unwrap_or(0);
+                vec![(first, first + spp)]
+            }
+        };
+        let mut channels: Vec<String> = header
+            .channels
+            .list
+            .iter()
+            .map(|c| c.name.to_string())
+            .collect();
+        channels.sort();
+        Ok(Part {
+            path: path.to_path_buf(),
+            frame: [display.size.width() as u32, display.size.height() as u32],
+            window,
+            ranges,
+            channels,
+            text,
+        })
+    }
+
+    fn spp(&self) -> u64 {
+        self.ranges.iter().map(|(a, b)| b - a).sum()
+    }
+
+    fn name(&self) -> String {
+        self.path.display().to_string()
+    }
+}
+
+/// Checks that `b` is a part of the same frame as `a`, naming the first difference.
+fn same_frame(a: &Part, b: &Part) -> Result<(), String> {
+    if a.frame != b.frame {
+        return Err(format!(
+            "{} is a {}x{} frame but {} is {}x{}",
+            b.name(),
+            b.frame[0],
+            b.frame[1],
+            a.name(),
+            a.frame[0],
+            a.frame[1]
+        ));
+    }
+    if a.channels != b.channels {
+        let only = |x: &Part, y: &Part| -> Vec<String> {
+            x.channels
+                .iter()
+                .filter(|c| !y.channels.contains(c))
+                .cloned()
+                .collect()
+        };
+        return Err(format!(
+            "{} and {} have different channels (only in the first: {:?}; only in the second: {:?})",
+            a.name(),
+            b.name(),
+            only(a, b),
+            only(b, a)
+        ));
+    }
+    let keys: std::collections::BTreeSet<&String> = a.text.keys().chain(b.text.keys()).collect();
+    for k in keys {
+        if PER_PART.contains(&k.as_str()) {
+            continue;
+        }
+        let (va, vb) = (a.text.get(k), b.text.get(k));
+        if va != vb {
+            let show = |v: Option<&String>| match v {
+                Some(v) if v.chars().count() > 80 => {
+                    format!("'{}…'", v.chars().take(80).collect::<String>())
+                }
+                Some(v) => format!("'{v}'"),
+                None => "nothing".to_string(),
+            };
+            return Err(format!(
+                "{} and {} are not parts of one frame: {k} is {} in the first and {} in the second",
+                a.name(),
+                b.name(),
+                show(va),
+                show(vb)
+            ));
+        }
+    }
+    Ok(())
+}
+
+fn overlaps(a: &PixelWindow, b: &PixelWindow) -> bool {
+    a.x0 < b.x1 && b.x0 < a.x1 && a.y0 < b.y1 && b.y0 < a.y1
+}
+
+/// Merges the parts of one frame into `output` (see the module's description).
+pub fn merge(inputs: &[PathBuf], output: &Path) -> Result<Merged, String> {
     if inputs.is_empty() {
         return Err("give the EXRs to merge".into());
     }
-    let spp_of = |exr: &ExrContents, path: &std::path::Path| -> Result<u64, String> {
-        exr.attributes
-            .iter()
-            .find(|(k, _)| k == SPP_ATTRIBUTE)
-            .and_then(|(_, v)| v.parse().ok())
-            .ok_or_else(|| {
-                format!(
-                    "{} has no {SPP_ATTRIBUTE} header: not a Lightpath render",
-                    path.display()
-                )
-            })
-    };
-    let first = read_exr(&inputs[0])?;
-    let mut total = spp_of(&first, &inputs[0])?;
-    let mut names: Vec<String> = first.channels.iter().map(|(n, _)| n.clone()).collect();
-    names.sort();
-    let mut sums: Vec<(String, Vec<f64>)> = first
-        .channels
+    let parts: Vec<Part> = inputs
         .iter()
-        .map(|(n, v)| {
-            (
-                n.clone(),
-                v.iter().map(|x| *x as f64 * total as f64).collect(),
-            )
-        })
-        .collect();
-    let mut ranges = vec![first
-        .attributes
-        .iter()
-        .find(|(k, _)| k == FIRST_SAMPLE_ATTRIBUTE)
-        .map(|(_, v)| v.clone())];
-    for path in &inputs[1..] {
-        let exr = read_exr(path)?;
-        let spp = spp_of(&exr, path)?;
-        let mut these: Vec<String> = exr.channels.iter().map(|(n, _)| n.clone()).collect();
-        these.sort();
-        if (exr.width, exr.height) != (first.width, first.height) || these != names {
-            return Err(format!(
-                "{} is not the same frame: its size or channels differ from {}",
-                path.display(),
-                inputs[0].display()
-            ));
+        .map(|p| Part::read(p))
+        .collect::<Result<_, _>>()?;
+    for p in &parts[1..] {
+        same_frame(&parts[0], p)?;
+    }
+    // Group by window: each group holds sample ranges of one tile.
+    let mut groups: Vec<(PixelWindow, Vec<&Part>)> = Vec::new();
+    for p in &parts {
+        match groups.iter_mut().find(|g| g.0 == p.window) {
+            Some(g) => g.1.push(p),
+            None => groups.push((p.window, vec![p])),
         }
-        let range = exr
-            .attributes
-            .iter()
-            .find(|(k, _)| k == FIRST_SAMPLE_ATTRIBUTE)
-            .map(|(_, v)| v.clone());
-        if range.is_some() && ranges.contains(&range) {
-            return Err(format!(
-                "{} repeats sample range {}: its samples would count twice",
-                path.display(),
-                range.unwrap_or_default()
-            ));
-        }
-        ranges.push(range);
-        for (name, sum) in &mut sums {
-            let values = exr.channel(name).unwrap_or(&[]);
-            for (s, v) in sum.iter_mut().zip(values) {
-                *s += *v as f64 * spp as f64;
+    }
+    let mut tile_ranges = Vec::new();
+    for (_, members) in &groups {
+        let mut held: Vec<((u64, u64), &Part)> = Vec::new();
+        for p in members {
+            for &r in &p.ranges {
+                if let Some((o, q)) = held.iter().find(|(o, _)| r.0 < o.1 && o.0 < r.1) {
+                    return Err(format!(
+                        "{} holds samples {}-{} and {} holds {}-{}: they overlap, so those samples would count twice",
+                        q.name(),
+                        o.0,
+                        o.1,
+                        p.name(),
+                        r.0,
+                        r.1
+                    ));
+                }
+                held.push((r, p));
             }
         }
-        total += spp;
+        let mut ranges: Vec<(u64, u64)> = held.iter().map(|h| h.0).collect();
+        ranges.sort();
+        tile_ranges.push(ranges);
     }
-    let channels = sums
-        .into_iter()
-        .map(|(n, s)| {
-            (
-                n,
-                s.into_iter().map(|v| (v / total as f64) as f32).collect(),
-            )
+    for (i, a) in groups.iter().enumerate() {
+        for (j, b) in groups.iter().enumerate().skip(i + 1) {
+            if overlaps(&a.0, &b.0) {
+                return Err(format!(
+                    "{} covers pixels {} and {} covers {}: tiles may not overlap",
+                    a.1[0].name(),
+                    a.0,
+                    b.1[0].name(),
+                    b.0
+                ));
+            }
+            if tile_ranges[i] != tile_ranges[j] {
+                return Err(format!(
+                    "tile {} holds samples {} but tile {} holds {}: tiles of one frame need the same samples",
+                    a.0,
+                    format_ranges(&tile_ranges[i]),
+                    b.0,
+                    format_ranges(&tile_ranges[j])
+                ));
+            }
+        }
+    }
+    let window = groups.iter().skip(1).fold(groups[0].0, |u, g| PixelWindow {
+        x0: u.x0.min(g.0.x0),
+        y0: u.y0.min(g.0.y0),
+        x1: u.x1.max(g.0.x1),
+        y1: u.y1.max(g.0.y1),
+    });
+    let covered: u64 = groups
+        .iter()
+        .map(|g| g.0.width() as u64 * g.0.height() as u64)
+        .sum();
+    let area = window.width() as u64 * window.height() as u64;
+    if covered != area {
+        return Err(format!(
+            "the tiles leave {} of the {} pixels of window {window} uncovered",
+            area - covered,
+            area
+        ));
+    }
+
+    let first = &parts[0];
+    let layers = cryptomatte::layers_in(
+        &first
+            .text
+            .iter()
+            .map(|(k, v)| (k.clone(), v.clone()))
+            .collect::<Vec<_>>(),
+    );
+    let (w, h) = (window.width() as usize, window.height() as usize);
+    let mut out: Vec<(String, Vec<f32>)> = first
+        .channels
+        .iter()
+        .map(|c| (c.clone(), vec![0.0; w * h]))
+        .collect();
+    let mut header = ExrHeader::default();
+    for (g, (tile, members)) in groups.iter().enumerate() {
+        let merged = merge_tile(members, &layers, g == 0, &mut header)?;
+        let tw = tile.width() as usize;
+        for (name, plane) in &mut out {
+            let Some(values) = merged.get(name) else {
+                continue;
+            };
+            for (row, src) in values.chunks_exact(tw).enumerate() {
+                let y = (tile.y0 - window.y0) as usize + row;
+                let x = (tile.x0 - window.x0) as usize;
+                plane[y * w + x..y * w + x + tw].copy_from_slice(src);
+            }
+        }
+    }
+    let ranges = tile_ranges[0].clone();
+    let spp: u64 = ranges.iter().map(|(a, b)| b - a).sum();
+    let mut text: Vec<(String, String)> = first
+        .text
+        .iter()
+        .filter(|(k, _)| !PER_PART.contains(&k.as_str()) || k.as_str() == SCENE_ATTRIBUTE)
+        .map(|(k, v)| (k.clone(), v.clone()))
+        .collect();
+    text.push((SPP_ATTRIBUTE.into(), spp.to_string()));
+    text.push((FIRST_SAMPLE_ATTRIBUTE.into(), ranges[0].0.to_string()));
+    text.push((SAMPLES_ATTRIBUTE.into(), format_ranges(&ranges)));
+    text.push((CROP_ATTRIBUTE.into(), window.to_string()));
+    header.text = text;
+    header.frame = Some(first.frame);
+    header.origin = [window.x0, window.y0];
+    write_image(output, w, h, out, &header, ExrOptions::default())?;
+    Ok(Merged {
+        spp,
+        ranges,
+        window,
+        tiles: groups.len(),
+    })
+}
+
+/// Merges the sample ranges of one tile, reading one part at a time; the first tile's
+/// first part gives the standard attributes of the result.
+fn merge_tile(
+    members: &[&Part],
+    layers: &[String],
+    keep_header: bool,
+    header: &mut ExrHeader,
+) -> Result<BTreeMap<String, Vec<f32>>, String> {
+    if let [only] = members {
+        // One part: its values as they are (a tile is exactly what was rendered).
+        let exr = read_exr(&only.path)?;
+        if keep_header {
+            header.world_to_camera = exr.world_to_camera;
+            header.world_to_ndc = exr.world_to_ndc;
+            header.capture_date = exr.capture_date.clone();
+        }
+        return Ok(exr.channels.into_iter().collect());
+    }
+    let matte_channels: Vec<Vec<String>> = layers
+        .iter()
+        .map(|l| {
+            let groups = members[0]
+                .channels
+                .iter()
+                .filter(|c| cryptomatte::is_layer_channel(l, c))
+                .count()
+                .div_ceil(4);
+            cryptomatte::channel_names(l, 2 * groups as u32)
         })
         .collect();
-    let mut attributes: Vec<(String, String)> = first
-        .attributes
+    let is_matte = |c: &str| matte_channels.iter().any(|m| m.iter().any(|n| n == c));
+    let counted = members[0]
+        .channels
         .iter()
-        .filter(|(k, _)| k != SPP_ATTRIBUTE && k != FIRST_SAMPLE_ATTRIBUTE)
-        .cloned()
+        .any(|c| c == SAMPLE_COUNT_CHANNEL);
+    let mut sums: BTreeMap<String, Vec<f64>> = BTreeMap::new();
+    let mut weight_sum: Vec<f64> = Vec::new();
+    // Per layer, per pixel: the merged (id, weighted coverage) pairs.
+    let mut mattes: Vec<Vec<f32>> = Vec::new();
+    for (i, part) in members.iter().enumerate() {
+        let exr = read_exr(&part.path)?;
+        if keep_header && i == 0 {
+            header.world_to_camera = exr.world_to_camera;
+            header.world_to_ndc = exr.world_to_ndc;
+            header.capture_date = exr.capture_date.clone();
+        }
+        let n = exr.width * exr.height;
+        let weights: Vec<f64> = match (counted, exr.channel(SAMPLE_COUNT_CHANNEL)) {
+            (true, Some(c)) => c.iter().map(|&v| v as f64).collect(),
+            _ => vec![part.spp() as f64; n],
+        };
+        if i == 0 {
+            weight_sum = vec![0.0; n];
+            mattes = matte_channels
+                .iter()
+                .map(|m| vec![0.0; m.len() * n])
+                .collect();
+        }
+        for (s, w) in weight_sum.iter_mut().zip(&weights) {
+            *s += w;
+        }
+        for (name, values) in &exr.channels {
+            if is_matte(name) {
+                continue;
+            }
+            let sum = sums.entry(name.clone()).or_insert_with(|| vec![0.0; n]);
+            if name == SAMPLE_COUNT_CHANNEL {
+                for (s, v) in sum.iter_mut().zip(values) {
+                    *s += *v as f64;
+                }
+            } else {
+                for ((s, v), w) in sum.iter_mut().zip(values).zip(&weights) {
+                    *s += *v as f64 * w;
+                }
+            }
+        }
+        for (names, acc) in matte_channels.iter().zip(&mut mattes) {
+            let planes: Vec<&[f32]> = names
+                .iter()
+                .map(|c| exr.channel(c).unwrap_or(&[]))
+                .collect();
+            let stride = names.len();
+            let mut pairs = vec![0.0f32; stride];
+            let mut merged = vec![0.0f32; stride];
+            for px in 0..n {
+                for (k, p) in planes.iter().enumerate() {
+                    pairs[k] = p.get(px).copied().unwrap_or(0.0);
+                }
+                let here = &mut acc[px * stride..(px + 1) * stride];
+                // Coverage scaled by the part's weight; normalised once all are in.
+                cryptomatte::merge_ranked(&[(&*here, 1.0), (&pairs, weights[px])], &mut merged);
+                here.copy_from_slice(&merged);
+            }
+        }
+    }
+    let mut out: BTreeMap<String, Vec<f32>> = sums
+        .into_iter()
+        .map(|(name, s)| {
+            let values = if name == SAMPLE_COUNT_CHANNEL {
+                s.into_iter().map(|v| v as f32).collect()
+            } else {
+                s.iter()
+                    .zip(&weight_sum)
+                    .map(|(v, w)| if *w > 0.0 { (v / w) as f32 } else { 0.0 })
+                    .collect()
+            };
+            (name, values)
+        })
         .collect();
-    attributes.push((SPP_ATTRIBUTE.into(), total.to_string()));
-    write_channels(
-        output,
-        first.width,
-        first.height,
-        channels,
-        &attributes,
-        ExrOptions::default(),
-    )?;
-    Ok(total)
+    for (names, acc) in matte_channels.iter().zip(&mattes) {
+        let stride = names.len();
+        let mut planes = vec![vec![0.0f32; weight_sum.len()]; stride];
+        for (px, w) in weight_sum.iter().enumerate() {
+            let inv = if *w > 0.0 { 1.0 / w } else { 0.0 };
+            for r in 0..stride / 2 {
+                planes[2 * r][px] = acc[px * stride + 2 * r];
+                planes[2 * r + 1][px] = (acc[px * stride + 2 * r + 1] as f64 * inv) as f32;
+            }
+        }
+        out.extend(names.iter().cloned().zip(planes));
+    }
+    Ok(out)
 }

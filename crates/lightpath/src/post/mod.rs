@@ -3,6 +3,8 @@
 //! Each reads the structured header attributes of `aov::naming`, never definitions' prose.
 
 pub mod comp;
+pub mod cryptomatte;
+pub mod diff;
 pub mod merge;
 pub mod partitions;
 

@@ -63,8 +63,8 @@ pub struct SceneDesc {
     pub light_group_aovs: Vec<String>,
     /// Every camera a file names (glTF), for `--camera NAME`; `camera` is the first.
     pub cameras: Vec<NamedCamera>,
-    /// What the loader skipped or chose for the user (unsupported extensions, a default
-    /// camera or light), each naming the file and where in it.
+    /// What the loaders want the user told (a default camera or light added, statements
+    /// skipped, unsupported glTF extensions), each naming its file.
     pub warnings: Vec<String>,
 }
 
@@ -262,6 +262,19 @@ pub struct MaterialDesc {
     /// Colour reported by the `U4` user lobe.
     pub user_color: Option<[f32; 3]>,
     pub textures: TexturesDesc,
+    /// Image maps of the base colour and the normal (OBJ `map_Kd`, `map_Bump`/`norm`),
+    /// kept for the texture support to come: not used by shading yet.
+    pub base_color_map: Option<TextureRef>,
+    pub normal_map: Option<TextureRef>,
+    pub origin: Origin,
+}
+
+/// An image file a material names: its resolved path, a factor (a bump map's `-bm`), and
+/// where it was named.
+#[derive(Clone, Debug)]
+pub struct TextureRef {
+    pub path: PathBuf,
+    pub scale: f32,
     pub origin: Origin,
 }
 
@@ -313,6 +326,9 @@ pub struct ObjectDesc {
     pub material: Option<NameRef>,
     /// LPE labels of every event on this object; None: the object's name.
     pub lpegroups: Option<Vec<String>>,
+    /// The asset it belongs to (Cryptomatte's `CryptoAsset`; a glTF's top-level node);
+    /// None: the object's own name.
+    pub asset: Option<String>,
     /// Radiance of a glowing (non-light) surface: seen as an `O` event.
     pub emission: Option<[f32; 3]>,
     pub holdout: bool,
@@ -353,6 +369,11 @@ pub enum LightKind {
     /// An optional equirectangular EXR (resolved path, and where it was named).
     Dome {
         map: Option<(PathBuf, Origin)>,
+    },
+    /// A mesh light: the triangles of `SceneDesc::objects[object]` emit (its transform,
+    /// material and trace sets are the object's; the light's own are not used).
+    Mesh {
+        object: usize,
     },
 }
 

@@ -79,6 +79,9 @@ pub struct Scene {
     pub accel: Accel,
     /// UVs and tangents of textured meshes (read only by textured materials).
     pub surface: SurfaceAttrs,
+    /// The triangles of every mesh light (object id: the light), for the lights-only
+    /// test of `unoccluded`/`shadows` AOVs.
+    pub mesh_lights: Accel,
     pub objects: Vec<Object>,
     pub materials: Vec<Material>,
     pub lights: Vec<Light>,

@@ -27,6 +27,7 @@ pub fn light_shape(l: &LightDesc) -> Result<(LightShape, Option<ShapePrims>, Vec
             by_area: Distribution1D::new(&areas),
             area: areas.iter().sum(),
             two_sided: l.two_sided,
+            mesh: false,
         };
         (shape, Some(prims), color)
     };
@@ -75,14 +76,55 @@ pub fn light_shape(l: &LightDesc) -> Result<(LightShape, Option<ShapePrims>, Vec
             None,
             color,
         ),
+        // Its object's triangles, filled once they are in the scene (`mesh_surfaces`).
+        LightKind::Mesh { .. } => {
+            let shape = LightShape::Triangles {
+                prims: Vec::new(),
+                normals: Vec::new(),
+                parallelogram: None,
+                by_area: Distribution1D::default(),
+                area: 0.0,
+                two_sided: l.two_sided,
+                mesh: true,
+            };
+            (shape, None, color)
+        }
         LightKind::Dome { map } => {
             let map = match map {
                 None => None,
-                Some((path, origin)) => Some(load_env(path, origin)?),
+                Some((path, origin)) => {
+                    let map = load_env(path, origin)?;
+                    match dome_rotation(xf, &l.origin)? {
+                        None => Some(map),
+                        Some(r) => Some(map.rotated(r)),
+                    }
+                }
             };
             (LightShape::Dome { map }, None, color)
         }
     })
+}
+
+/// The rotation of a dome's `rotate`/`matrix` (None: none). Scale is divided out and the
+/// translation ignored (the dome is infinitely far); a shear is an error, since it would
+/// not keep solid angles.
+fn dome_rotation(xf: &glam::Affine3A, origin: &Origin) -> Result<Option<glam::Mat3A>, SceneError> {
+    let m = xf.matrix3;
+    if m == glam::Mat3A::IDENTITY {
+        return Ok(None);
+    }
+    let cols = [m.x_axis, m.y_axis, m.z_axis];
+    let lengths = cols.map(|c| c.length());
+    if lengths.iter().any(|l| !(l.is_finite() && *l > 0.0)) {
+        return Err(origin.error("a dome's transform must be invertible (a rotation)"));
+    }
+    let [x, y, z] = [0, 1, 2].map(|i| cols[i] / lengths[i]);
+    if x.dot(y).abs() > 1e-4 || y.dot(z).abs() > 1e-4 || x.dot(z).abs() > 1e-4 {
+        return Err(origin.error(
+            "a dome's transform must be a rotation (with scale, which is ignored), not a shear",
+        ));
+    }
+    Ok(Some(glam::Mat3A::from_cols(x, y, z)))
 }
 
 /// Points each area light at its triangles: `added` is where the scene's primitive list
@@ -93,6 +135,72 @@ pub fn locate_prims(lights: &mut [Light], added: &[Option<Range<u32>>], accel: &
             *prims = range.clone().map(|i| accel.slot(i)).collect();
         }
     }
+}
+
+/// Gives each mesh light the triangles of its object (`ranges[object]`: where
+/// `GeometryBuilder::add` put them), their normals, and the distribution it picks them
+/// by: power, which is area × emitted luminance, and the radiance is uniform over a light,
+/// so area. Returns the lights-only BVH of all mesh-light triangles (object id: the
+/// light), so that finding one along a ray is not linear in their number.
+pub fn mesh_surfaces(
+    lights: &mut [Light],
+    descs: &[LightDesc],
+    ranges: &[Range<u32>],
+    accel: &Accel,
+) -> Result<Accel, SceneError> {
+    let mut prims = Vec::new();
+    let mut owners = Vec::new();
+    for (li, (light, desc)) in lights.iter_mut().zip(descs).enumerate() {
+        let LightKind::Mesh { object } = desc.kind else {
+            continue;
+        };
+        let LightShape::Triangles {
+            prims: ids,
+            normals,
+            by_area,
+            area,
+            ..
+        } = &mut light.shape
+        else {
+            continue;
+        };
+        // In slot order: the BVH's primitive order, so the light's triangles are read
+        // in the order they sit in memory.
+        *ids = ranges[object].clone().map(|i| accel.slot(i)).collect();
+        ids.sort_unstable();
+        let mut areas = Vec::with_capacity(ids.len());
+        for &slot in ids.iter() {
+            let p = accel.prims()[slot as usize];
+            let Prim::Triangle { p0, e1, e2, .. } = p else {
+                return Err(desc.origin.error(
+                    "a mesh light's object must be made of triangles (a sphere is a sphere light)",
+                ));
+            };
+            areas.push(p.area());
+            normals.push(p.face_normal());
+            prims.push(Prim::Triangle {
+                p0,
+                e1,
+                e2,
+                normals: u32::MAX,
+            });
+            owners.push(li as u32);
+        }
+        *area = areas.iter().sum();
+        if *area <= 0.0 || area.is_nan() {
+            return Err(desc
+                .origin
+                .error("a mesh light's object has no area: it cannot emit"));
+        }
+        *by_area = Distribution1D::new(&areas);
+    }
+    let n = prims.len();
+    Ok(Accel::build(
+        prims,
+        owners,
+        Vec::new(),
+        vec![crate::geometry::Visibility::ALL; n],
+    ))
 }
 
 /// Two triangles `(c0, c1, c2)`, `(c0, c2, c3)` that form a parallelogram, as corner and

@@ -1,11 +1,12 @@
 //! Materials: each description becomes a BSDF (a list of lobes) and a user colour.
 
 use crate::material::pbr::{PbrParams, MIN_TEXTURED_ROUGHNESS};
-use crate::material::texture::{ColorSpace, MipMap, Texture};
+use crate::material::texture::{ColorSpace, MipMap, Texture, UvTransform, Wrap};
 use crate::material::textured::{MaterialTextures, ShadeModel, Textured};
 use crate::material::{roughness_to_alpha, Bsdf};
 use crate::scene::desc::{
-    ImageSource, MaterialDesc, MaterialKind, NameRef, SceneDesc, TextureDesc,
+    ImageSource, MaterialDesc, MaterialKind, NameRef, SceneDesc, TextureDesc, TextureRef,
+    TexturesDesc,
 };
 use crate::scene::{Material, SceneError};
 use glam::Vec3A;
@@ -74,7 +75,7 @@ pub fn find(
 
 fn material(name: &str, m: &MaterialDesc, images: &mut Images) -> Result<Material, SceneError> {
     let v3 = Vec3A::from;
-    let t = &m.textures;
+    let t = &textures_of(m);
     let textured = t.base_color.is_some()
         || t.metallic_roughness.is_some()
         || t.normal.is_some()
@@ -159,6 +160,28 @@ fn material(name: &str, m: &MaterialDesc, images: &mut Images) -> Result<Materia
         user_color: m.user_color.map(v3),
         textured,
     })
+}
+
+/// The material's textures, with an MTL's `map_Kd` and `map_Bump`/`norm` (OBJ UVs) where
+/// the material names no other.
+fn textures_of(m: &MaterialDesc) -> TexturesDesc {
+    let mut t = m.textures.clone();
+    // OBJ's v grows up the image, glTF's (Lightpath's) down it: v' = 1 − v.
+    let from_map = |r: &TextureRef| TextureDesc {
+        image: ImageSource::File(r.path.clone()),
+        wrap: [Wrap::Repeat; 2],
+        transform: UvTransform {
+            rows: [[1.0, 0.0, 0.0], [0.0, -1.0, 1.0]],
+        },
+        origin: r.origin.clone(),
+    };
+    if t.base_color.is_none() {
+        t.base_color = m.base_color_map.as_ref().map(from_map);
+    }
+    if t.normal.is_none() {
+        t.normal = m.normal_map.as_ref().map(|r| (from_map(r), r.scale));
+    }
+    t
 }
 
 fn pbr_ior(m: &MaterialDesc) -> Option<f32> {

@@ -10,7 +10,7 @@ use crate::aov::AovSpec;
 use crate::events::Vocabulary;
 use crate::geometry::Visibility;
 use crate::light::Light;
-use crate::scene::desc::{Origin, SceneDesc};
+use crate::scene::desc::{LightDesc, LightKind, Origin, SceneDesc};
 use crate::scene::{Aov, Object, Scene, SceneError};
 use geometry::GeometryBuilder;
 use glam::Vec3A;
@@ -23,11 +23,12 @@ impl Scene {
     pub fn build(desc: &SceneDesc, aovs: &[AovSpec]) -> Result<Scene, SceneError> {
         let (materials, material_ids) = materials::build(desc)?;
         let mut geometry = GeometryBuilder::default();
-        let mut objects = add_objects(desc, &material_ids, &mut geometry)?;
+        let (mut objects, object_prims) = add_objects(desc, &material_ids, &mut geometry)?;
         let (mut lights, light_prims) =
             add_lights(desc, &material_ids, &mut geometry, &mut objects)?;
         let (accel, surface) = geometry.build();
         lights::locate_prims(&mut lights, &light_prims, &accel);
+        let mesh_lights = lights::mesh_surfaces(&mut lights, &desc.lights, &object_prims, &accel)?;
         lights::link(&desc.lights, &mut objects);
         let (scene_radius, epsilon) = geometry::scene_size(&accel);
 
@@ -45,6 +46,7 @@ impl Scene {
         Ok(Scene {
             accel,
             surface,
+            mesh_lights,
             objects,
             materials,
             light_classes: classes.lights,
@@ -83,13 +85,15 @@ fn new_object(name: String, groups: Vec<String>) -> Object {
     }
 }
 
-/// The scene's objects, their primitives added to `geometry`.
+/// The scene's objects, their primitives added to `geometry` (at the returned ranges of
+/// the primitive list, one per object).
 fn add_objects(
     desc: &SceneDesc,
     material_ids: &HashMap<String, u32>,
     geometry: &mut GeometryBuilder,
-) -> Result<Vec<Object>, SceneError> {
+) -> Result<(Vec<Object>, Vec<Range<u32>>), SceneError> {
     let mut objects: Vec<Object> = Vec::new();
+    let mut ranges = Vec::new();
     for o in &desc.objects {
         let name = o
             .name
@@ -100,7 +104,7 @@ fn add_objects(
         let visibility = (o.visible_camera as u8 * Visibility::CAMERA)
             | (o.visible_indirect as u8 * Visibility::INDIRECT)
             | (o.casts_shadows as u8 * Visibility::SHADOW);
-        geometry.add(id, shape, visibility);
+        ranges.push(geometry.add(id, shape, visibility));
         let groups = o.lpegroups.clone().unwrap_or_else(|| vec![name.clone()]);
         objects.push(Object {
             material: materials::find(desc, material_ids, &o.material)?,
@@ -109,7 +113,7 @@ fn add_objects(
             ..new_object(name, groups)
         });
     }
-    Ok(objects)
+    Ok((objects, ranges))
 }
 
 /// Where an area light's primitives were added to the scene's primitive list.
@@ -152,6 +156,10 @@ fn add_lights(
         if let Some(id) = object {
             objects[id as usize].material = materials::find(desc, material_ids, &l.material)?;
         }
+        let object = match l.kind {
+            LightKind::Mesh { object: o } => Some(mesh_light_object(l, o, light_id, objects)?),
+            _ => object,
+        };
         lights.push(Light {
             shape,
             color,
@@ -162,6 +170,31 @@ fn add_lights(
         ranges.push(range);
     }
     Ok((lights, ranges))
+}
+
+/// Makes object `o` the surface of mesh light `light_id`: its emission is the light's.
+fn mesh_light_object(
+    l: &LightDesc,
+    o: usize,
+    light_id: u32,
+    objects: &mut [Object],
+) -> Result<u32, SceneError> {
+    let Some(obj) = objects.get_mut(o) else {
+        return Err(l.origin.error(format!(
+            "mesh light: there is no object {o} (the scene has {})",
+            objects.len()
+        )));
+    };
+    if obj.light.is_some() {
+        return Err(l.origin.error(format!(
+            "object '{}' is already the surface of another light",
+            obj.name
+        )));
+    }
+    obj.light = Some(light_id);
+    // Its light emits; a glow as well would count the emission twice.
+    obj.emission = Vec3A::ZERO;
+    Ok(o as u32)
 }
 
 /// The output AOVs: one per rule, then the parts of those split per light group.

@@ -7,16 +7,18 @@
 //!   collection: `C<..'props'>` selects everything under it), plus `extras.lpegroup`
 //!   (a string or a list).
 //! - Cameras: perspective ones, by node name; the first is used (`--camera NAME` picks
-//!   another). None: a camera framing the scene, and a warning.
+//!   another).
 //! - Lights (`KHR_lights_punctual`): converted as Blender's glTF importer does (its
 //!   "Standard" lighting mode): point and spot W = cd · 4π / 683, sun W/m² = lux / 683;
 //!   then as Cycles emits them: a point or spot of P watts has radiant intensity P / 4π
 //!   W/sr. So Lightpath's intensity is cd / 683 W/sr and its irradiance lux / 683.
 //!   A light's group is its node's name (else the light's), or `extras.lightgroup`.
-//!   No lights at all: a white dome, and a warning.
+//!   Emissive materials make their primitives mesh lights. With no camera or no light
+//!   at all, `defaults::complete` adds one, and a warning.
 //! - Extensions: those in [`SUPPORTED`]; any other used one is a warning naming it, any
 //!   other required one an error.
 
+use super::defaults;
 use crate::camera::FovAxis;
 use crate::material::texture::{UvTransform, Wrap};
 use crate::scene::desc::{
@@ -47,19 +49,13 @@ pub const WATTS_TO_LUMENS: f32 = 683.0;
 /// Longer side of the film when the file's camera gives only an aspect ratio.
 const FILM_SIZE: f32 = 512.0;
 
-/// True for the file names this loader reads.
-pub fn is_gltf(path: &Path) -> bool {
-    path.extension()
-        .and_then(|e| e.to_str())
-        .is_some_and(|e| e.eq_ignore_ascii_case("gltf") || e.eq_ignore_ascii_case("glb"))
-}
-
-/// Reads a glTF file into a scene description.
-pub fn load(path: &Path) -> Result<SceneDesc, SceneError> {
+/// Reads a glTF file into a scene description, without defaults (the caller adds a
+/// camera or a dome where the file has none: `defaults::complete`). `at` is where the
+/// file was named, for an error opening it.
+pub fn load_scene(path: &Path, at: &Origin) -> Result<SceneDesc, SceneError> {
     let file = path.display().to_string();
-    let at = Origin::file(&file);
     let bytes =
-        std::fs::read(path).map_err(|e| at.error(format!("cannot read the glTF file: {e}")))?;
+        std::fs::read(path).map_err(|e| at.error(format!("cannot read glTF file {file}: {e}")))?;
     let dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
     Loader::new(&file, dir, &bytes)?.scene()
 }
@@ -74,9 +70,6 @@ struct Loader {
     /// Material index (None: glTF's default material) → name in `desc.materials`.
     materials: HashMap<Option<usize>, String>,
     images: HashMap<usize, ImageSource>,
-    /// World-space bounds of every mesh, for a default camera.
-    lo: Vec3A,
-    hi: Vec3A,
 }
 
 fn pointer_of(path: &gltf::json::Path) -> String {
@@ -149,8 +142,6 @@ impl Loader {
             desc,
             materials: HashMap::new(),
             images: HashMap::new(),
-            lo: Vec3A::splat(f32::INFINITY),
-            hi: Vec3A::splat(f32::NEG_INFINITY),
         })
     }
 
@@ -201,58 +192,6 @@ impl Loader {
                 stack.push((child, world, below.clone()));
             }
         }
-        self.finish()
-    }
-
-    /// Default camera and dome when the file has none.
-    fn finish(mut self) -> Result<SceneDesc, SceneError> {
-        if self.desc.camera.is_none() {
-            let (center, radius) = if self.lo.x.is_finite() {
-                (
-                    0.5 * (self.lo + self.hi),
-                    0.5 * (self.hi - self.lo).length(),
-                )
-            } else {
-                (Vec3A::ZERO, 1.0)
-            };
-            let fov = 40.0f32;
-            let dist = radius.max(1e-3) / (0.5 * fov).to_radians().sin();
-            // glTF's front is +Z and its up +Y: look at the front, a little from above.
-            let from = center + Vec3A::new(0.0, 0.25, 1.0).normalize() * dist;
-            self.desc.camera = Some(CameraDesc {
-                position: from.into(),
-                look_at: center.into(),
-                up: [0.0, 1.0, 0.0],
-                fov,
-                fov_axis: FovAxis::Smaller,
-                origin: Origin::file(&self.file),
-                ..CameraDesc::default()
-            });
-            self.warn(
-                "/cameras",
-                "the scene has no camera: one frames the whole scene",
-            );
-        }
-        if self.desc.lights.is_empty() {
-            self.desc.lights.push(LightDesc {
-                kind: LightKind::Dome { map: None },
-                name: Some("dome".into()),
-                groups: Vec::new(),
-                color: [1.0; 3],
-                strength: 1.0,
-                camera_visible: true,
-                two_sided: false,
-                material: None,
-                transform: Affine3A::IDENTITY,
-                include: None,
-                exclude: Vec::new(),
-                origin: Origin::file(&self.file),
-            });
-            self.warn(
-                "/extensions/KHR_lights_punctual",
-                "the scene has no lights: a white dome lights it",
-            );
-        }
         Ok(self.desc)
     }
 
@@ -287,17 +226,21 @@ impl Loader {
                 continue;
             }
             let data = self.mesh_data(&prim, &pointer, flip)?;
-            for p in &data.positions {
-                let w = xf.transform_point3a(Vec3A::from(*p));
-                self.lo = self.lo.min(w);
-                self.hi = self.hi.max(w);
-            }
             let material = self.material(prim.material())?;
             let name = if prim.index() == 0 {
                 node_name.clone()
             } else {
                 format!("{node_name}.{}", prim.index())
             };
+            // An emissive material makes the primitive a mesh light (light group: its
+            // name), as Blender and RenderMan treat emissive meshes.
+            if let Some(radiance) = self.emission(prim.material()) {
+                let object = self.desc.objects.len();
+                let at = Origin::file(&self.file);
+                self.desc
+                    .lights
+                    .push(defaults::mesh_light(object, &name, radiance, at));
+            }
             self.desc.objects.push(ObjectDesc {
                 name: Some(name),
                 shape_name: "mesh".into(),
@@ -308,11 +251,13 @@ impl Loader {
                     origin: Origin::file(&self.file),
                 }),
                 lpegroups: Some(groups.clone()),
-                emission: self.emission(prim.material()),
+                emission: None,
                 holdout: false,
                 visible_camera: true,
                 visible_indirect: true,
                 casts_shadows: true,
+                // Cryptomatte's asset: the top-level node the mesh is under.
+                asset: Some(ancestors.first().unwrap_or(&node_name).clone()),
                 origin: Origin::file(&self.file),
             });
         }
@@ -458,6 +403,8 @@ impl Loader {
                 roughness: pbr.roughness_factor(),
                 user_color: None,
                 textures,
+                base_color_map: None,
+                normal_map: None,
                 origin: Origin::file(&self.file),
             },
         );

@@ -2,8 +2,12 @@
 //! text with its name, and maps byte offsets to the lines and columns of `Origin`s.
 
 pub mod builtin;
+pub mod defaults;
 pub mod gltf;
+pub mod include;
 pub mod obj;
+pub mod ply;
+mod text;
 pub mod toml;
 
 use super::desc::{Origin, SceneDesc};
@@ -19,10 +23,47 @@ pub struct Source {
     pub dir: PathBuf,
 }
 
+/// Scene file formats, told by the file's extension (anything else is TOML).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Format {
+    Toml,
+    Obj,
+    Ply,
+    Gltf,
+}
+
+impl Format {
+    pub fn of(path: &Path) -> Format {
+        let ext = path.extension().map(|e| e.to_ascii_lowercase());
+        match ext.as_ref().and_then(|e| e.to_str()) {
+            Some("obj") => Format::Obj,
+            Some("ply") => Format::Ply,
+            Some("gltf" | "glb") => Format::Gltf,
+            _ => Format::Toml,
+        }
+    }
+}
+
+/// A scene file of a format other than TOML as its `SceneDesc`, without defaults: what
+/// `[[include]]` merges and what `lightpath render model.obj` completes. `at` is where
+/// the file was named (an error opening it points there).
+pub fn load_file(path: &Path, at: &Origin) -> Result<SceneDesc, SceneError> {
+    match Format::of(path) {
+        Format::Obj => obj::load_scene(path, at),
+        Format::Ply => ply::load_scene(path, at),
+        Format::Gltf => gltf::load_scene(path, at),
+        Format::Toml => Err(at.error(format!(
+            "{}: only OBJ, PLY and glTF files can be included (.obj, .ply, .gltf, .glb)",
+            path.display()
+        ))),
+    }
+}
+
 impl Source {
+    /// A scene file; OBJ, PLY and glTF files are read by their loader when parsed (their
+    /// `text` stays empty).
     pub fn from_file(path: &Path) -> Result<Source, SceneError> {
-        // A glTF file is read (text or binary) by its own loader when parsed.
-        if gltf::is_gltf(path) {
+        if Format::of(path) != Format::Toml {
             return Ok(Source {
                 name: path.display().to_string(),
                 text: String::new(),
@@ -63,13 +104,18 @@ impl Source {
         self.origin(span).error(message)
     }
 
-    /// The scene description: glTF (`.gltf`, `.glb`) or TOML.
+    /// The scene description: TOML, or a model file completed with a default camera
+    /// and light where it has none (with warnings in `SceneDesc::warnings`).
     pub fn parse(&self) -> Result<SceneDesc, SceneError> {
         let path = Path::new(&self.name);
-        if gltf::is_gltf(path) {
-            return gltf::load(path);
+        match Format::of(path) {
+            Format::Toml => toml::load(self),
+            _ => {
+                let mut desc = load_file(path, &Origin::file(&self.name))?;
+                defaults::complete(&mut desc);
+                Ok(desc)
+            }
         }
-        toml::load(self)
     }
 }
 

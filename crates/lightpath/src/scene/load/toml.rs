@@ -2,6 +2,7 @@
 //! spans, then converted to the neutral `SceneDesc` with an `Origin` on every entity.
 //! Kinds and required fields are checked here, where the spans are.
 
+use super::include::Override;
 use super::obj;
 use super::Source;
 use crate::camera::FovAxis;
@@ -36,6 +37,38 @@ struct SceneFile {
     /// Also split these AOVs per light group.
     #[serde(default)]
     light_group_aovs: Vec<String>,
+    /// Scene files (OBJ, PLY, glTF) merged into this one, their objects overridden by
+    /// name.
+    #[serde(default)]
+    include: Vec<Spanned<IncludeDesc>>,
+}
+
+/// `[[include]]`: a scene file, placed, with overrides of its objects by name.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct IncludeDesc {
+    file: Spanned<String>,
+    translate: Option<[f32; 3]>,
+    rotate: Option<[f32; 3]>,
+    scale: Option<ScaleDesc>,
+    matrix: Option<[f32; 16]>,
+    /// `[include.objects.NAME]`: what changes on every object of that name.
+    #[serde(default)]
+    objects: BTreeMap<String, Spanned<OverrideDesc>>,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct OverrideDesc {
+    material: Option<Spanned<String>>,
+    lpegroups: Option<Vec<String>>,
+    visible_camera: Option<bool>,
+    visible_indirect: Option<bool>,
+    casts_shadows: Option<bool>,
+    holdout: Option<bool>,
+    /// false: an emissive object glows (`O`) instead of being a mesh light; true: the
+    /// reverse.
+    light: Option<bool>,
 }
 
 #[derive(Debug, Deserialize)]
@@ -238,6 +271,8 @@ struct ObjectDesc {
     material: Option<Spanned<String>>,
     /// LPE labels of every event on this object; defaults to the object's name.
     lpegroups: Option<Vec<String>>,
+    /// The asset the object belongs to (Cryptomatte's CryptoAsset); defaults to its name.
+    asset: Option<String>,
     translate: Option<[f32; 3]>,
     rotate: Option<[f32; 3]>,
     scale: Option<ScaleDesc>,
@@ -298,6 +333,8 @@ struct LightDesc {
     cone_softness: Option<f32>,
     /// Dome: an equirectangular EXR, relative to the scene file.
     map: Option<Spanned<String>>,
+    /// Mesh: the name of the object(s) whose surface emits.
+    object: Option<Spanned<String>>,
     segments: Option<u32>,
     /// Light linking: only objects in these lpegroups are lit (default: all) …
     include: Option<Vec<String>>,
@@ -318,21 +355,39 @@ pub fn load(src: &Source) -> Result<d::SceneDesc, SceneError> {
     let file: SceneFile =
         toml::from_str(&src.text).map_err(|e| src.error(e.span(), e.message().to_string()))?;
     let at = |span: Range<usize>| src.origin(Some(span));
-    let mut materials = BTreeMap::new();
+    // Included files first: their materials are renamed where this file's take a name.
+    let mut scene = d::SceneDesc::default();
     for (name, m) in &file.materials {
-        materials.insert(name.clone(), material(src, name, m)?);
+        scene
+            .materials
+            .insert(name.clone(), material(src, name, m)?);
     }
-    let objects = file
-        .objects
-        .iter()
-        .map(|o| object(src, o))
-        .collect::<Result<_, _>>()?;
-    let lights = file
-        .lights
-        .iter()
-        .map(|l| light(src, l))
-        .collect::<Result<_, _>>()?;
-    let camera = file.camera.as_ref().map(|c| camera(src, c)).transpose()?;
+    for inc in &file.include {
+        include(src, inc, &mut scene)?;
+    }
+    for o in &file.objects {
+        scene.objects.push(object(src, o)?);
+    }
+    for l in &file.lights {
+        if l.get_ref().kind.get_ref() == "mesh" {
+            let lights = mesh_lights(src, l, &scene.objects)?;
+            scene.lights.extend(lights);
+        } else {
+            scene.lights.push(light(src, l)?);
+        }
+    }
+    let d::SceneDesc {
+        materials,
+        objects,
+        lights,
+        warnings,
+        camera: included_camera,
+        ..
+    } = scene;
+    let camera = match file.camera.as_ref() {
+        Some(c) => Some(camera(src, c)?),
+        None => included_camera,
+    };
     let filter = match file.film.filter.as_ref().map(|s| s.get_ref().as_str()) {
         None | Some("box") => d::FilterDesc::Box,
         Some("gaussian") => d::FilterDesc::Gaussian {
@@ -379,8 +434,8 @@ pub fn load(src: &Source) -> Result<d::SceneDesc, SceneError> {
             .collect(),
         light_groups: file.light_groups,
         cameras: Vec::new(),
-        warnings: Vec::new(),
         light_group_aovs: file.light_group_aovs,
+        warnings,
     })
 }
 
@@ -459,6 +514,8 @@ fn material(
         roughness: m.roughness,
         user_color: m.user_color,
         textures: textures(src, name, m)?,
+        base_color_map: None,
+        normal_map: None,
         origin: src.origin(Some(span)),
     })
 }
@@ -520,7 +577,7 @@ fn object(src: &Source, o: &Spanned<ObjectDesc>) -> Result<d::ObjectDesc, SceneE
         "obj" => {
             let file = o.file.as_ref().ok_or_else(|| missing("file"))?;
             let path = src.dir.join(file.get_ref());
-            let parts = obj::load(&path).map_err(|message| src.error(Some(file.span()), message))?;
+            let parts = obj::load_meshes(&path, &src.origin(Some(file.span())))?;
             d::ShapeDesc::Mesh { parts }
         }
         other => {
@@ -537,6 +594,7 @@ fn object(src: &Source, o: &Spanned<ObjectDesc>) -> Result<d::ObjectDesc, SceneE
         transform: placement(o.translate, o.rotate, o.scale, o.matrix),
         material: name_ref(src, &o.material),
         lpegroups: o.lpegroups.clone(),
+        asset: o.asset.clone(),
         emission: o.emission,
         holdout: o.holdout,
         visible_camera: o.visible_camera,
@@ -595,7 +653,7 @@ fn light(src: &Source, l: &Spanned<LightDesc>) -> Result<d::LightDesc, SceneErro
         other => {
             return Err(src.error(
                 Some(l.kind.span()),
-                format!("unknown light type '{other}': expected rect, quad, disk, sphere, point, spot, distant or dome"),
+                format!("unknown light type '{other}': expected rect, quad, disk, sphere, point, spot, distant, dome or mesh"),
             ))
         }
     };
@@ -613,4 +671,97 @@ fn light(src: &Source, l: &Spanned<LightDesc>) -> Result<d::LightDesc, SceneErro
         exclude: l.exclude.clone(),
         origin: src.origin(Some(span)),
     })
+}
+
+/// Merges an `[[include]]`d file into `scene`.
+fn include(
+    src: &Source,
+    inc: &Spanned<IncludeDesc>,
+    scene: &mut d::SceneDesc,
+) -> Result<(), SceneError> {
+    let i = inc.get_ref();
+    let path = src.dir.join(i.file.get_ref());
+    let from = super::load_file(&path, &src.origin(Some(i.file.span())))?;
+    let overrides: Vec<Override> = i
+        .objects
+        .iter()
+        .map(|(name, o)| {
+            let origin = src.origin(Some(o.span()));
+            let o = o.get_ref();
+            Override {
+                name: name.clone(),
+                material: name_ref(src, &o.material),
+                lpegroups: o.lpegroups.clone(),
+                visible_camera: o.visible_camera,
+                visible_indirect: o.visible_indirect,
+                casts_shadows: o.casts_shadows,
+                holdout: o.holdout,
+                light: o.light,
+                origin,
+            }
+        })
+        .collect();
+    let xf = placement(i.translate, i.rotate, i.scale, i.matrix);
+    super::include::merge(scene, from, xf, &overrides)
+}
+
+/// `type = "mesh"`: one mesh light per object named `object`.
+fn mesh_lights(
+    src: &Source,
+    l: &Spanned<LightDesc>,
+    objects: &[d::ObjectDesc],
+) -> Result<Vec<d::LightDesc>, SceneError> {
+    let span = l.span();
+    let origin = src.origin(Some(span.clone()));
+    let l = l.get_ref();
+    let Some(object) = &l.object else {
+        return Err(origin.error("mesh light needs 'object' = the name of the object that emits"));
+    };
+    let radiance = l
+        .radiance
+        .ok_or_else(|| origin.error("mesh light needs 'radiance' = [r, g, b]"))?;
+    if l.material.is_some() {
+        return Err(
+            origin.error("a mesh light's surface is its object: set 'material' on the object")
+        );
+    }
+    let name = object.get_ref();
+    let at = src.origin(Some(object.span()));
+    let found: Vec<usize> = (0..objects.len())
+        .filter(|&i| objects[i].name.as_deref() == Some(name.as_str()))
+        .collect();
+    if found.is_empty() {
+        let mut names: Vec<&str> = objects.iter().filter_map(|o| o.name.as_deref()).collect();
+        names.sort();
+        names.dedup();
+        return Err(at.error(format!(
+            "no object named '{name}' (objects are declared or included before lights): the scene has {names:?}"
+        )));
+    }
+    if let Some(&i) = found.iter().find(|&&i| objects[i].emission.is_some()) {
+        return Err(objects[i].origin.error(format!(
+            "object '{name}' has 'emission' (a glowing surface) and is a mesh light: choose one"
+        )));
+    }
+    Ok(found
+        .into_iter()
+        .map(|i| d::LightDesc {
+            kind: d::LightKind::Mesh { object: i },
+            name: Some(l.name.clone().unwrap_or_else(|| name.clone())),
+            groups: if l.groups.is_empty() {
+                vec![name.clone()]
+            } else {
+                l.groups.clone()
+            },
+            color: radiance,
+            strength: l.strength,
+            camera_visible: l.camera_visible,
+            two_sided: l.two_sided,
+            material: None,
+            transform: glam::Affine3A::IDENTITY,
+            include: l.include.clone(),
+            exclude: l.exclude.clone(),
+            origin: origin.clone(),
+        })
+        .collect())
 }

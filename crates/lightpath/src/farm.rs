@@ -1,0 +1,322 @@
+//! Splitting a frame over a farm: the parts (`--first-sample/--spp` ranges or `--crop`
+//! row strips) and the scripts that run them on Slurm (`sbatch` job array + a merge job
+//! that depends on it) or on one workstation with GNU `parallel`.
+//!
+//! Every part renders with the frame's own sample numbers, so `lightpath merge` of the
+//! parts equals the single-process render: exactly for tiles, to float rounding for
+//! sample ranges (the merge averages per-range means).
+
+use crate::film::PixelWindow;
+use std::path::{Path, PathBuf};
+
+/// How a frame is split.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum SplitBy {
+    /// Sample ranges of the whole frame.
+    Samples,
+    /// Horizontal strips of rows, all samples each.
+    Tiles,
+}
+
+impl SplitBy {
+    pub fn parse(s: &str) -> Result<SplitBy, String> {
+        match s {
+            "samples" => Ok(SplitBy::Samples),
+            "tiles" => Ok(SplitBy::Tiles),
+            other => Err(format!("expected samples or tiles, got '{other}'")),
+        }
+    }
+}
+
+/// One task's extra render arguments.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub enum Part {
+    Samples { first: u64, spp: u32 },
+    Tile(PixelWindow),
+}
+
+impl Part {
+    /// The `lightpath render` arguments selecting this part.
+    pub fn args(&self) -> Vec<String> {
+        match self {
+            Part::Samples { first, spp } => vec![
+                "--first-sample".into(),
+                first.to_string(),
+                "--spp".into(),
+                spp.to_string(),
+            ],
+            Part::Tile(w) => vec!["--crop".into(), w.to_string()],
+        }
+    }
+}
+
+/// Splits a frame of `spp` samples and `resolution` into `tasks` parts: sample ranges as
+/// even as integers allow, or strips of rows likewise.
+pub fn split(by: SplitBy, tasks: u32, spp: u32, resolution: [u32; 2]) -> Result<Vec<Part>, String> {
+    if tasks == 0 {
+        return Err("--tasks must be at least 1".into());
+    }
+    let even = |total: u32| -> Vec<(u32, u32)> {
+        let (base, extra) = (total / tasks, total % tasks);
+        let mut at = 0;
+        (0..tasks)
+            .map(|i| {
+                let n = base + (i < extra) as u32;
+                at += n;
+                (at - n, at)
+            })
+            .collect()
+    };
+    match by {
+        SplitBy::Samples => {
+            if spp < tasks {
+                return Err(format!(
+                    "{spp} samples per pixel cannot be split into {tasks} sample ranges: use fewer tasks or --by tiles"
+                ));
+            }
+            Ok(even(spp)
+                .into_iter()
+                .map(|(a, b)| Part::Samples {
+                    first: a as u64,
+                    spp: b - a,
+                })
+                .collect())
+        }
+        SplitBy::Tiles => {
+            let [w, h] = resolution;
+            if h < tasks {
+                return Err(format!(
+                    "{h} rows cannot be split into {tasks} tiles: use fewer tasks or --by samples"
+                ));
+            }
+            Ok(even(h)
+                .into_iter()
+                .map(|(a, b)| {
+                    Part::Tile(PixelWindow {
+                        x0: 0,
+                        y0: a,
+                        x1: w,
+                        y1: b,
+                    })
+                })
+                .collect())
+        }
+    }
+}
+
+/// A farm job: the binary, the scene, the render arguments every part shares, the parts
+/// and the merged output.
+#[derive(Clone, Debug)]
+pub struct FarmJob {
+    pub lightpath: PathBuf,
+    pub scene: String,
+    pub render_args: Vec<String>,
+    pub parts: Vec<Part>,
+    pub output: PathBuf,
+    /// Extra `sbatch` options for both jobs (partition, time limit, …).
+    pub sbatch_args: Vec<String>,
+}
+
+/// Quotes a word for POSIX shells.
+pub fn shell_quote(s: &str) -> String {
+    if !s.is_empty()
+        && s.bytes()
+            .all(|b| b.is_ascii_alphanumeric() || b"-_./=,:+@%".contains(&b))
+    {
+        s.to_string()
+    } else {
+        format!("'{}'", s.replace('\'', r"'\''"))
+    }
+}
+
+fn quote_all(words: &[String]) -> String {
+    words
+        .iter()
+        .map(|w| shell_quote(w))
+        .collect::<Vec<_>>()
+        .join(" ")
+}
+
+impl FarmJob {
+    /// Where the parts and logs go: `<output without .exr>.parts/`.
+    pub fn parts_dir(&self) -> PathBuf {
+        let mut name = self
+            .output
+            .file_stem()
+            .map(|s| s.to_os_string())
+            .unwrap_or_else(|| "render".into());
+        name.push(".parts");
+        self.output.with_file_name(name)
+    }
+
+    fn part_path(&self, i: usize) -> PathBuf {
+        self.parts_dir().join(format!("part-{i:04}.exr"))
+    }
+
+    /// The command rendering part `i`.
+    pub fn render_command(&self, i: usize) -> Vec<String> {
+        let mut cmd = vec![
+            self.lightpath.display().to_string(),
+            "render".into(),
+            self.scene.clone(),
+        ];
+        cmd.extend(self.render_args.iter().cloned());
+        cmd.extend(self.parts[i].args());
+        cmd.extend([
+            "--quiet".into(),
+            "-o".into(),
+            self.part_path(i).display().to_string(),
+        ]);
+        cmd
+    }
+
+    /// The command merging every part into the output.
+    pub fn merge_command(&self) -> Vec<String> {
+        let mut cmd = vec![self.lightpath.display().to_string(), "merge".into()];
+        cmd.extend((0..self.parts.len()).map(|i| self.part_path(i).display().to_string()));
+        cmd.extend(["-o".into(), self.output.display().to_string()]);
+        cmd
+    }
+
+    fn preamble(&self, what: &str) -> String {
+        format!(
+            "#!/usr/bin/env bash\n# {} {}: {} as {} parts -> {}\nset -euo pipefail\nparts={}\nmkdir -p \"$parts\"\n",
+            crate::output::software(),
+            what,
+            self.scene,
+            self.parts.len(),
+            self.output.display(),
+            shell_quote(&self.parts_dir().display().to_string()),
+        )
+    }
+
+    /// A script that submits a job array of the parts and a merge job depending on it
+    /// (`afterok`: the merge runs only if every part succeeded). It prints the two job
+    /// ids; the output appears when the merge ends.
+    pub fn slurm_script(&self) -> String {
+        let sbatch = if self.sbatch_args.is_empty() {
+            String::new()
+        } else {
+            format!(" {}", quote_all(&self.sbatch_args))
+        };
+        let mut s = self.preamble("Slurm submission");
+        s.push_str(&format!(
+            "array=$(sbatch --parsable{sbatch} --job-name=lightpath-parts --array=0-{} --output=\"$parts/part-%a.log\" <<'LIGHTPATH_PARTS'\n",
+            self.parts.len() - 1
+        ));
+        s.push_str("#!/usr/bin/env bash\nset -euo pipefail\ncase \"$SLURM_ARRAY_TASK_ID\" in\n");
+        for i in 0..self.parts.len() {
+            s.push_str(&format!(
+                "  {i}) exec {} ;;\n",
+                quote_all(&self.render_command(i))
+            ));
+        }
+        s.push_str(
+            "  *) echo \"no part $SLURM_ARRAY_TASK_ID\" >&2; exit 2 ;;\nesac\nLIGHTPATH_PARTS\n)\n",
+        );
+        s.push_str(&format!(
+            "merge=$(sbatch --parsable{sbatch} --job-name=lightpath-merge --dependency=afterok:\"${{array%%;*}}\" --output=\"$parts/merge.log\" <<'LIGHTPATH_MERGE'\n#!/usr/bin/env bash\nset -euo pipefail\nexec {}\nLIGHTPATH_MERGE\n)\n",
+            quote_all(&self.merge_command())
+        ));
+        s.push_str("echo \"parts: job array $array; merge: job $merge\"\n");
+        s
+    }
+
+    /// A script that renders the parts with GNU `parallel` on one workstation (each part
+    /// with `--threads` so the parts share the cores) and merges them.
+    pub fn parallel_script(&self, jobs: u32) -> String {
+        let mut s = self.preamble("GNU parallel");
+        s.push_str(&format!(
+            "parallel --halt now,fail=1 --jobs {jobs} ::: \\\n"
+        ));
+        for i in 0..self.parts.len() {
+            let end = if i + 1 == self.parts.len() {
+                "\n"
+            } else {
+                " \\\n"
+            };
+            s.push_str(&format!(
+                "  {}{end}",
+                shell_quote(&quote_all(&self.render_command(i)))
+            ));
+        }
+        s.push_str(&format!("{}\n", quote_all(&self.merge_command())));
+        s
+    }
+}
+
+/// `args` without option `name` and its value (`--spp 4` or `--spp=4`).
+pub fn without_option(args: &[String], name: &str) -> Vec<String> {
+    let mut out = Vec::new();
+    let mut skip = false;
+    for a in args {
+        if skip {
+            skip = false;
+        } else if a == name {
+            skip = true;
+        } else if !a.starts_with(&format!("{name}=")) {
+            out.push(a.clone());
+        }
+    }
+    out
+}
+
+/// An absolute path (without resolving links), so that jobs run from any directory.
+pub fn absolute(path: &Path) -> PathBuf {
+    std::path::absolute(path).unwrap_or_else(|_| path.to_path_buf())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn splits_are_even_and_cover_everything_once() {
+        let parts = split(SplitBy::Samples, 3, 8, [4, 4]).unwrap();
+        assert_eq!(
+            parts,
+            [
+                Part::Samples { first: 0, spp: 3 },
+                Part::Samples { first: 3, spp: 3 },
+                Part::Samples { first: 6, spp: 2 }
+            ]
+        );
+        let tiles = split(SplitBy::Tiles, 4, 8, [10, 7]).unwrap();
+        let rows: Vec<(u32, u32)> = tiles
+            .iter()
+            .map(|p| match p {
+                Part::Tile(w) => {
+                    assert_eq!((w.x0, w.x1), (0, 10));
+                    (w.y0, w.y1)
+                }
+                _ => unreachable!(),
+            })
+            .collect();
+        assert_eq!(rows, [(0, 2), (2, 4), (4, 6), (6, 7)]);
+        assert!(split(SplitBy::Samples, 9, 8, [4, 4]).is_err());
+        assert!(split(SplitBy::Tiles, 5, 8, [4, 4]).is_err());
+        assert!(split(SplitBy::Tiles, 0, 8, [4, 4]).is_err());
+    }
+
+    #[test]
+    fn an_option_is_removed_with_its_value() {
+        let args: Vec<String> = ["--spp", "4", "--aov", "a=C<RD>L", "--spp=8", "--half"]
+            .map(String::from)
+            .to_vec();
+        assert_eq!(
+            without_option(&args, "--spp"),
+            ["--aov", "a=C<RD>L", "--half"]
+        );
+    }
+
+    #[test]
+    fn shell_quoting_survives_spaces_and_quotes() {
+        assert_eq!(shell_quote("a/b.exr"), "a/b.exr");
+        assert_eq!(shell_quote("it's here"), r"'it'\''s here'");
+        assert_eq!(
+            shell_quote("C<.>*[<L.'key'>O]"),
+            r"'C<.>*[<L.'\''key'\''>O]'"
+        );
+        assert_eq!(shell_quote(""), "''");
+    }
+}
