@@ -37,6 +37,16 @@ pub struct RenderJob {
     /// Record the date in the header (`capDate`); off, identical renders are identical
     /// files.
     pub timestamp: bool,
+    /// Denoise the EXR after rendering (`render --denoise`; feature `denoise`).
+    pub denoise: Option<DenoiseRequest>,
+}
+
+/// `render --denoise`: the written EXR is the denoised one (post/denoise.rs).
+#[derive(Clone, Copy, Debug, Default)]
+pub struct DenoiseRequest {
+    /// Keep each filtered AOV's input as `<aov>_noisy`.
+    pub keep_noisy: bool,
+    pub quality: crate::post::denoise::Quality,
 }
 
 /// Render settings the command line overrides; `None` keeps the scene's value.
@@ -61,6 +71,8 @@ pub struct AovRequest {
     pub light_groups: bool,
     /// Further AOVs to split per light group.
     pub light_group_aovs: Vec<String>,
+    /// AOVs whose per-pixel variance to write as `<aov>_var` (besides the scene's).
+    pub variance: Vec<String>,
 }
 
 /// A job whose scene is loaded, planned and built: ready to render, with what the user
@@ -86,6 +98,8 @@ pub struct RenderSummary {
     pub aovs: usize,
     pub stats: RenderStats,
     pub paths: output::naming::OutputPaths,
+    /// `render --denoise`: what the denoiser did (its summary line).
+    pub denoised: Option<String>,
 }
 
 impl RenderSummary {
@@ -127,18 +141,24 @@ impl RenderJob {
             crop: None,
             cryptomatte: None,
             timestamp: false,
+            denoise: None,
         }
     }
 
     /// Loads the scene, applies the overrides, plans the AOVs and builds the scene.
     pub fn prepare(self) -> Result<PreparedRender, Error> {
+        // Before the render: a build without denoising must not render for nothing.
+        if self.denoise.is_some() && !crate::post::denoise::AVAILABLE {
+            return Err(Error::Output(crate::post::denoise::UNAVAILABLE.into()));
+        }
         let source = crate::load_source(&self.scene)?;
         let mut desc = source.parse()?;
         self.overrides.apply(&mut desc);
         let mut warnings = desc.warnings.clone();
         warnings.extend(crate::scene::load::defaults::no_light_warning(&desc));
         let specs = self.plan(&desc, &mut warnings)?;
-        let scene = Scene::build(&desc, &specs)?;
+        let mut scene = Scene::build(&desc, &specs)?;
+        scene.variance_aovs = self.variance_aovs(&desc, &scene)?;
         for w in scene.automaton.warnings() {
             let aov = &scene.aovs[w.rule.0 as usize];
             warnings.push(format!(
@@ -164,6 +184,33 @@ impl RenderJob {
             frame: FrameRequest { window, mattes },
             metadata,
         })
+    }
+
+    /// The AOVs whose variance is written: the command line's and the scene's, by name
+    /// (light-group parts included), each once.
+    fn variance_aovs(&self, desc: &SceneDesc, scene: &Scene) -> Result<Vec<u32>, Error> {
+        let mut out: Vec<u32> = Vec::new();
+        for name in self.aovs.variance.iter().chain(&desc.variance) {
+            let k = scene
+                .aovs
+                .iter()
+                .position(|a| &a.name == name)
+                .ok_or_else(|| {
+                    Error::Plan(format!(
+                        "--variance names '{name}', which is not an AOV of this render"
+                    ))
+                })?;
+            let var = crate::aov::naming::variance_name(name);
+            if scene.aovs.iter().any(|a| a.name == var) {
+                return Err(Error::Plan(format!(
+                    "the variance of '{name}' would be named '{var}', which is already an AOV"
+                )));
+            }
+            if !out.contains(&(k as u32)) {
+                out.push(k as u32);
+            }
+        }
+        Ok(out)
     }
 
     /// The AOV plan from the request and the scene description.
@@ -285,6 +332,10 @@ impl PreparedRender {
         let (width, height, spp) = (film.width, film.height, film.spp);
         output::write_film(&paths.exr, film, &scene.aovs, derived, job.exr, header)
             .map_err(Error::Output)?;
+        let denoised = match job.denoise {
+            Some(d) => Some(denoise_in_place(&paths, d, job.preview_exposure)?),
+            None => None,
+        };
         Ok(RenderSummary {
             width,
             height,
@@ -292,6 +343,34 @@ impl PreparedRender {
             aovs: scene.aovs.len(),
             stats,
             paths,
+            denoised,
         })
     }
+}
+
+/// Replaces a render's EXR by its denoised version and its preview by the denoised beauty.
+fn denoise_in_place(
+    paths: &output::naming::OutputPaths,
+    request: DenoiseRequest,
+    exposure: f32,
+) -> Result<String, Error> {
+    use crate::aov::naming::{channel_names, BEAUTY};
+    let job = crate::post::denoise::DenoiseJob {
+        input: paths.exr.clone(),
+        output: paths.exr.clone(),
+        keep_noisy: request.keep_noisy,
+        quality: request.quality,
+    };
+    let summary = crate::post::denoise::run(&job).map_err(Error::Output)?;
+    let exr = output::read_exr(&paths.exr).map_err(Error::Output)?;
+    let rgb = channel_names(BEAUTY).map(|c| exr.channel(&c).unwrap_or_default().to_vec());
+    output::write_png_rgb(
+        &paths.png,
+        exr.width as u32,
+        exr.height as u32,
+        &rgb,
+        exposure,
+    )
+    .map_err(Error::Output)?;
+    Ok(summary.line())
 }

@@ -1,7 +1,7 @@
 //! The `lightpath` command: render scenes and work with Light Path Expressions.
 
 use clap::{Parser, Subcommand};
-use lightpath::job::{AovRequest, RenderJob, SettingOverrides};
+use lightpath::job::{AovRequest, DenoiseRequest, RenderJob, SettingOverrides};
 use lightpath::lpe_tools;
 use lightpath::output;
 use lightpath::progress::{PeriodicLines, Progress, Silent};
@@ -65,6 +65,20 @@ enum Command {
         inputs: Vec<PathBuf>,
         #[arg(short, long)]
         output: PathBuf,
+    },
+    /// Denoise every light AOV of an EXR with Intel Open Image Denoise (albedo and normal
+    /// as auxiliary images, diffuse AOVs divided by albedo), keeping its partitions summing
+    /// (needs a build with the `denoise` feature).
+    Denoise {
+        input: PathBuf,
+        #[arg(short, long)]
+        output: PathBuf,
+        /// Keep each filtered AOV's input as <aov>_noisy.
+        #[arg(long)]
+        keep_noisy: bool,
+        /// Open Image Denoise quality: high, balanced or fast.
+        #[arg(long, default_value = "high", value_parser = lightpath::post::denoise::Quality::parse)]
+        quality: lightpath::post::denoise::Quality,
     },
     /// Compare two EXRs of one frame channel by channel: print the largest relative
     /// difference; exit 1 if it exceeds --tolerance (0: every value's bits must match).
@@ -182,6 +196,10 @@ struct RenderArgs {
     /// Also split these AOVs per light group (comma-separated names).
     #[arg(long, value_delimiter = ',')]
     light_group_aovs: Vec<String>,
+    /// Also write the per-pixel variance of these AOVs (comma-separated names) as
+    /// <aov>_var: the estimated variance of the pixel mean (RenderMan's `mse`).
+    #[arg(long, value_delimiter = ',')]
+    variance: Vec<String>,
     /// Add bounce AOVs bounce0 … bounce<K-1> and bounce<K>plus (they sum to beauty).
     #[arg(long)]
     bounces: Option<u32>,
@@ -220,6 +238,16 @@ struct RenderArgs {
     /// identical files.
     #[arg(long)]
     timestamp: bool,
+    /// Denoise the EXR after rendering (as `lightpath denoise`; needs a build with the
+    /// `denoise` feature).
+    #[arg(long)]
+    denoise: bool,
+    /// With --denoise: keep each filtered AOV's input as <aov>_noisy.
+    #[arg(long, requires = "denoise")]
+    keep_noisy: bool,
+    /// With --denoise: Open Image Denoise quality, high, balanced or fast.
+    #[arg(long, default_value = "high", value_parser = lightpath::post::denoise::Quality::parse)]
+    denoise_quality: lightpath::post::denoise::Quality,
 }
 
 fn parse_resolution(s: &str) -> Result<[u32; 2], String> {
@@ -313,6 +341,30 @@ fn main() -> ExitCode {
                 ExitCode::FAILURE
             }
         },
+        Command::Denoise {
+            input,
+            output,
+            keep_noisy,
+            quality,
+        } => {
+            let job = lightpath::post::denoise::DenoiseJob {
+                input,
+                output,
+                keep_noisy,
+                quality,
+            };
+            match lightpath::post::denoise::run(&job) {
+                Ok(summary) => {
+                    say!("{}", summary.line());
+                    say!("wrote {}", job.output.display());
+                    ExitCode::SUCCESS
+                }
+                Err(e) => {
+                    tell!("error: {e}");
+                    ExitCode::FAILURE
+                }
+            }
+        }
     }
 }
 
@@ -501,6 +553,7 @@ fn render(args: RenderArgs) -> ExitCode {
             bounces: args.bounces,
             light_groups: args.light_groups,
             light_group_aovs: args.light_group_aovs,
+            variance: args.variance,
         },
         first_sample: args.first_sample,
         exr: output::ExrOptions {
@@ -511,6 +564,10 @@ fn render(args: RenderArgs) -> ExitCode {
         crop: args.crop,
         cryptomatte: args.cryptomatte.then_some(args.cryptomatte_ranks),
         timestamp: args.timestamp,
+        denoise: args.denoise.then_some(DenoiseRequest {
+            keep_noisy: args.keep_noisy,
+            quality: args.denoise_quality,
+        }),
     };
     let prepared = match job.prepare() {
         Ok(p) => p,
@@ -526,6 +583,9 @@ fn render(args: RenderArgs) -> ExitCode {
     match prepared.run(progress.as_ref()) {
         Ok(summary) => {
             say!("{}", summary.line());
+            if let Some(d) = &summary.denoised {
+                say!("{d}");
+            }
             say!(
                 "wrote {} and {}",
                 summary.paths.exr.display(),

@@ -131,7 +131,7 @@ pub fn render_frame(
     let win = request.window;
     debug_assert!(win.check(fw, fh).is_ok());
     let (w, h) = (win.width(), win.height());
-    let stride = Film::stride_for(scene.aovs.len());
+    let stride = Film::stride_with(scene.aovs.len(), scene.variance_aovs.len());
     let tracer = Tracer::new(scene);
     let rays = AtomicU64::new(0);
     let nonfinite = AtomicU64::new(0);
@@ -144,7 +144,8 @@ pub fn render_frame(
     // At least 8 rows (or the whole window when it is shorter).
     let band_rows = (BAND_BYTES / (4 * row_len)).max(8).min(h.max(1) as usize);
     let mut band = vec![0.0f32; band_rows * row_len];
-    let mut film = Film::for_window(win, [fw, fh], scene.aovs.len(), options.spp);
+    let mut film = Film::for_window(win, [fw, fh], scene.aovs.len(), options.spp)
+        .summing_squares(scene.variance_aovs.clone());
     // Cryptomatte values, band by band beside the AOVs' (one dummy value per row without).
     let table = request.mattes.as_ref();
     let matte_stride = table.map_or(0, |t| t.stride());
@@ -164,7 +165,10 @@ pub fn render_frame(
             .for_each_init(
                 || {
                     (
-                        SampleAccumulator::new(scene.aovs.len()),
+                        SampleAccumulator::with_squares(
+                            scene.aovs.len(),
+                            scene.variance_aovs.clone(),
+                        ),
                         PixelMatte::new(table.map_or(0, |t| t.layers.len())),
                     )
                 },

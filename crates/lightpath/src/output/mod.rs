@@ -8,8 +8,8 @@ pub mod naming;
 mod png;
 
 pub use self::exr::{
-    derived_aovs, read_exr, software, write_channels, write_exr, write_film, write_image,
-    DerivedAov, ExrCompression, ExrContents, ExrHeader, ExrOptions,
+    derived_aovs, read_exr, shadow_matte, software, write_channels, write_exr, write_film,
+    write_image, DerivedAov, ExrCompression, ExrContents, ExrHeader, ExrOptions,
 };
 pub use self::png::{write_png, write_png_rgb};
 pub use crate::aov::naming::{channel_names, AOV_ATTRIBUTE_PREFIX};
