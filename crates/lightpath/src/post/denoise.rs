@@ -185,6 +185,9 @@ const EMISSION: &str = "emission";
 /// RGB planes of one AOV.
 type Planes = [Vec<f32>; 3];
 
+/// An EXR's named channels.
+type Channels = Vec<(String, Vec<f32>)>;
+
 /// An image filter over interleaved RGB of the file's size: OIDN, or a stand-in in
 /// tests. `albedo_divided`: the input was divided by the albedo (filter it with a white
 /// albedo).
@@ -200,8 +203,8 @@ pub struct Aux {
 
 fn interleave(p: [&[f32]; 3]) -> Vec<f32> {
     let mut out = Vec::with_capacity(p[0].len() * 3);
-    for i in 0..p[0].len() {
-        out.extend([p[0][i], p[1][i], p[2][i]]);
+    for ((r, g), b) in p[0].iter().zip(p[1]).zip(p[2]) {
+        out.extend([*r, *g, *b]);
     }
     out
 }
@@ -379,7 +382,7 @@ pub fn denoise_contents(
     filter: &mut dyn Filter,
     keep_noisy: bool,
     summary: &mut DenoiseSummary,
-) -> Result<(Vec<(String, Vec<f32>)>, Vec<(String, String)>), String> {
+) -> Result<(Channels, Vec<(String, String)>), String> {
     if exr
         .attributes
         .iter()
