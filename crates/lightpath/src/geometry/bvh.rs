@@ -890,6 +890,7 @@ impl Accel {
             ng,
             ns,
             prim,
+            inner: u32::MAX,
             object: self.objects[prim as usize],
         }
     }
@@ -908,6 +909,7 @@ impl Accel {
             ng,
             ns: if ns.dot(ng) < 0.0 { -ns } else { ns },
             prim,
+            inner,
             object: self.objects[prim as usize],
         }
     }

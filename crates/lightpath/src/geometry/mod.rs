@@ -2,12 +2,14 @@
 //! `intersect` / `occluded` seam; `obvhs` builds the BVH, `bvh` lays it out 4 or 8 wide
 //! (`lanes`: SSE2 or, where the CPU has AVX2, AVX).
 
+pub mod attrs;
 mod bvh;
 mod instance;
 mod lanes;
 mod sah;
 pub mod shapes;
 
+pub use attrs::{SurfaceAttrs, SurfaceUv};
 pub use bvh::{Accel, Visibility};
 pub use instance::Instance;
 
@@ -54,6 +56,9 @@ pub struct Hit {
     /// Shading normal, on the same side as `ng`.
     pub ns: Vec3A,
     pub prim: u32,
+    /// On an instance (`prim` is a `Prim::Instance`): the shared mesh's primitive hit;
+    /// otherwise `u32::MAX`.
+    pub inner: u32,
     pub object: u32,
 }
 

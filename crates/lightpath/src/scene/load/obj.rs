@@ -111,6 +111,7 @@ fn default_material(file: &str) -> MaterialDesc {
         user_color: None,
         base_color_map: None,
         normal_map: None,
+        textures: Default::default(),
         origin: Origin::file(file),
     }
 }
@@ -239,6 +240,12 @@ fn parse(bytes: &[u8], file: &str, path: &Path) -> Result<Obj, SceneError> {
                     let index =
                         |s: Option<&str>, count: usize, what: &str| line.index(s, count, w, what);
                     let v = index(fields.next(), positions.len(), "vertex")?;
+                    if v == NONE {
+                        return Err(line.origin(w).error(format!(
+                            "expected a vertex index first in '{}' (like 3, 3/1 or 3//2)",
+                            w.text
+                        )));
+                    }
                     let vt = index(fields.next(), uvs.len(), "texture coordinate")?;
                     let vn = index(fields.next(), normals.len(), "normal")?;
                     let next = part.mesh.positions.len() as u32;
@@ -472,6 +479,7 @@ impl Mtl {
             user_color: None,
             base_color_map: self.map_kd.clone(),
             normal_map: self.map_bump.clone(),
+            textures: Default::default(),
             origin: self.origin.clone(),
         }
     }
