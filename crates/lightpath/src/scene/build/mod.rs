@@ -73,6 +73,7 @@ impl Scene {
             light_parts,
             any_unoccluded,
             data_live,
+            variance_aovs: Vec::new(),
         })
     }
 }
