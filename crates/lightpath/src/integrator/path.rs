@@ -143,7 +143,7 @@ impl Tracer<'_> {
     }
 
     /// Emission arriving along the ray at `hit`: a light's surface, or a glowing object
-    /// that is not a light (`O`, no MIS: nothing samples it).
+    /// that is not a light (`O`, weighted against light sampling when that samples it).
     fn emission_at_hit(
         &self,
         out: &mut Sink,
@@ -163,16 +163,17 @@ impl Tracer<'_> {
             }
         } else if let Some(glow) = obj.glow_class {
             let s = scene.automaton.step(path.state, glow);
-            let via = Via::Hit {
-                light_sampled: false,
-                light_after_scatter: false,
-            };
+            let weight = obj.glow_light.map_or(1.0, |li| {
+                self.bsdf_weight(path, li, |light| {
+                    light.pdf_hit(path.prev_p, ray.dir, hit.t, hit.ng)
+                })
+            });
             let origin = Origin {
-                via,
+                via: Via::Glow,
                 scatters: path.depth,
                 part: self.default_part,
             };
-            self.contribute(out, s, path.throughput, obj.emission, 1.0, origin);
+            self.contribute(out, s, path.throughput, obj.emission, weight, origin);
         }
     }
 
