@@ -105,7 +105,7 @@ impl Part {
             ));
         }
         let ranges = match text.get(SAMPLES_ATTRIBUTE) {
-            Some(s) => parse_ranges(s).ok_or_else(|| {
+            Some(s) => parse_ranges(s).filter(|r| !r.is_empty()).ok_or_else(|| {
                 format!(
                     "{}: {SAMPLES_ATTRIBUTE} is '{s}', expected ranges like '0-64 64-128'",
                     path.display()
@@ -113,15 +113,30 @@ impl Part {
             })?,
             // Files written before sample ranges were recorded: first_sample and spp.
             None => {
-                let get = |k: &str| text.get(k).and_then(|v| v.parse::<u64>().ok());
-                let spp = get(SPP_ATTRIBUTE).ok_or_else(|| {
-                    format!(
+                let Some(spp) = text.get(SPP_ATTRIBUTE) else {
+                    return Err(format!(
                         "{} has no {SPP_ATTRIBUTE} header: not a Lightpath render",
                         path.display()
-                    )
-                })?;
-                let first = get(FIRST_SAMPLE_ATTRIBUTE).unwrap_or(0);
-                vec![(first, first + spp)]
+                    ));
+                };
+                let first = match text.get(FIRST_SAMPLE_ATTRIBUTE) {
+                    Some(f) => f.parse::<u64>().ok(),
+                    None => Some(0),
+                };
+                // A count of 0 (or one that overflows) would merge as no samples at all,
+                // and its weight would divide by zero.
+                match (spp.parse::<u64>(), first) {
+                    (Ok(n), Some(first)) if n > 0 && first.checked_add(n).is_some() => {
+                        vec![(first, first + n)]
+                    }
+                    _ => {
+                        return Err(format!(
+                            "{}: {SPP_ATTRIBUTE} is '{spp}': expected a sample count \
+                             (a whole number from 1, after a valid {FIRST_SAMPLE_ATTRIBUTE})",
+                            path.display()
+                        ))
+                    }
+                }
             }
         };
         let mut channels: Vec<String> = header

@@ -239,6 +239,12 @@ fn parse(bytes: &[u8], file: &str, path: &Path) -> Result<Obj, SceneError> {
                     let index =
                         |s: Option<&str>, count: usize, what: &str| line.index(s, count, w, what);
                     let v = index(fields.next(), positions.len(), "vertex")?;
+                    if v == NONE {
+                        return Err(line.origin(w).error(format!(
+                            "expected a vertex index first in '{}' (like 3, 3/1 or 3//2)",
+                            w.text
+                        )));
+                    }
                     let vt = index(fields.next(), uvs.len(), "texture coordinate")?;
                     let vn = index(fields.next(), normals.len(), "normal")?;
                     let next = part.mesh.positions.len() as u32;
