@@ -91,6 +91,7 @@ fn bumpy_sphere(levels: u32) -> MeshData {
         indices: faces,
         normals: None,
         uvs: None,
+        tangents: None,
     }
 }
 

@@ -103,6 +103,12 @@ impl Camera {
         }
     }
 
+    /// The angle one pixel subtends at the image centre (radians): the spread of the
+    /// ray cones that choose texture mip levels.
+    pub fn pixel_spread(&self) -> f32 {
+        2.0 * self.tan_half.y / self.height as f32
+    }
+
     /// OpenEXR's `worldToCamera` as a column-vector matrix: camera space has x right, y
     /// up and z along the view direction (left-handed; what the camera sees has z > 0).
     pub fn world_to_camera(&self) -> glam::Mat4 {

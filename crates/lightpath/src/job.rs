@@ -34,6 +34,9 @@ pub struct RenderJob {
     pub exr: output::ExrOptions,
     /// Exposure of the PNG preview, in stops.
     pub preview_exposure: f32,
+    /// Which of the scene file's named cameras to render through (glTF); `None`: its
+    /// first.
+    pub camera: Option<String>,
     /// Render only this window of the frame (`--crop`); the EXR keeps the whole frame
     /// as its display window.
     pub crop: Option<PixelWindow>,
@@ -166,6 +169,7 @@ impl RenderJob {
             first_sample: 0,
             exr: output::ExrOptions::default(),
             preview_exposure: 0.0,
+            camera: None,
             crop: None,
             cryptomatte: None,
             timestamp: false,
@@ -179,6 +183,9 @@ impl RenderJob {
     pub fn prepare(self) -> Result<PreparedRender, Error> {
         let source = crate::load_source(&self.scene)?;
         let mut desc = source.parse()?;
+        if let Some(name) = &self.camera {
+            desc.use_camera(name)?;
+        }
         self.overrides.apply(&mut desc);
         let paths = output::naming::output_paths(&self.scene, self.output.as_deref());
         checks::outputs(&paths, &self.scene).map_err(Error::Output)?;

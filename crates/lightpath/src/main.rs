@@ -49,7 +49,7 @@ struct Cli {
 #[derive(Subcommand)]
 enum Command {
     /// Render a scene file or a built-in scene (cornell, cornell-classic) to EXR and PNG.
-    Render(RenderArgs),
+    Render(Box<RenderArgs>),
     /// Check, match and explain Light Path Expressions.
     #[command(subcommand)]
     Lpe(LpeCommand),
@@ -179,7 +179,7 @@ struct CompArgs {
 
 #[derive(clap::Args)]
 struct RenderArgs {
-    /// A scene file (TOML) or the name of a built-in scene.
+    /// A scene file (TOML, glTF .gltf/.glb) or the name of a built-in scene.
     #[arg(default_value = "cornell")]
     scene: String,
     /// Output EXR; the PNG preview goes beside it. Default: <scene>.exr in this directory.
@@ -227,6 +227,9 @@ struct RenderArgs {
     /// Exposure of the PNG preview, in stops.
     #[arg(long, default_value_t = 0.0)]
     exposure: f32,
+    /// Render through this camera of a glTF scene (default: its first).
+    #[arg(long)]
+    camera: Option<String>,
     /// No progress bar.
     #[arg(short, long)]
     quiet: bool,
@@ -375,7 +378,7 @@ fn main() -> ExitCode {
         return ExitCode::FAILURE;
     }
     match cli.command {
-        Command::Render(args) => render(args),
+        Command::Render(args) => render(*args),
         Command::Lpe(cmd) => lpe_command(cmd),
         Command::Aovs { exr, tolerance } => aovs_command(&exr, tolerance),
         Command::Comp(args) => comp_command(args),
@@ -692,6 +695,7 @@ fn render(args: RenderArgs) -> ExitCode {
             compression: args.compression,
         },
         preview_exposure: args.exposure,
+        camera: args.camera,
         crop: args.crop,
         cryptomatte: args.cryptomatte.then_some(args.cryptomatte_ranks),
         timestamp: args.timestamp,

@@ -818,6 +818,7 @@ impl Accel {
             ng,
             ns,
             prim,
+            inner: u32::MAX,
             object: self.objects[prim as usize],
         }
     }
@@ -836,6 +837,7 @@ impl Accel {
             ng,
             ns: if ns.dot(ng) < 0.0 { -ns } else { ns },
             prim,
+            inner,
             object: self.objects[prim as usize],
         }
     }

@@ -1,11 +1,13 @@
 //! Primitives (triangles and spheres) and the acceleration structure behind a small
 //! `intersect` / `occluded` seam; `obvhs` builds the BVH, `bvh` lays it out 4 wide.
 
+pub mod attrs;
 mod bvh;
 mod instance;
 mod sah;
 pub mod shapes;
 
+pub use attrs::{SurfaceAttrs, SurfaceUv};
 pub use bvh::{Accel, Visibility};
 pub use instance::Instance;
 
@@ -52,6 +54,9 @@ pub struct Hit {
     /// Shading normal, on the same side as `ng`.
     pub ns: Vec3A,
     pub prim: u32,
+    /// On an instance (`prim` is a `Prim::Instance`): the shared mesh's primitive hit;
+    /// otherwise `u32::MAX`.
+    pub inner: u32,
     pub object: u32,
 }
 

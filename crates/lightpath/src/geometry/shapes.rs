@@ -2,7 +2,7 @@
 //! space, as Mitsuba defines them), spheres stay analytic, meshes come inline or from OBJ.
 
 use super::Prim;
-use glam::{Affine3A, Vec3A};
+use glam::{Affine3A, Vec2, Vec3A, Vec4};
 use std::f32::consts::PI;
 
 /// Primitives of one shape, plus per-vertex normals for smooth meshes.
@@ -11,6 +11,19 @@ pub struct ShapePrims {
     pub prims: Vec<Prim>,
     /// For each triangle with shading normals: its index in `prims` and the normals.
     pub normals: Vec<(usize, [Vec3A; 3])>,
+    /// UVs and world tangents of the triangles in `normals`: empty, or one entry each.
+    pub attrs: Vec<VertexAttrs>,
+}
+
+/// A triangle's per-vertex UVs and world-space tangents (w: bitangent sign), if given.
+pub type VertexAttrs = (Option<[Vec2; 3]>, Option<[Vec4; 3]>);
+
+/// Per-vertex attributes of a mesh beyond positions, one entry per position each.
+#[derive(Clone, Copy, Default)]
+pub struct MeshAttrs<'a> {
+    pub normals: Option<&'a [Vec3A]>,
+    pub uvs: Option<&'a [Vec2]>,
+    pub tangents: Option<&'a [Vec4]>,
 }
 
 fn tri(xf: &Affine3A, a: Vec3A, b: Vec3A, c: Vec3A) -> Prim {
@@ -37,7 +50,7 @@ pub fn rectangle(xf: &Affine3A) -> ShapePrims {
     ];
     ShapePrims {
         prims: vec![tri(xf, c[0], c[1], c[2]), tri(xf, c[0], c[2], c[3])],
-        normals: vec![],
+        ..ShapePrims::default()
     }
 }
 
@@ -49,7 +62,7 @@ pub fn quad(corners: [Vec3A; 4]) -> ShapePrims {
             tri(&id, corners[0], corners[1], corners[2]),
             tri(&id, corners[0], corners[2], corners[3]),
         ],
-        normals: vec![],
+        ..ShapePrims::default()
     }
 }
 
@@ -103,25 +116,45 @@ pub fn disk(xf: &Affine3A, segments: usize) -> ShapePrims {
 pub fn sphere(center: Vec3A, radius: f32) -> ShapePrims {
     ShapePrims {
         prims: vec![Prim::Sphere { center, radius }],
-        normals: vec![],
+        ..ShapePrims::default()
     }
 }
 
-/// A triangle mesh; `normals` (one per vertex), if given, are interpolated for shading.
+/// A triangle mesh; normals (one per vertex), if given, are interpolated for shading,
+/// and UVs and tangents are kept for textures (a mesh with UVs but no normals gets its
+/// face normals, so every textured triangle has an attribute entry).
 pub fn mesh(
     xf: &Affine3A,
     positions: &[Vec3A],
     indices: &[[u32; 3]],
-    normals: Option<&[Vec3A]>,
+    attrs: MeshAttrs,
 ) -> ShapePrims {
     let mut out = ShapePrims::default();
     let normal_xf = xf.matrix3.inverse().transpose();
+    let extra = attrs.uvs.is_some() || attrs.tangents.is_some();
+    // A mirroring placement flips the bitangent with the winding.
+    let handedness = xf.matrix3.determinant().signum();
     for idx in indices {
         let [a, b, c] = idx.map(|i| positions[i as usize]);
         let t = tri(xf, a, b, c);
-        if let Some(ns) = normals {
-            let n = idx.map(|i| (normal_xf * ns[i as usize]).normalize_or(Vec3A::Z));
+        let n = match attrs.normals {
+            Some(ns) => Some(idx.map(|i| (normal_xf * ns[i as usize]).normalize_or(Vec3A::Z))),
+            None if extra => Some([t.face_normal(); 3]),
+            None => None,
+        };
+        if let Some(n) = n {
             out.normals.push((out.prims.len(), n));
+            if extra {
+                let uvs = attrs.uvs.map(|uv| idx.map(|i| uv[i as usize]));
+                let tangents = attrs.tangents.map(|ts| {
+                    idx.map(|i| {
+                        let t = ts[i as usize];
+                        let w = xf.transform_vector3a(Vec3A::from(t.truncate()));
+                        w.normalize_or(Vec3A::X).extend(t.w * handedness)
+                    })
+                });
+                out.attrs.push((uvs, tangents));
+            }
         }
         out.prims.push(t);
     }

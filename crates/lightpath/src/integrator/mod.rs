@@ -11,6 +11,7 @@ mod direct;
 mod path;
 mod pixel;
 mod routing;
+mod shading;
 
 use crate::film::{Film, Mattes, PixelWindow, SampleAccumulator};
 use crate::geometry::{Hit, Ray};

@@ -32,6 +32,10 @@ pub(super) struct PathState {
     pub specular: u32,
     /// Scattering vertices so far.
     pub depth: u32,
+    /// The ray cone that picks texture mip levels: its width at the last vertex and its
+    /// spread angle (shading.rs).
+    pub cone_width: f32,
+    pub cone_spread: f32,
 }
 
 /// A scattering vertex: the hit and what is there.
@@ -39,8 +43,8 @@ pub(super) struct Vertex<'a> {
     pub hit: &'a Hit,
     pub obj: &'a Object,
     pub material: &'a Material,
-    /// The BSDF shading uses here: the material's, or its regularised one after a
-    /// diffuse bounce.
+    /// The BSDF shading uses here: the material's, its textured one (textures evaluated),
+    /// or its regularised one after a diffuse bounce.
     pub bsdf: &'a Bsdf,
     pub sh: Shading,
 }
@@ -62,6 +66,8 @@ impl Tracer<'_> {
             diffuse: 0,
             specular: 0,
             depth: 0,
+            cone_width: 0.0,
+            cone_spread: scene.camera.pixel_spread(),
         };
         let mut alpha = 0.0;
         out.holdout = false;
@@ -92,6 +98,7 @@ impl Tracer<'_> {
                 break;
             };
             let obj = &scene.objects[hit.object as usize];
+            path.cone_width += path.cone_spread * hit.t;
             self.emission_at_hit(out, &path, &ray, &hit, obj);
 
             // Mitsuba's convention: `max_depth` counts segments; scattering here adds one.
@@ -101,11 +108,16 @@ impl Tracer<'_> {
             let Some(material) = obj.material.map(|m| &scene.materials[m as usize]) else {
                 break;
             };
-            let bsdf = match &material.regularized {
-                Some(rough) if path.diffuse > 0 => rough,
-                _ => &material.bsdf,
+            let textured;
+            let (bsdf, ns) = match (&material.textured, &material.regularized) {
+                (Some(t), _) => {
+                    textured = self.textured(t, &hit, ray.dir, path.cone_width);
+                    (&textured.0, textured.1)
+                }
+                (None, Some(rough)) if path.diffuse > 0 => (rough, hit.ns),
+                (None, _) => (&material.bsdf, hit.ns),
             };
-            let sh = Shading::new(bsdf, hit.ns, hit.ng, -ray.dir);
+            let sh = Shading::new(bsdf, ns, hit.ng, -ray.dir);
             if sh.wo.z == 0.0 {
                 break;
             }
@@ -163,6 +175,7 @@ impl Tracer<'_> {
             }
         } else if let Some(glow) = obj.glow_class {
             let s = scene.automaton.step(path.state, glow);
+            let emission = obj.emission * self.glow_texture(obj, hit, ray.dir, path.cone_width);
             let weight = obj.glow_light.map_or(1.0, |li| {
                 self.bsdf_weight(path, li, |light| {
                     light.pdf_hit(path.prev_p, ray.dir, hit.t, hit.ng)
@@ -173,7 +186,7 @@ impl Tracer<'_> {
                 scatters: path.depth,
                 part: self.default_part,
             };
-            self.contribute(out, s, path.throughput, obj.emission, weight, origin);
+            self.contribute(out, s, path.throughput, emission, weight, origin);
         }
     }
 
@@ -249,6 +262,9 @@ impl Tracer<'_> {
         path.prev_pdf = bs.pdf;
         path.prev_delta = bs.delta;
         path.prev_object = v.hit.object;
+        if !bs.delta {
+            path.cone_spread = path.cone_spread.max(super::shading::SCATTERED_SPREAD);
+        }
         path.depth += 1;
         Some(self.spawn(v.hit, bs.wi, f32::INFINITY))
     }

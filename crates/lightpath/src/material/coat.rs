@@ -1,5 +1,6 @@
 //! A dielectric clear coat (RS4) over base lobes: its specular reflection, and the
-//! Fresnel transmittance that attenuates what lies beneath.
+//! Fresnel transmittance that attenuates what lies beneath. A `weight` below one is a
+//! partial coat (glTF's `clearcoatFactor`): reflection × w, the base × (1 − w·F).
 
 use super::fresnel::{fresnel_dielectric, reflect};
 use super::lobe::{tag, LobeModel, LobeSample, LobeTag, SampleCtx};
@@ -12,19 +13,22 @@ pub struct Coat {
     pub eta: f32,
     /// GGX alpha; 0 is a smooth coat.
     pub alpha: f32,
+    /// How much of the surface the coat covers, in [0, 1].
+    pub weight: f32,
 }
 
 impl Coat {
     /// The factor on a base lobe's `f`: light crosses the coat going in and coming out.
     pub fn transmittance(&self, wo: Vec3A, wi: Vec3A) -> f32 {
-        (1.0 - fresnel_dielectric(wo.z, self.eta)) * (1.0 - fresnel_dielectric(wi.z, self.eta))
+        (1.0 - self.weight * fresnel_dielectric(wo.z, self.eta))
+            * (1.0 - self.weight * fresnel_dielectric(wi.z, self.eta))
     }
 
     /// Probability of choosing the coat over a base whose selection weights sum to
     /// `base`: its Fresnel share of the reflected energy, kept within [0.1, 0.9] so
     /// neither layer starves.
     pub fn selection(&self, wo: Vec3A, base: f32) -> f32 {
-        let f = fresnel_dielectric(wo.z.abs(), self.eta);
+        let f = self.weight * fresnel_dielectric(wo.z.abs(), self.eta);
         let d = (1.0 - f) * base;
         (f / (f + d).max(1e-6)).clamp(0.1, 0.9)
     }
@@ -46,7 +50,8 @@ impl LobeModel for Coat {
         }
         let g = Ggx { alpha: self.alpha };
         let m = (wo + wi).normalize();
-        let f = fresnel_dielectric(wi.dot(m), self.eta) * g.d(m) * g.g(wo, wi) / (4.0 * wo.z);
+        let f = self.weight * fresnel_dielectric(wi.dot(m), self.eta) * g.d(m) * g.g(wo, wi)
+            / (4.0 * wo.z);
         (
             Vec3A::splat(f),
             sel * g.pdf_visible(wo, m) / (4.0 * wo.dot(m)),
@@ -57,7 +62,7 @@ impl LobeModel for Coat {
             return None;
         }
         if self.alpha == 0.0 {
-            let f = fresnel_dielectric(wo.z, self.eta);
+            let f = self.weight * fresnel_dielectric(wo.z, self.eta);
             return Some(LobeSample {
                 sub: 0,
                 wi: Vec3A::new(-wo.x, -wo.y, wo.z),

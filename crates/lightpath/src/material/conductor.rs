@@ -51,7 +51,10 @@ impl LobeModel for Conductor {
         }
         LobeSample::direction(0, wi)
     }
-    fn selection_weight(&self, _: Vec3A) -> f32 {
-        1.0
+    /// Its Fresnel reflectance towards `wo`: beside a diffuse lobe, a dielectric's
+    /// specular (f0 ≈ 0.04) gets few samples, a metal's most. (Alone, a lobe's weight
+    /// is never read.)
+    fn selection_weight(&self, wo: Vec3A) -> f32 {
+        crate::light::luminance(schlick(self.f0, wo.z.abs()))
     }
 }

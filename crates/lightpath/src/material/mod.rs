@@ -24,6 +24,9 @@ pub mod fresnel;
 mod lambert;
 pub mod lobe;
 pub mod microfacet;
+pub mod pbr;
+pub mod texture;
+pub mod textured;
 mod translucent;
 
 #[cfg(test)]
@@ -35,6 +38,7 @@ pub use dielectric::Dielectric;
 pub use fresnel::fresnel_dielectric;
 pub use lambert::Lambert;
 pub use lobe::{Lobe, LobeModel, LobeTag};
+pub use pbr::PbrParams;
 pub use translucent::DiffuseTransmission;
 
 use crate::sampling::Frame;
@@ -174,7 +178,11 @@ impl Bsdf {
     pub fn plastic(albedo: Vec3A, eta: f32, alpha: f32) -> Bsdf {
         Bsdf::layered(
             &[Lambert { albedo }.into()],
-            Some(Coat { eta, alpha }),
+            Some(Coat {
+                eta,
+                alpha,
+                weight: 1.0,
+            }),
             albedo,
         )
     }

@@ -160,7 +160,22 @@ fn rough_lobe_cases() -> Vec<(String, Lobe, Vec<Vec3A>)> {
         ));
         cases.push((
             format!("coat alpha {alpha}"),
-            Coat { eta: 1.5, alpha }.into(),
+            Coat {
+                eta: 1.5,
+                alpha,
+                weight: 1.0,
+            }
+            .into(),
+            up.clone(),
+        ));
+        cases.push((
+            format!("half coat alpha {alpha}"),
+            Coat {
+                eta: 1.5,
+                alpha,
+                weight: 0.5,
+            }
+            .into(),
             up.clone(),
         ));
         cases.push((
@@ -446,9 +461,15 @@ fn chi2_sampled_directions_follow_each_material_pdf() {
                 Some(Coat {
                     eta: 1.5,
                     alpha: 0.3,
+                    weight: 1.0,
                 }),
                 Vec3A::splat(0.5),
             ),
+        ),
+        ("pbr dielectric", Bsdf::pbr(&pbr(0.0, 0.3, 0.0))),
+        (
+            "pbr half metal under a half coat",
+            Bsdf::pbr(&pbr(0.5, 0.5, 0.5)),
         ),
     ];
     let wos = [dir(20.0, 0.0), dir(70.0, 45.0)];
@@ -580,6 +601,7 @@ fn smooth_lobes_reflect_their_fresnel_and_glass_conserves_energy() {
         let coat = Lobe::from(Coat {
             eta: 1.5,
             alpha: 0.0,
+            weight: 1.0,
         });
         let want = (fresnel_dielectric(wo.z, 1.5) as f64, 0.0);
         let got = sampled_albedo(&coat, wo, 10_000, 6);
@@ -618,6 +640,8 @@ fn eval_pdf_equals_sample_pdf_for_every_material() {
         Bsdf::plastic(Vec3A::splat(0.5), 1.5, 0.4),
         Bsdf::conductor(Vec3A::splat(0.9), 0.3),
         Bsdf::dielectric(1.5, 0.3, Vec3A::new(0.9, 0.8, 0.7)),
+        Bsdf::pbr(&pbr(0.0, 0.4, 0.0)),
+        Bsdf::pbr(&pbr(0.7, 0.2, 1.0)),
     ];
     let mut rng = Rng::for_sample(9, 0, 0);
     for bsdf in &materials {
@@ -650,4 +674,56 @@ fn eval_pdf_equals_sample_pdf_for_every_material() {
         }
         assert!(checked > 100, "{bsdf:?}: only {checked} samples");
     }
+}
+
+/// A metallic-roughness material of base colour (0.8, 0.6, 0.4).
+fn pbr(metallic: f32, alpha: f32, clearcoat: f32) -> crate::material::PbrParams {
+    crate::material::PbrParams {
+        base: Vec3A::new(0.8, 0.6, 0.4),
+        metallic,
+        alpha,
+        ior: 1.5,
+        glass: false,
+        clearcoat,
+        clearcoat_alpha: 0.1,
+    }
+}
+
+/// The metallic-roughness material conserves energy for a white base at any metallic
+/// and coat, and a full metal reflects exactly as the conductor of its base colour.
+#[test]
+fn pbr_material_conserves_energy_and_full_metal_is_the_conductor() {
+    let albedo = |bsdf: &Bsdf, wo: Vec3A, seed: u64| {
+        let sh = local(wo);
+        let mut rng = Rng::for_sample(17, seed, 0);
+        mean_se((0..20_000).map(|_| {
+            bsdf.sample(&sh, rng.next_f32(), rng.next_2d())
+                .map_or(0.0, |s| luminance(s.weight) as f64)
+        }))
+    };
+    for (i, metallic) in [0.0, 0.5, 1.0].into_iter().enumerate() {
+        for (j, coat) in [0.0, 1.0].into_iter().enumerate() {
+            let p = crate::material::PbrParams {
+                base: Vec3A::ONE,
+                ..pbr(metallic, 0.3, coat)
+            };
+            let wo = dir(40.0, 0.0);
+            let (mean, se) = albedo(&Bsdf::pbr(&p), wo, (3 * i + j) as u64);
+            assert!(
+                mean <= 1.0 + 5.0 * se + ROUNDING,
+                "metallic {metallic} coat {coat}: {mean} ± {se}"
+            );
+            assert!(mean > 0.5, "metallic {metallic} coat {coat}: {mean}");
+        }
+    }
+    let metal = Bsdf::pbr(&pbr(1.0, 0.3, 0.0));
+    let conductor = Bsdf::conductor(Vec3A::new(0.8, 0.6, 0.4), 0.3);
+    let sh = local(dir(30.0, 10.0));
+    let wi = dir(50.0, 200.0);
+    let spec = metal.lobes().len() - 1;
+    assert_eq!(
+        metal.eval_lobe(spec, &sh, wi).0,
+        conductor.eval_lobe(0, &sh, wi).0
+    );
+    assert_eq!(metal.eval_lobe(0, &sh, wi).0, Vec3A::ZERO);
 }

@@ -61,9 +61,36 @@ pub struct SceneDesc {
     pub light_groups: bool,
     /// Also split these AOVs per light group.
     pub light_group_aovs: Vec<String>,
+    /// Every camera a file names (glTF), for `--camera NAME`; `camera` is the first.
+    pub cameras: Vec<NamedCamera>,
     /// What the loaders want the user told (a default camera or light added, statements
-    /// skipped), each naming its file.
+    /// skipped, unsupported glTF extensions), each naming its file.
     pub warnings: Vec<String>,
+}
+
+impl SceneDesc {
+    /// Renders through the named camera (and its film size, if it implies one).
+    pub fn use_camera(&mut self, name: &str) -> Result<(), crate::scene::SceneError> {
+        let Some(c) = self.cameras.iter().find(|c| c.name == name) else {
+            let known: Vec<&str> = self.cameras.iter().map(|c| c.name.as_str()).collect();
+            return Err(Origin::file(&self.source).error(format!(
+                "no camera named '{name}': the scene's cameras are {known:?}"
+            )));
+        };
+        self.camera = Some(c.camera.clone());
+        if let Some(r) = c.resolution {
+            self.film.resolution = r;
+        }
+        Ok(())
+    }
+}
+
+/// A camera a scene file names, and the film size it implies (from its aspect ratio).
+#[derive(Clone, Debug)]
+pub struct NamedCamera {
+    pub name: String,
+    pub camera: CameraDesc,
+    pub resolution: Option<[u32; 2]>,
 }
 
 #[derive(Clone, Debug)]
@@ -193,6 +220,59 @@ pub enum MaterialKind {
         albedo: [f32; 3],
         ior: Option<f32>,
     },
+    /// glTF's metallic-roughness material (`material::pbr`); roughness is the
+    /// material's. Transmission ≥ ½ makes it glass.
+    Pbr {
+        base_color: [f32; 3],
+        metallic: f32,
+        ior: Option<f32>,
+        transmission: f32,
+        clearcoat: f32,
+        clearcoat_roughness: f32,
+    },
+}
+
+/// Where an image comes from: a file, or bytes inside a scene file (glTF buffers, data
+/// URIs) with a name for messages.
+#[derive(Clone, Debug)]
+pub enum ImageSource {
+    File(PathBuf),
+    Bytes {
+        name: String,
+        bytes: std::sync::Arc<[u8]>,
+    },
+}
+
+impl fmt::Display for ImageSource {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            ImageSource::File(p) => write!(f, "{}", p.display()),
+            ImageSource::Bytes { name, .. } => f.write_str(name),
+        }
+    }
+}
+
+/// An image texture as a material names it.
+#[derive(Clone, Debug)]
+pub struct TextureDesc {
+    pub image: ImageSource,
+    /// In u and v.
+    pub wrap: [crate::material::texture::Wrap; 2],
+    pub transform: crate::material::texture::UvTransform,
+    pub origin: Origin,
+}
+
+/// A material's textures; each multiplies the parameter it names.
+#[derive(Clone, Debug, Default)]
+pub struct TexturesDesc {
+    /// Albedo, f0, tint or base colour (sRGB-decoded).
+    pub base_color: Option<TextureDesc>,
+    /// Roughness in green, metallic in blue (glTF's layout, linear).
+    pub metallic_roughness: Option<TextureDesc>,
+    /// Tangent-space normal map and its scale.
+    pub normal: Option<(TextureDesc, f32)>,
+    /// Multiplies the object's emission (sRGB-decoded).
+    pub emissive: Option<TextureDesc>,
 }
 
 #[derive(Clone, Debug)]
@@ -201,6 +281,7 @@ pub struct MaterialDesc {
     pub roughness: f32,
     /// Colour reported by the `U4` user lobe.
     pub user_color: Option<[f32; 3]>,
+    pub textures: TexturesDesc,
     /// Image maps of the base colour and the normal (OBJ `map_Kd`, `map_Bump`/`norm`),
     /// kept for the texture support to come: not used by shading yet.
     pub base_color_map: Option<TextureRef>,
@@ -224,8 +305,11 @@ pub struct MeshData {
     pub indices: Vec<[u32; 3]>,
     /// Shading normals.
     pub normals: Option<Vec<[f32; 3]>>,
-    /// Texture coordinates (carried for the materials to come; not used by shading yet).
+    /// Texture coordinates, glTF's convention: (0, 0) is the image's top-left corner.
     pub uvs: Option<Vec<[f32; 2]>>,
+    /// Tangents (xyz) and the bitangent's sign (w), for normal maps; without them the
+    /// tangent follows the UVs.
+    pub tangents: Option<Vec<[f32; 4]>>,
 }
 
 /// A shape in its local space; the object's `transform` places it.

@@ -11,8 +11,9 @@ pub use crate::events::DataLobe;
 pub use load::Source;
 
 use crate::camera::{Camera, PixelFilter};
-use crate::geometry::Accel;
+use crate::geometry::{Accel, SurfaceAttrs};
 use crate::light::Light;
+use crate::material::textured::Textured;
 use crate::material::Bsdf;
 use glam::Vec3A;
 use lpe::{Automaton, ClassId, Flags};
@@ -20,11 +21,14 @@ use lpe::{Automaton, ClassId, Flags};
 /// A material: its BSDF and the colour of its `U4` user lobe.
 #[derive(Clone, Debug)]
 pub struct Material {
+    /// The BSDF (a textured material's lobes and events, with untextured values).
     pub bsdf: Bsdf,
     /// The BSDF after a diffuse bounce under path regularisation (`[render] regularize`):
     /// specular lobes roughened, the same lobes and events. `None`: unchanged.
     pub regularized: Option<Bsdf>,
     pub user_color: Option<Vec3A>,
+    /// Textures, if any: the BSDF is then rebuilt at each hit.
+    pub textured: Option<Box<Textured>>,
 }
 
 /// One scene object after building: what it is made of and its precomputed LPE classes.
@@ -85,6 +89,8 @@ pub struct Aov {
 
 pub struct Scene {
     pub accel: Accel,
+    /// UVs and tangents of textured meshes (read only by textured materials).
+    pub surface: SurfaceAttrs,
     /// The triangles of every mesh light (object id: the light), for the lights-only
     /// test of `unoccluded`/`shadows` AOVs.
     pub mesh_lights: Accel,

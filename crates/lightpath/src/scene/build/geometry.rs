@@ -1,11 +1,11 @@
 //! Geometry: object shapes become primitives, collected (with shading normals and trace
 //! sets) into the acceleration structure.
 
-use crate::geometry::shapes::{self, ShapePrims};
-use crate::geometry::{Accel, Instance, Prim, Visibility, RAY_EPSILON};
+use crate::geometry::shapes::{self, MeshAttrs, ShapePrims};
+use crate::geometry::{Accel, Instance, Prim, SurfaceAttrs, Visibility, RAY_EPSILON};
 use crate::scene::desc::{MeshData, ObjectDesc, Origin, ShapeDesc};
 use crate::scene::SceneError;
-use glam::{Affine3A, Vec3A};
+use glam::{Affine3A, Vec2, Vec3A, Vec4};
 use rayon::prelude::*;
 use std::collections::HashMap;
 use std::ops::Range;
@@ -107,10 +107,23 @@ fn mesh_parts(
     xf: &Affine3A,
     origin: &Origin,
 ) -> Result<ShapePrims, SceneError> {
+    let parts = parts
+        .iter()
+        .map(|part| mesh(part, xf, origin))
+        .collect::<Result<Vec<_>, _>>()?;
+    // UVs and tangents stay one entry per normal across parts with and without.
+    let any_attrs = parts.iter().any(|p| !p.attrs.is_empty());
     let mut out = ShapePrims::default();
     for part in parts {
-        let part = mesh(part, xf, origin)?;
         let base = out.prims.len();
+        if any_attrs {
+            if part.attrs.len() == part.normals.len() {
+                out.attrs.extend(part.attrs);
+            } else {
+                out.attrs
+                    .extend(std::iter::repeat_n((None, None), part.normals.len()));
+            }
+        }
         out.normals
             .extend(part.normals.into_iter().map(|(i, n)| (i + base, n)));
         out.prims.extend(part.prims);
@@ -150,7 +163,11 @@ fn mesh(m: &MeshData, xf: &Affine3A, origin: &Origin) -> Result<ShapePrims, Scen
             )));
         }
     }
-    if let Some(uv) = &m.uvs {
+    let uvs: Option<Vec<Vec2>> = m
+        .uvs
+        .as_ref()
+        .map(|uv| uv.iter().map(|t| Vec2::from(*t)).collect());
+    if let Some(uv) = &uvs {
         if uv.len() != pos.len() {
             return Err(origin.error(format!(
                 "mesh has {} UVs for {} positions",
@@ -159,7 +176,25 @@ fn mesh(m: &MeshData, xf: &Affine3A, origin: &Origin) -> Result<ShapePrims, Scen
             )));
         }
     }
-    Ok(shapes::mesh(xf, &pos, &m.indices, normals.as_deref()))
+    let tangents: Option<Vec<Vec4>> = m
+        .tangents
+        .as_ref()
+        .map(|ts| ts.iter().map(|t| Vec4::from(*t)).collect());
+    if let Some(ts) = &tangents {
+        if ts.len() != pos.len() {
+            return Err(origin.error(format!(
+                "mesh has {} tangents for {} positions",
+                ts.len(),
+                pos.len()
+            )));
+        }
+    }
+    let attrs = MeshAttrs {
+        normals: normals.as_deref(),
+        uvs: uvs.as_deref(),
+        tangents: tangents.as_deref(),
+    };
+    Ok(shapes::mesh(xf, &pos, &m.indices, attrs))
 }
 
 /// The key of shared mesh parts: their address.
@@ -178,13 +213,14 @@ pub fn shared_mesh_users(objects: &[ObjectDesc]) -> HashMap<usize, usize> {
     users
 }
 
-/// Collects primitives of all objects, with their shading normals, and the shared meshes
-/// with their placements.
+/// Collects primitives of all objects, with their shading normals, UVs and tangents, and
+/// the shared meshes with their placements.
 #[derive(Default)]
 pub struct GeometryBuilder {
     prims: Vec<Prim>,
     objects: Vec<u32>,
     normals: Vec<[Vec3A; 3]>,
+    surface: SurfaceAttrs,
     visibility: Vec<u8>,
     /// Each shared mesh's primitives in its own space, with their bounds, by the address
     /// of the parts the objects share.
@@ -196,9 +232,11 @@ pub struct GeometryBuilder {
 impl GeometryBuilder {
     /// Adds an object's primitives; returns their range in the scene's primitive list.
     pub fn add(&mut self, object: u32, mut shape: ShapePrims, visibility: u8) -> Range<u32> {
-        for (i, n) in shape.normals.drain(..) {
+        for (k, (i, n)) in shape.normals.drain(..).enumerate() {
             if let Prim::Triangle { normals, .. } = &mut shape.prims[i] {
                 *normals = self.normals.len() as u32;
+                let (uvs, tangents) = shape.attrs.get(k).copied().unwrap_or((None, None));
+                self.surface.push(self.normals.len(), uvs, tangents);
                 self.normals.push(n);
             }
         }
@@ -275,15 +313,25 @@ impl GeometryBuilder {
         self.prims.is_empty()
     }
 
-    pub fn build(self) -> Accel {
+    /// The acceleration structure, and the UVs and tangents textures read (the shared
+    /// meshes' own in `SurfaceAttrs::meshes`, by mesh).
+    pub fn build(self) -> (Accel, SurfaceAttrs) {
         // The shared meshes' trees on every core (each build also splits its work).
-        let meshes: Vec<Accel> = self
+        let (meshes, mesh_surfaces): (Vec<Accel>, Vec<SurfaceAttrs>) = self
             .meshes
             .into_par_iter()
-            .map(|(m, _)| Accel::build(m.prims, m.objects, m.normals, m.visibility))
-            .collect();
-        Accel::build(self.prims, self.objects, self.normals, self.visibility)
-            .with_instances(meshes, self.instances)
+            .map(|(m, _)| {
+                (
+                    Accel::build(m.prims, m.objects, m.normals, m.visibility),
+                    m.surface,
+                )
+            })
+            .unzip();
+        let accel = Accel::build(self.prims, self.objects, self.normals, self.visibility)
+            .with_instances(meshes, self.instances);
+        let mut surface = self.surface;
+        surface.meshes = mesh_surfaces;
+        (accel, surface)
     }
 }
 

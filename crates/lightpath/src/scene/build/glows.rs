@@ -6,8 +6,9 @@
 //! `O` event, like a ray that hits it (`Scene::first_glow_light`).
 //!
 //! A glow is sampled when its object is one sphere or made of triangles, its emission is
-//! finite and not black, and indirect rays see it (light sampling must not find what a
-//! BSDF ray could not). Others (instances of a shared mesh, infinite emission for the
+//! finite, not black and not textured (a light's radiance is the same all over), and
+//! indirect rays see it (light sampling must not find what a BSDF ray could not). Others
+//! (instances of a shared mesh, emissive textures, infinite emission for the
 //! `noinfinitecheck` prefix, objects hidden from indirect rays) glow as before: found by
 //! rays only.
 
@@ -15,7 +16,7 @@ use crate::geometry::{Accel, Prim};
 use crate::light::{Light, LightShape};
 use crate::sampling::Distribution1D;
 use crate::scene::desc::ObjectDesc;
-use crate::scene::Object;
+use crate::scene::{Material, Object};
 use std::ops::Range;
 
 /// Appends a light for each glowing object of `descs` that can be sampled (`ranges`:
@@ -24,6 +25,7 @@ use std::ops::Range;
 pub fn add(
     lights: &mut Vec<Light>,
     objects: &mut [Object],
+    materials: &[Material],
     descs: &[ObjectDesc],
     ranges: &[Range<u32>],
     accel: &Accel,
@@ -31,7 +33,18 @@ pub fn add(
     for (id, (desc, range)) in descs.iter().zip(ranges).enumerate() {
         let obj = &objects[id];
         let e = obj.emission;
-        if obj.light.is_some() || !desc.visible_indirect || !e.is_finite() || e.max_element() <= 0.0
+        // A light sample's radiance is the light's colour: the same all over.
+        let textured = obj.material.is_some_and(|m| {
+            materials[m as usize]
+                .textured
+                .as_ref()
+                .is_some_and(|t| t.textures.emissive.is_some())
+        });
+        if obj.light.is_some()
+            || textured
+            || !desc.visible_indirect
+            || !e.is_finite()
+            || e.max_element() <= 0.0
         {
             continue;
         }

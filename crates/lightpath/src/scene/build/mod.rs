@@ -28,7 +28,7 @@ impl Scene {
         let (mut objects, object_prims) = add_objects(desc, &material_ids, &mut geometry)?;
         let (mut lights, light_prims) =
             add_lights(desc, &material_ids, &mut geometry, &mut objects)?;
-        let accel = geometry.build();
+        let (accel, surface) = geometry.build();
         lights::locate_prims(&mut lights, &light_prims, &accel);
         let mesh_lights = lights::mesh_surfaces(&mut lights, &desc.lights, &object_prims, &accel)?;
         lights::link(&desc.lights, &mut objects);
@@ -36,6 +36,7 @@ impl Scene {
         glows::add(
             &mut lights,
             &mut objects,
+            &materials,
             &desc.objects,
             &object_prims,
             &accel,
@@ -68,6 +69,7 @@ impl Scene {
         });
         Ok(Scene {
             accel,
+            surface,
             mesh_lights,
             objects,
             materials,

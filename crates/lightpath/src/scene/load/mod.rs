@@ -3,6 +3,7 @@
 
 pub mod builtin;
 pub mod defaults;
+pub mod gltf;
 pub mod include;
 pub mod obj;
 pub mod ply;
@@ -50,10 +51,7 @@ pub fn load_file(path: &Path, at: &Origin) -> Result<SceneDesc, SceneError> {
     match Format::of(path) {
         Format::Obj => obj::load_scene(path, at),
         Format::Ply => ply::load_scene(path, at),
-        Format::Gltf => Err(at.error(format!(
-            "{}: glTF files are not supported yet",
-            path.display()
-        ))),
+        Format::Gltf => gltf::load_scene(path, at),
         Format::Toml => Err(at.error(format!(
             "{}: only OBJ, PLY and glTF files can be included (.obj, .ply, .gltf, .glb)",
             path.display()

@@ -111,6 +111,7 @@ fn default_material(file: &str) -> MaterialDesc {
         user_color: None,
         base_color_map: None,
         normal_map: None,
+        textures: Default::default(),
         origin: Origin::file(file),
     }
 }
@@ -478,6 +479,7 @@ impl Mtl {
             user_color: None,
             base_color_map: self.map_kd.clone(),
             normal_map: self.map_bump.clone(),
+            textures: Default::default(),
             origin: self.origin.clone(),
         }
     }

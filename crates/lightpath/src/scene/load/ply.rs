@@ -41,6 +41,7 @@ pub fn load_scene(path: &Path, at: &Origin) -> Result<SceneDesc, SceneError> {
             user_color: None,
             base_color_map: None,
             normal_map: None,
+            textures: Default::default(),
             origin: origin.clone(),
         },
     );

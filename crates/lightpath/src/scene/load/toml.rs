@@ -274,6 +274,26 @@ struct MaterialDesc {
     tint: Option<[f32; 3]>,
     /// Colour reported by the `U4` user lobe.
     user_color: Option<[f32; 3]>,
+    /// pbr: glTF's metallic-roughness parameters.
+    base_color: Option<[f32; 3]>,
+    #[serde(default)]
+    metallic: f32,
+    #[serde(default)]
+    transmission: f32,
+    #[serde(default)]
+    clearcoat: f32,
+    #[serde(default)]
+    clearcoat_roughness: f32,
+    /// Textures (paths relative to the scene file): colour multiplies albedo, f0, tint
+    /// or base colour; metallic-roughness is glTF's layout (green, blue).
+    color_texture: Option<Spanned<String>>,
+    metallic_roughness_texture: Option<Spanned<String>>,
+    normal_texture: Option<Spanned<String>>,
+    #[serde(default = "one")]
+    normal_scale: f32,
+    emission_texture: Option<Spanned<String>>,
+    /// repeat | clamp | mirror, for all the material's textures.
+    texture_wrap: Option<Spanned<String>>,
 }
 
 /// Object-to-world placement: scale, then rotate (degrees about X, then Y, then Z), then
@@ -541,6 +561,7 @@ pub fn load(src: &Source) -> Result<d::SceneDesc, SceneError> {
             })
             .collect(),
         light_groups: file.light_groups,
+        cameras: Vec::new(),
         light_group_aovs: file.light_group_aovs,
         warnings,
     })
@@ -601,10 +622,18 @@ fn material(
         "conductor" => d::MaterialKind::Conductor { f0: need(m.f0, "f0")? },
         "dielectric" => d::MaterialKind::Dielectric { ior: m.ior, tint: m.tint },
         "plastic" => d::MaterialKind::Plastic { albedo: need(m.albedo, "albedo")?, ior: m.ior },
+        "pbr" => d::MaterialKind::Pbr {
+            base_color: need(m.base_color, "base_color")?,
+            metallic: m.metallic,
+            ior: m.ior,
+            transmission: m.transmission,
+            clearcoat: m.clearcoat,
+            clearcoat_roughness: m.clearcoat_roughness,
+        },
         other => {
             return Err(src.error(
                 Some(m.kind.span()),
-                format!("unknown material type '{other}': expected diffuse, translucent, conductor, dielectric or plastic"),
+                format!("unknown material type '{other}': expected diffuse, translucent, conductor, dielectric, plastic or pbr"),
             ))
         }
     };
@@ -612,6 +641,7 @@ fn material(
         kind,
         roughness: m.roughness,
         user_color: m.user_color,
+        textures: textures(src, name, m)?,
         base_color_map: None,
         normal_map: None,
         origin: src.origin(Some(span)),
@@ -620,6 +650,36 @@ fn material(
 
 /// The OBJ files a scene has loaded, by path.
 type ObjFiles = HashMap<std::path::PathBuf, std::sync::Arc<Vec<d::MeshData>>>;
+
+/// A material's textures, their paths resolved against the scene file's directory.
+fn textures(src: &Source, name: &str, m: &MaterialDesc) -> Result<d::TexturesDesc, SceneError> {
+    use crate::material::texture::{UvTransform, Wrap};
+    let wrap = match m.texture_wrap.as_ref().map(|w| (w.get_ref().as_str(), w.span())) {
+        None | Some(("repeat", _)) => Wrap::Repeat,
+        Some(("clamp", _)) => Wrap::Clamp,
+        Some(("mirror", _)) => Wrap::Mirror,
+        Some((other, span)) => {
+            return Err(src.error(
+                Some(span),
+                format!("material '{name}': unknown texture_wrap '{other}': expected repeat, clamp or mirror"),
+            ))
+        }
+    };
+    let tex = |t: &Option<Spanned<String>>| {
+        t.as_ref().map(|t| d::TextureDesc {
+            image: d::ImageSource::File(src.dir.join(t.get_ref())),
+            wrap: [wrap; 2],
+            transform: UvTransform::default(),
+            origin: src.origin(Some(t.span())),
+        })
+    };
+    Ok(d::TexturesDesc {
+        base_color: tex(&m.color_texture),
+        metallic_roughness: tex(&m.metallic_roughness_texture),
+        normal: tex(&m.normal_texture).map(|t| (t, m.normal_scale)),
+        emissive: tex(&m.emission_texture),
+    })
+}
 
 fn object(
     src: &Source,
@@ -646,7 +706,7 @@ fn object(
         "mesh" => {
             let positions = o.positions.clone().ok_or_else(|| missing("positions"))?;
             let indices = o.indices.clone().ok_or_else(|| missing("indices"))?;
-            let mesh = d::MeshData { positions, indices, normals: o.normals.clone(), uvs: None };
+            let mesh = d::MeshData { positions, indices, normals: o.normals.clone(), uvs: None, tangents: None };
             d::ShapeDesc::Mesh { parts: vec![mesh] }
         }
         "obj" => {

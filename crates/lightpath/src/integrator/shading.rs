@@ -1,0 +1,76 @@
+//! Textured materials at a hit: the UVs, the footprint that picks mip levels, the
+//! BSDF with textured values and the normal-mapped shading normal. Untextured
+//! materials never come here, so scenes without textures pay one branch per vertex.
+//!
+//! The footprint is a ray cone (Akenine-Möller et al., "Texture Level of Detail
+//! Strategies for Real-Time Ray Tracing", 2019): it starts at the camera with a
+//! pixel's spread angle, widens by `spread · t` along each segment, and keeps its spread
+//! through delta (mirror, glass) bounces; any other bounce widens the spread to at
+//! least [`SCATTERED_SPREAD`], since what it scatters blurs the texture anyway. At a
+//! hit the width becomes UV units through the triangle's UV-to-world ratio, stretched
+//! by 1/√|cos θ| (the mean of the footprint ellipse's axes).
+
+use super::Tracer;
+use crate::geometry::Hit;
+use crate::material::textured::Textured;
+use crate::material::Bsdf;
+use crate::scene::Object;
+use glam::{Vec2, Vec3A};
+
+/// The least spread (radians) of a ray cone after a non-delta bounce.
+pub(super) const SCATTERED_SPREAD: f32 = 0.05;
+
+/// Footprint in UV units of a mesh without UVs: the whole texture, so it reads the
+/// texture's average.
+const NO_UV_WIDTH: f32 = 1.0;
+
+impl Tracer<'_> {
+    /// A textured material's BSDF and shading normal at `hit`, reached along `dir` by a
+    /// ray cone `cone_width` wide there.
+    pub(super) fn textured(
+        &self,
+        t: &Textured,
+        hit: &Hit,
+        dir: Vec3A,
+        cone_width: f32,
+    ) -> (Bsdf, Vec3A) {
+        let scene = self.scene;
+        let Some(s) = scene.surface.at(&scene.accel, hit) else {
+            return (t.bsdf(Vec2::ZERO, NO_UV_WIDTH), hit.ns);
+        };
+        let width = uv_width(cone_width, s.uv_per_world, dir, hit.ng);
+        let mut ns = t.shading_normal(hit.ns, &s, width);
+        // A mapped normal turned away from the geometric side would shade nothing.
+        if ns.dot(hit.ng) <= 0.0 {
+            ns = hit.ns;
+        }
+        (t.bsdf(s.uv, width), ns)
+    }
+
+    /// The factor an emissive texture puts on a glowing object's emission at `hit`.
+    pub(super) fn glow_texture(
+        &self,
+        obj: &Object,
+        hit: &Hit,
+        dir: Vec3A,
+        cone_width: f32,
+    ) -> Vec3A {
+        let scene = self.scene;
+        let Some(t) = obj
+            .material
+            .and_then(|m| scene.materials[m as usize].textured.as_deref())
+        else {
+            return Vec3A::ONE;
+        };
+        match scene.surface.at(&scene.accel, hit) {
+            Some(s) => t.emission(s.uv, uv_width(cone_width, s.uv_per_world, dir, hit.ng)),
+            None => t.emission(Vec2::ZERO, NO_UV_WIDTH),
+        }
+    }
+}
+
+/// A ray cone's width at a hit, in UV units.
+fn uv_width(cone_width: f32, uv_per_world: f32, dir: Vec3A, ng: Vec3A) -> f32 {
+    let cos = dir.dot(ng).abs().max(1e-3);
+    cone_width * uv_per_world / cos.sqrt()
+}

@@ -1,0 +1,468 @@
+//! Image textures: PNG, JPEG and EXR images decoded once to linear RGBA, mip-mapped,
+//! and looked up with bilinear filtering between the two mip levels the ray's footprint
+//! falls between (trilinear).
+//!
+//! ```toml
+//! [materials.wood]
+//! type = "diffuse"
+//! albedo = [1, 1, 1]                       # multiplies the texture
+//! albedo_texture = "textures/wood.png"     # sRGB-decoded colour
+//! roughness_texture = "textures/rough.png" # linear data (its green channel, as glTF)
+//! normal_texture = "textures/normal.png"   # tangent space, linear
+//! texture_wrap = "repeat"                  # repeat | clamp | mirror
+//! ```
+//!
+//! UVs follow glTF: (0, 0) is the image's top-left corner, `v` grows downwards.
+//! Colour images (base colour, emission) are decoded from sRGB; data images (roughness,
+//! metallic, normals, transmission) are read as linear values. EXR images are linear.
+
+use glam::{Vec2, Vec4};
+use std::path::Path;
+
+/// What happens outside [0, 1] in one texture direction (glTF's sampler wrap modes).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub enum Wrap {
+    #[default]
+    Repeat,
+    Clamp,
+    Mirror,
+}
+
+impl Wrap {
+    /// The texel index for integer coordinate `i` of a row or column of `n` texels.
+    #[inline]
+    fn index(self, i: i32, n: i32) -> usize {
+        let k = match self {
+            Wrap::Repeat => i.rem_euclid(n),
+            Wrap::Clamp => i.clamp(0, n - 1),
+            Wrap::Mirror => {
+                let m = i.rem_euclid(2 * n);
+                if m < n {
+                    m
+                } else {
+                    2 * n - 1 - m
+                }
+            }
+        };
+        k as usize
+    }
+}
+
+/// How an image's 8- or 16-bit values become linear values.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ColorSpace {
+    /// Colour: the sRGB transfer function is undone (alpha stays linear).
+    Srgb,
+    /// Data (roughness, metallic, normals): values as stored.
+    Linear,
+}
+
+/// The sRGB electro-optical transfer function (IEC 61966-2-1).
+pub fn srgb_to_linear(c: f32) -> f32 {
+    if c <= 0.04045 {
+        c / 12.92
+    } else {
+        ((c + 0.055) / 1.055).powf(2.4)
+    }
+}
+
+struct Level {
+    width: u32,
+    height: u32,
+    texels: Vec<Vec4>,
+}
+
+/// A linear RGBA image and its mip levels, each half the size of the one before (a 2×2
+/// box filter, the last row or column repeated for odd sizes) down to 1×1.
+pub struct MipMap {
+    levels: Vec<Level>,
+}
+
+impl std::fmt::Debug for MipMap {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(
+            f,
+            "MipMap({}x{}, {} levels)",
+            self.width(),
+            self.height(),
+            self.levels.len()
+        )
+    }
+}
+
+impl MipMap {
+    /// # Panics
+    /// If `texels` does not hold `width × height` values or a size is zero.
+    pub fn new(width: u32, height: u32, texels: Vec<Vec4>) -> MipMap {
+        assert!(width > 0 && height > 0 && texels.len() == (width * height) as usize);
+        let mut levels = vec![Level {
+            width,
+            height,
+            texels,
+        }];
+        loop {
+            let prev = levels.last().expect("level 0 exists");
+            if prev.width == 1 && prev.height == 1 {
+                break;
+            }
+            let (w, h) = ((prev.width / 2).max(1), (prev.height / 2).max(1));
+            let at = |x: u32, y: u32| {
+                prev.texels[(y.min(prev.height - 1) * prev.width + x.min(prev.width - 1)) as usize]
+            };
+            let mut texels = Vec::with_capacity((w * h) as usize);
+            for y in 0..h {
+                for x in 0..w {
+                    let (x0, y0) = (2 * x, 2 * y);
+                    texels.push(
+                        0.25 * (at(x0, y0) + at(x0 + 1, y0) + at(x0, y0 + 1) + at(x0 + 1, y0 + 1)),
+                    );
+                }
+            }
+            levels.push(Level {
+                width: w,
+                height: h,
+                texels,
+            });
+        }
+        MipMap { levels }
+    }
+
+    pub fn width(&self) -> u32 {
+        self.levels[0].width
+    }
+
+    pub fn height(&self) -> u32 {
+        self.levels[0].height
+    }
+
+    pub fn levels(&self) -> usize {
+        self.levels.len()
+    }
+
+    /// Bytes held by all levels.
+    pub fn bytes(&self) -> usize {
+        self.levels.iter().map(|l| l.texels.len() * 16).sum()
+    }
+
+    /// Bilinear lookup in one level; texel centres sit at half-integer coordinates.
+    pub fn bilinear(&self, level: usize, uv: Vec2, wrap: [Wrap; 2]) -> Vec4 {
+        let l = &self.levels[level.min(self.levels.len() - 1)];
+        let (w, h) = (l.width as i32, l.height as i32);
+        let x = uv.x * w as f32 - 0.5;
+        let y = uv.y * h as f32 - 0.5;
+        if !(x.is_finite() && y.is_finite()) {
+            return Vec4::ZERO;
+        }
+        // Far outside the image, wrap before converting to integers.
+        let (x, y) = (x.clamp(-1e6, 1e6), y.clamp(-1e6, 1e6));
+        let (x0, y0) = (x.floor(), y.floor());
+        let (fx, fy) = (x - x0, y - y0);
+        let (x0, y0) = (x0 as i32, y0 as i32);
+        let px =
+            |i: i32, j: i32| l.texels[wrap[1].index(j, h) * l.width as usize + wrap[0].index(i, w)];
+        let top = px(x0, y0) * (1.0 - fx) + px(x0 + 1, y0) * fx;
+        let bottom = px(x0, y0 + 1) * (1.0 - fx) + px(x0 + 1, y0 + 1) * fx;
+        top * (1.0 - fy) + bottom * fy
+    }
+
+    /// Trilinear lookup: `lod` 0 is the full image, each unit one level smaller.
+    pub fn lookup(&self, uv: Vec2, lod: f32, wrap: [Wrap; 2]) -> Vec4 {
+        let top = (self.levels.len() - 1) as f32;
+        let lod = if lod.is_finite() {
+            lod.clamp(0.0, top)
+        } else {
+            0.0
+        };
+        let l0 = lod.floor();
+        let t = lod - l0;
+        let a = self.bilinear(l0 as usize, uv, wrap);
+        if t == 0.0 {
+            return a;
+        }
+        a * (1.0 - t) + self.bilinear(l0 as usize + 1, uv, wrap) * t
+    }
+
+    /// Decodes a PNG, JPEG or EXR image (told apart by their first bytes) to linear
+    /// RGBA; 8- and 16-bit images by `space`, EXR as stored.
+    pub fn decode(bytes: &[u8], space: ColorSpace) -> Result<MipMap, String> {
+        if bytes.starts_with(&[0x76, 0x2f, 0x31, 0x01]) {
+            return decode_exr(bytes);
+        }
+        let img = image::load_from_memory(bytes).map_err(|e| e.to_string())?;
+        let (w, h) = (img.width(), img.height());
+        if w == 0 || h == 0 {
+            return Err("the image is empty".into());
+        }
+        let texels: Vec<Vec4> = match (&img, space) {
+            (
+                image::DynamicImage::ImageRgb8(_)
+                | image::DynamicImage::ImageRgba8(_)
+                | image::DynamicImage::ImageLuma8(_)
+                | image::DynamicImage::ImageLumaA8(_),
+                _,
+            ) => {
+                let lut: Vec<f32> = (0..256)
+                    .map(|i| {
+                        let c = i as f32 / 255.0;
+                        match space {
+                            ColorSpace::Srgb => srgb_to_linear(c),
+                            ColorSpace::Linear => c,
+                        }
+                    })
+                    .collect();
+                img.to_rgba8()
+                    .pixels()
+                    .map(|p| {
+                        let [r, g, b, a] = p.0;
+                        Vec4::new(
+                            lut[r as usize],
+                            lut[g as usize],
+                            lut[b as usize],
+                            a as f32 / 255.0,
+                        )
+                    })
+                    .collect()
+            }
+            _ => img
+                .to_rgba32f()
+                .pixels()
+                .map(|p| {
+                    let [r, g, b, a] = p.0;
+                    let f = |c: f32| match space {
+                        ColorSpace::Srgb => srgb_to_linear(c),
+                        ColorSpace::Linear => c,
+                    };
+                    Vec4::new(f(r), f(g), f(b), a)
+                })
+                .collect(),
+        };
+        Ok(MipMap::new(w, h, texels))
+    }
+
+    /// Reads and decodes an image file.
+    pub fn read(path: &Path, space: ColorSpace) -> Result<MipMap, String> {
+        let bytes = std::fs::read(path).map_err(|e| format!("cannot read it: {e}"))?;
+        MipMap::decode(&bytes, space)
+    }
+}
+
+fn decode_exr(bytes: &[u8]) -> Result<MipMap, String> {
+    use exr::prelude::*;
+    let image = read()
+        .no_deep_data()
+        .largest_resolution_level()
+        .rgba_channels(
+            |res, _| (res.width(), vec![Vec4::ZERO; res.width() * res.height()]),
+            |(w, px), pos, (r, g, b, a): (f32, f32, f32, f32)| {
+                px[pos.y() * *w + pos.x()] = Vec4::new(r, g, b, a)
+            },
+        )
+        .first_valid_layer()
+        .all_attributes()
+        .from_buffered(std::io::Cursor::new(bytes))
+        .map_err(|e| e.to_string())?;
+    let size = image.layer_data.size;
+    let (_, texels) = image.layer_data.channel_data.pixels;
+    if size.width() == 0 || size.height() == 0 {
+        return Err("the image is empty".into());
+    }
+    Ok(MipMap::new(
+        size.width() as u32,
+        size.height() as u32,
+        texels,
+    ))
+}
+
+/// A placement of texture coordinates (KHR_texture_transform): `uv' = M·(u, v, 1)`,
+/// M = translation · rotation · scale, stored as the rows of a 2×3 matrix.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct UvTransform {
+    pub rows: [[f32; 3]; 2],
+}
+
+impl Default for UvTransform {
+    fn default() -> Self {
+        UvTransform {
+            rows: [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0]],
+        }
+    }
+}
+
+impl UvTransform {
+    /// KHR_texture_transform's `offset`, `rotation` (radians) and `scale`.
+    pub fn new(offset: [f32; 2], rotation: f32, scale: [f32; 2]) -> UvTransform {
+        let (s, c) = rotation.sin_cos();
+        // The extension's GLSL matrix T · R · S, whose rotation has columns (cos, sin)
+        // and (−sin, cos).
+        UvTransform {
+            rows: [
+                [c * scale[0], -s * scale[1], offset[0]],
+                [s * scale[0], c * scale[1], offset[1]],
+            ],
+        }
+    }
+
+    pub fn apply(&self, uv: Vec2) -> Vec2 {
+        let [a, b] = self.rows;
+        Vec2::new(
+            a[0] * uv.x + a[1] * uv.y + a[2],
+            b[0] * uv.x + b[1] * uv.y + b[2],
+        )
+    }
+
+    /// How much the transform stretches lengths (the root of its determinant), for the
+    /// footprint.
+    fn scale(&self) -> f32 {
+        let [a, b] = self.rows;
+        (a[0] * b[1] - a[1] * b[0]).abs().sqrt()
+    }
+}
+
+/// A texture as a material uses it: an image shared between materials, its wrap modes
+/// and UV placement.
+#[derive(Clone, Debug)]
+pub struct Texture {
+    pub image: std::sync::Arc<MipMap>,
+    pub wrap: [Wrap; 2],
+    pub transform: UvTransform,
+}
+
+impl Texture {
+    /// The filtered value at `uv` for a footprint `width` wide in UV units.
+    pub fn eval(&self, uv: Vec2, width: f32) -> Vec4 {
+        let st = self.transform.apply(uv);
+        let size = (self.image.width() as f32 * self.image.height() as f32).sqrt();
+        let texels = width * self.transform.scale() * size;
+        let lod = if texels > 1.0 { texels.log2() } else { 0.0 };
+        self.image.lookup(st, lod, self.wrap)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn checker2() -> MipMap {
+        // Row 0: red, green; row 1: blue, white.
+        MipMap::new(
+            2,
+            2,
+            vec![
+                Vec4::new(1.0, 0.0, 0.0, 1.0),
+                Vec4::new(0.0, 1.0, 0.0, 1.0),
+                Vec4::new(0.0, 0.0, 1.0, 1.0),
+                Vec4::new(1.0, 1.0, 1.0, 1.0),
+            ],
+        )
+    }
+
+    #[test]
+    fn texel_centres_return_texels_and_midpoints_average() {
+        let m = checker2();
+        let w = [Wrap::Clamp; 2];
+        assert_eq!(
+            m.bilinear(0, Vec2::new(0.25, 0.25), w),
+            Vec4::new(1.0, 0.0, 0.0, 1.0)
+        );
+        assert_eq!(m.bilinear(0, Vec2::new(0.75, 0.75), w), Vec4::ONE);
+        let mid = m.bilinear(0, Vec2::new(0.5, 0.25), w);
+        assert!((mid - Vec4::new(0.5, 0.5, 0.0, 1.0)).abs().max_element() < 1e-6);
+        // The image centre averages all four.
+        let c = m.bilinear(0, Vec2::new(0.5, 0.5), w);
+        assert!((c - Vec4::new(0.5, 0.5, 0.5, 1.0)).abs().max_element() < 1e-6);
+    }
+
+    #[test]
+    fn wrap_modes() {
+        let m = checker2();
+        let red = Vec4::new(1.0, 0.0, 0.0, 1.0);
+        let green = Vec4::new(0.0, 1.0, 0.0, 1.0);
+        // One image to the right: repeat finds red again, mirror finds green (the image
+        // flipped), clamp the right column (green).
+        let uv = Vec2::new(1.25, 0.25);
+        assert_eq!(m.bilinear(0, uv, [Wrap::Repeat; 2]), red);
+        assert_eq!(m.bilinear(0, uv, [Wrap::Mirror; 2]), green);
+        assert_eq!(m.bilinear(0, uv, [Wrap::Clamp; 2]), green);
+        assert_eq!(
+            m.bilinear(0, Vec2::new(-0.75, 0.25), [Wrap::Repeat; 2]),
+            red
+        );
+        assert_eq!(
+            m.bilinear(0, Vec2::new(-0.25, 0.25), [Wrap::Mirror; 2]),
+            red
+        );
+    }
+
+    #[test]
+    fn mip_levels_average_and_lod_blends() {
+        let m = checker2();
+        assert_eq!(m.levels(), 2);
+        let avg = Vec4::new(0.5, 0.5, 0.5, 1.0);
+        let w = [Wrap::Repeat; 2];
+        assert!(
+            (m.lookup(Vec2::new(0.25, 0.25), 1.0, w) - avg)
+                .abs()
+                .max_element()
+                < 1e-6
+        );
+        let half = m.lookup(Vec2::new(0.25, 0.25), 0.5, w);
+        let want = 0.5 * (Vec4::new(1.0, 0.0, 0.0, 1.0) + avg);
+        assert!((half - want).abs().max_element() < 1e-6);
+        // A footprint of one texel or less reads level 0; the whole image, the last.
+        let t = Texture {
+            image: std::sync::Arc::new(checker2()),
+            wrap: w,
+            transform: UvTransform::default(),
+        };
+        assert_eq!(
+            t.eval(Vec2::new(0.25, 0.25), 0.1),
+            Vec4::new(1.0, 0.0, 0.0, 1.0)
+        );
+        assert!(
+            (t.eval(Vec2::new(0.25, 0.25), 1.0) - avg)
+                .abs()
+                .max_element()
+                < 1e-6
+        );
+    }
+
+    #[test]
+    fn odd_sizes_reduce_to_one_texel() {
+        let m = MipMap::new(5, 3, vec![Vec4::splat(0.5); 15]);
+        assert_eq!(m.levels(), 3);
+        assert_eq!(
+            m.lookup(Vec2::new(0.3, 0.7), 10.0, [Wrap::Clamp; 2]),
+            Vec4::splat(0.5)
+        );
+    }
+
+    #[test]
+    fn srgb_decoding_of_png_values() {
+        // A 1×1 PNG of (128, 255, 0, 255): colour is decoded from sRGB, data is not.
+        let mut png = Vec::new();
+        image::RgbaImage::from_pixel(1, 1, image::Rgba([128, 255, 0, 255]))
+            .write_to(&mut std::io::Cursor::new(&mut png), image::ImageFormat::Png)
+            .unwrap();
+        let c = MipMap::decode(&png, ColorSpace::Srgb).unwrap();
+        let d = MipMap::decode(&png, ColorSpace::Linear).unwrap();
+        let w = [Wrap::Clamp; 2];
+        let (c, d) = (
+            c.bilinear(0, Vec2::splat(0.5), w),
+            d.bilinear(0, Vec2::splat(0.5), w),
+        );
+        assert!((c.x - 0.2158605).abs() < 1e-5, "{c}");
+        assert!((d.x - 128.0 / 255.0).abs() < 1e-6);
+        assert_eq!((c.y, c.z, c.w), (1.0, 0.0, 1.0));
+        assert!(MipMap::decode(b"not an image", ColorSpace::Srgb).is_err());
+    }
+
+    #[test]
+    fn texture_transform_matches_the_extension() {
+        // The extension's example: offset (0.5, 0), rotation π/2, scale (2, 2).
+        let t = UvTransform::new([0.5, 0.0], std::f32::consts::FRAC_PI_2, [2.0, 2.0]);
+        let p = t.apply(Vec2::new(1.0, 0.0));
+        // R·(2, 0) = (2cos, 2sin) = (0, 2), then + offset.
+        assert!((p - Vec2::new(0.5, 2.0)).length() < 1e-5, "{p}");
+        assert!((t.scale() - 2.0).abs() < 1e-5);
+    }
+}

@@ -1,0 +1,768 @@
+//! glTF 2.0 (`.gltf` with its buffers and images, or `.glb`) → `SceneDesc`, so that
+//! `lightpath render shot.glb` needs no TOML. See docs/scene-format.md ("glTF") for the
+//! table of what each glTF property becomes, with its LPE event.
+//!
+//! - Nodes: the default scene's hierarchy, transforms composed from the root. A mesh
+//!   node's LPE groups are its own name and every ancestor's (a parent node is a
+//!   collection: `C<..'props'>` selects everything under it), plus `extras.lpegroup`
+//!   (a string or a list).
+//! - Cameras: perspective ones, by node name; the first is used (`--camera NAME` picks
+//!   another).
+//! - Lights (`KHR_lights_punctual`): converted as Blender's glTF importer does (its
+//!   "Standard" lighting mode): point and spot W = cd · 4π / 683, sun W/m² = lux / 683;
+//!   then as Cycles emits them: a point or spot of P watts has radiant intensity P / 4π
+//!   W/sr. So Lightpath's intensity is cd / 683 W/sr and its irradiance lux / 683.
+//!   A light's group is its node's name (else the light's), or `extras.lightgroup`.
+//!   Emissive materials make their primitives mesh lights. With no camera or no light
+//!   at all, `defaults::complete` adds one, and a warning.
+//! - Extensions: those in [`SUPPORTED`]; any other used one is a warning naming it, any
+//!   other required one an error.
+
+use super::defaults;
+use crate::camera::FovAxis;
+use crate::material::texture::{UvTransform, Wrap};
+use crate::scene::desc::{
+    CameraDesc, ImageSource, LightDesc, LightKind, MaterialDesc, MaterialKind, MeshData, NameRef,
+    NamedCamera, ObjectDesc, Origin, SceneDesc, ShapeDesc, TextureDesc, TexturesDesc,
+};
+use crate::scene::SceneError;
+use glam::{Affine3A, Mat4, Vec3, Vec3A};
+use gltf::Document;
+use std::collections::HashMap;
+use std::f32::consts::PI;
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+
+/// The extensions Lightpath reads.
+pub const SUPPORTED: &[&str] = &[
+    "KHR_lights_punctual",
+    "KHR_materials_clearcoat",
+    "KHR_materials_emissive_strength",
+    "KHR_materials_ior",
+    "KHR_materials_transmission",
+    "KHR_texture_transform",
+];
+
+/// Lumens per watt of the photometric conversion Blender's importer uses (555 nm).
+pub const WATTS_TO_LUMENS: f32 = 683.0;
+
+/// Longer side of the film when the file's camera gives only an aspect ratio.
+const FILM_SIZE: f32 = 512.0;
+
+/// Reads a glTF file into a scene description, without defaults (the caller adds a
+/// camera or a dome where the file has none: `defaults::complete`). `at` is where the
+/// file was named, for an error opening it.
+pub fn load_scene(path: &Path, at: &Origin) -> Result<SceneDesc, SceneError> {
+    let file = path.display().to_string();
+    let bytes =
+        std::fs::read(path).map_err(|e| at.error(format!("cannot read glTF file {file}: {e}")))?;
+    let dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
+    Loader::new(&file, dir, &bytes)?.scene()
+}
+
+/// Decoded file and what the walk collects.
+struct Loader {
+    file: String,
+    dir: PathBuf,
+    doc: Document,
+    buffers: Vec<gltf::buffer::Data>,
+    desc: SceneDesc,
+    /// Material index (None: glTF's default material) → name in `desc.materials`.
+    materials: HashMap<Option<usize>, String>,
+    images: HashMap<usize, ImageSource>,
+    /// Each primitive's mesh data, read once however many nodes place it (by mesh,
+    /// primitive, and whether the placement mirrors): nodes sharing a mesh become
+    /// instances of it.
+    meshes: HashMap<(usize, usize, bool), std::sync::Arc<Vec<MeshData>>>,
+}
+
+fn pointer_of(path: &gltf::json::Path) -> String {
+    // "nodes[3].mesh" → "/nodes/3/mesh"
+    let mut out = String::new();
+    for part in path.as_str().split('.') {
+        for piece in part.split('[') {
+            let piece = piece.trim_end_matches(']');
+            if !piece.is_empty() {
+                out.push('/');
+                out.push_str(piece);
+            }
+        }
+    }
+    out
+}
+
+impl Loader {
+    fn new(file: &str, dir: PathBuf, bytes: &[u8]) -> Result<Loader, SceneError> {
+        let at = Origin::file(file);
+        let gltf::Gltf { document, blob } = gltf::Gltf::from_slice_without_validation(bytes)
+            .map_err(|e| {
+                let hint = if bytes.starts_with(b"v ") || bytes.starts_with(b"# ") {
+                    " (is it an OBJ file named .gltf?)"
+                } else {
+                    ""
+                };
+                at.error(format!("not a glTF 2.0 file: {e}{hint}"))
+            })?;
+        if let Some(ext) = document
+            .extensions_required()
+            .find(|e| !SUPPORTED.contains(e))
+        {
+            return Err(at.error(format!(
+                "/extensionsRequired: the file requires extension '{ext}', which Lightpath \
+                 does not support (it reads {})",
+                SUPPORTED.join(", ")
+            )));
+        }
+        let mut warnings = Vec::new();
+        for ext in document.extensions_used() {
+            if !SUPPORTED.contains(&ext) {
+                warnings.push(format!(
+                    "{file}: /extensionsUsed: extension '{ext}' is not supported; what it \
+                     adds is ignored"
+                ));
+            }
+        }
+        // The crate's validation (index ranges, accessor types) with its JSON paths.
+        if let Err(gltf::Error::Validation(errors)) = gltf::Gltf::from_slice(bytes) {
+            if let Some((path, e)) = errors.iter().find(|(p, _)| {
+                // Extensions we read but the crate does not know are not errors.
+                !p.as_str().contains("extensionsRequired")
+            }) {
+                return Err(at.error(format!("{}: {e}", pointer_of(path))));
+            }
+        }
+        let buffers = gltf::import_buffers(&document, Some(&dir), blob)
+            .map_err(|e| at.error(format!("/buffers: cannot load a buffer: {e}")))?;
+        let desc = SceneDesc {
+            source: file.to_string(),
+            warnings,
+            ..SceneDesc::default()
+        };
+        Ok(Loader {
+            file: file.to_string(),
+            dir,
+            doc: document,
+            buffers,
+            desc,
+            materials: HashMap::new(),
+            images: HashMap::new(),
+            meshes: HashMap::new(),
+        })
+    }
+
+    fn error(&self, pointer: &str, message: impl std::fmt::Display) -> SceneError {
+        Origin::file(&self.file).error(format!("{pointer}: {message}"))
+    }
+
+    fn warn(&mut self, pointer: &str, message: impl std::fmt::Display) {
+        self.desc
+            .warnings
+            .push(format!("{}: {pointer}: {message}", self.file));
+    }
+
+    fn scene(mut self) -> Result<SceneDesc, SceneError> {
+        let doc = self.doc.clone();
+        let Some(scene) = doc.default_scene().or_else(|| doc.scenes().next()) else {
+            return Err(self.error("/scenes", "the file has no scene"));
+        };
+        // Depth-first, with each node's world transform and its ancestors' names.
+        let mut stack: Vec<(gltf::Node, Mat4, Vec<String>)> = scene
+            .nodes()
+            .map(|n| (n, Mat4::IDENTITY, Vec::new()))
+            .collect();
+        stack.reverse();
+        let mut seen = vec![false; doc.nodes().len()];
+        while let Some((node, parent, ancestors)) = stack.pop() {
+            let pointer = format!("/nodes/{}", node.index());
+            if std::mem::replace(&mut seen[node.index()], true) {
+                return Err(self.error(&pointer, "the node appears twice in the hierarchy"));
+            }
+            let world = parent * Mat4::from_cols_array_2d(&node.transform().matrix());
+            if !world.is_finite() {
+                return Err(self.error(&pointer, "the node's transform is not finite"));
+            }
+            let name = node.name().map(str::to_string);
+            if let Some(mesh) = node.mesh() {
+                self.mesh_node(&node, &mesh, world, &ancestors)?;
+            }
+            if let Some(camera) = node.camera() {
+                self.camera(&node, &camera, world);
+            }
+            if let Some(light) = node.light() {
+                self.light(&node, &light, world)?;
+            }
+            let mut below = ancestors.clone();
+            below.extend(name);
+            for child in node.children().collect::<Vec<_>>().into_iter().rev() {
+                stack.push((child, world, below.clone()));
+            }
+        }
+        Ok(self.desc)
+    }
+
+    fn mesh_node(
+        &mut self,
+        node: &gltf::Node,
+        mesh: &gltf::Mesh,
+        world: Mat4,
+        ancestors: &[String],
+    ) -> Result<(), SceneError> {
+        let node_name = node
+            .name()
+            .or(mesh.name())
+            .map(str::to_string)
+            .unwrap_or_else(|| format!("node{}", node.index()));
+        let mut groups = vec![node_name.clone()];
+        groups.extend(ancestors.iter().rev().cloned());
+        groups.extend(extra_strings(node.extras(), "lpegroup"));
+        groups.dedup();
+        let xf = Affine3A::from_mat4(world);
+        let flip = world.determinant() < 0.0;
+        for prim in mesh.primitives() {
+            let pointer = format!("/meshes/{}/primitives/{}", mesh.index(), prim.index());
+            if prim.mode() != gltf::mesh::Mode::Triangles {
+                self.warn(
+                    &pointer,
+                    format!(
+                        "mode {:?} is not triangles; the primitive is skipped",
+                        prim.mode()
+                    ),
+                );
+                continue;
+            }
+            let key = (mesh.index(), prim.index(), flip);
+            let parts = match self.meshes.get(&key) {
+                Some(parts) => parts.clone(),
+                None => {
+                    let parts = std::sync::Arc::new(vec![self.mesh_data(&prim, &pointer, flip)?]);
+                    self.meshes.insert(key, parts.clone());
+                    parts
+                }
+            };
+            let material = self.material(prim.material())?;
+            let name = if prim.index() == 0 {
+                node_name.clone()
+            } else {
+                format!("{node_name}.{}", prim.index())
+            };
+            // An emissive material makes the primitive a mesh light (light group: its
+            // name), as Blender and RenderMan treat emissive meshes.
+            if let Some(radiance) = self.emission(prim.material()) {
+                let object = self.desc.objects.len();
+                let at = Origin::file(&self.file);
+                self.desc
+                    .lights
+                    .push(defaults::mesh_light(object, &name, radiance, at));
+            }
+            self.desc.objects.push(ObjectDesc {
+                name: Some(name),
+                shape_name: "mesh".into(),
+                shape: ShapeDesc::SharedMesh { parts },
+                transform: xf,
+                material: Some(NameRef {
+                    name: material.clone(),
+                    origin: Origin::file(&self.file),
+                }),
+                lpegroups: Some(groups.clone()),
+                emission: None,
+                holdout: false,
+                visible_camera: true,
+                visible_indirect: true,
+                casts_shadows: true,
+                // Cryptomatte's asset: the top-level node the mesh is under.
+                asset: Some(ancestors.first().unwrap_or(&node_name).clone()),
+                origin: Origin::file(&self.file),
+            });
+        }
+        Ok(())
+    }
+
+    fn mesh_data(
+        &self,
+        prim: &gltf::Primitive,
+        pointer: &str,
+        flip: bool,
+    ) -> Result<MeshData, SceneError> {
+        let reader = prim.reader(|b| self.buffers.get(b.index()).map(|d| &d.0[..]));
+        let positions: Vec<[f32; 3]> = reader
+            .read_positions()
+            .ok_or_else(|| self.error(&format!("{pointer}/attributes"), "no POSITION attribute"))?
+            .collect();
+        if let Some(i) = positions
+            .iter()
+            .position(|p| !p.iter().all(|c| c.is_finite()))
+        {
+            return Err(self.error(
+                &format!("{pointer}/attributes/POSITION"),
+                format!("vertex {i} is not finite: {:?}", positions[i]),
+            ));
+        }
+        let n = positions.len() as u32;
+        let flat: Vec<u32> = match reader.read_indices() {
+            Some(ix) => ix.into_u32().collect(),
+            None => (0..n).collect(),
+        };
+        if let Some(bad) = flat.iter().find(|&&i| i >= n) {
+            return Err(self.error(
+                &format!("{pointer}/indices"),
+                format!("index {bad} is out of range: there are {n} vertices"),
+            ));
+        }
+        let indices: Vec<[u32; 3]> = flat
+            .chunks_exact(3)
+            .map(|t| {
+                if flip {
+                    [t[0], t[2], t[1]]
+                } else {
+                    [t[0], t[1], t[2]]
+                }
+            })
+            .collect();
+        let same = |len: usize| len == positions.len();
+        let normals: Option<Vec<[f32; 3]>> = reader
+            .read_normals()
+            .map(|it| it.collect::<Vec<_>>())
+            .filter(|v| same(v.len()));
+        let set = uv_set(prim.material());
+        let uvs: Option<Vec<[f32; 2]>> = reader
+            .read_tex_coords(set)
+            .map(|t| t.into_f32().collect::<Vec<_>>())
+            .filter(|v| same(v.len()));
+        let tangents: Option<Vec<[f32; 4]>> = reader
+            .read_tangents()
+            .map(|it| it.collect::<Vec<_>>())
+            .filter(|v| same(v.len()));
+        Ok(MeshData {
+            positions,
+            indices,
+            normals,
+            uvs,
+            tangents,
+        })
+    }
+
+    /// The scene material for a glTF material (None: glTF's default), made once.
+    fn material(&mut self, m: gltf::Material) -> Result<String, SceneError> {
+        if let Some(name) = self.materials.get(&m.index()) {
+            return Ok(name.clone());
+        }
+        let pointer = match m.index() {
+            Some(i) => format!("/materials/{i}"),
+            None => "/materials".into(),
+        };
+        let base_name = match (m.index(), m.name()) {
+            (None, _) => "gltf default".to_string(),
+            (Some(i), None) => format!("material{i}"),
+            (Some(_), Some(n)) => n.to_string(),
+        };
+        let mut name = base_name.clone();
+        let mut k = 1;
+        while self.desc.materials.contains_key(&name) {
+            name = format!("{base_name}.{k}");
+            k += 1;
+        }
+        let pbr = m.pbr_metallic_roughness();
+        let [r, g, b, _a] = pbr.base_color_factor();
+        let transmission = m.transmission().map_or(0.0, |t| t.transmission_factor());
+        if transmission > 0.0 && transmission < 1.0 {
+            self.warn(
+                &format!("{pointer}/extensions/KHR_materials_transmission"),
+                format!(
+                    "partial transmission ({transmission}) is not blended: the material is {}",
+                    if transmission >= 0.5 {
+                        "glass"
+                    } else {
+                        "opaque"
+                    }
+                ),
+            );
+        }
+        let clearcoat = m.extension_value("KHR_materials_clearcoat");
+        let number = |key: &str, default: f32| {
+            clearcoat
+                .and_then(|c| c.get(key))
+                .and_then(|v| v.as_f64())
+                .map_or(default, |v| v as f32)
+        };
+        let kind = MaterialKind::Pbr {
+            base_color: [r, g, b],
+            metallic: pbr.metallic_factor(),
+            ior: m.ior(),
+            transmission,
+            clearcoat: number("clearcoatFactor", 0.0),
+            clearcoat_roughness: number("clearcoatRoughnessFactor", 0.0),
+        };
+        let mut textures = TexturesDesc::default();
+        if let Some(info) = pbr.base_color_texture() {
+            textures.base_color =
+                Some(self.texture(&info.texture(), info.texture_transform(), &pointer)?);
+        }
+        if let Some(info) = pbr.metallic_roughness_texture() {
+            textures.metallic_roughness =
+                Some(self.texture(&info.texture(), info.texture_transform(), &pointer)?);
+        }
+        if let Some(nt) = m.normal_texture() {
+            let t = self.texture(&nt.texture(), None, &pointer)?;
+            textures.normal = Some((t, nt.scale()));
+        }
+        if let Some(info) = m.emissive_texture() {
+            textures.emissive =
+                Some(self.texture(&info.texture(), info.texture_transform(), &pointer)?);
+        }
+        self.desc.materials.insert(
+            name.clone(),
+            MaterialDesc {
+                kind,
+                roughness: pbr.roughness_factor(),
+                user_color: None,
+                textures,
+                base_color_map: None,
+                normal_map: None,
+                origin: Origin::file(&self.file),
+            },
+        );
+        self.materials.insert(m.index(), name.clone());
+        Ok(name)
+    }
+
+    /// Emission of a material's surface (factor × KHR_materials_emissive_strength).
+    fn emission(&self, m: gltf::Material) -> Option<[f32; 3]> {
+        let e = Vec3::from(m.emissive_factor()) * m.emissive_strength().unwrap_or(1.0);
+        (e != Vec3::ZERO).then_some(e.into())
+    }
+
+    fn texture(
+        &mut self,
+        t: &gltf::Texture,
+        transform: Option<gltf::texture::TextureTransform>,
+        pointer: &str,
+    ) -> Result<TextureDesc, SceneError> {
+        use gltf::texture::WrappingMode as W;
+        let wrap = |w: W| match w {
+            W::Repeat => Wrap::Repeat,
+            W::ClampToEdge => Wrap::Clamp,
+            W::MirroredRepeat => Wrap::Mirror,
+        };
+        let sampler = t.sampler();
+        let image = self.image(&t.source(), pointer)?;
+        let transform = transform.map_or_else(UvTransform::default, |x| {
+            UvTransform::new(x.offset(), x.rotation(), x.scale())
+        });
+        Ok(TextureDesc {
+            image,
+            wrap: [wrap(sampler.wrap_s()), wrap(sampler.wrap_t())],
+            transform,
+            origin: Origin::file(&self.file),
+        })
+    }
+
+    fn image(&mut self, img: &gltf::Image, pointer: &str) -> Result<ImageSource, SceneError> {
+        if let Some(s) = self.images.get(&img.index()) {
+            return Ok(s.clone());
+        }
+        let at = format!("{pointer}: /images/{}", img.index());
+        let label = img
+            .name()
+            .map(str::to_string)
+            .unwrap_or_else(|| format!("{} image {}", self.file, img.index()));
+        let source = match img.source() {
+            gltf::image::Source::View { view, .. } => {
+                let buffer = &self.buffers[view.buffer().index()].0;
+                let (start, len) = (view.offset(), view.length());
+                let bytes = buffer.get(start..start + len).ok_or_else(|| {
+                    self.error(
+                        &at,
+                        format!(
+                            "its buffer view ends past its buffer ({} bytes)",
+                            buffer.len()
+                        ),
+                    )
+                })?;
+                ImageSource::Bytes {
+                    name: label,
+                    bytes: Arc::from(bytes),
+                }
+            }
+            gltf::image::Source::Uri { uri, .. } => match uri.strip_prefix("data:") {
+                Some(rest) => {
+                    let (_, data) = rest
+                        .split_once(";base64,")
+                        .ok_or_else(|| self.error(&at, "a data URI that is not base64"))?;
+                    let bytes = base64_decode(data)
+                        .ok_or_else(|| self.error(&at, "its data URI is not valid base64"))?;
+                    ImageSource::Bytes {
+                        name: label,
+                        bytes: Arc::from(bytes),
+                    }
+                }
+                None => ImageSource::File(self.dir.join(percent_decode(uri))),
+            },
+        };
+        self.images.insert(img.index(), source.clone());
+        Ok(source)
+    }
+
+    fn camera(&mut self, node: &gltf::Node, camera: &gltf::Camera, world: Mat4) {
+        let pointer = format!("/cameras/{}", camera.index());
+        let gltf::camera::Projection::Perspective(p) = camera.projection() else {
+            self.warn(
+                &pointer,
+                "orthographic cameras are not supported; it is skipped",
+            );
+            return;
+        };
+        let name = node
+            .name()
+            .or(camera.name())
+            .map(str::to_string)
+            .unwrap_or_else(|| format!("camera{}", camera.index()));
+        let xf = Affine3A::from_mat4(world);
+        // A glTF camera looks down its local −Z with +Y up.
+        let position = xf.transform_point3a(Vec3A::ZERO);
+        let forward = xf.transform_vector3a(-Vec3A::Z).normalize_or(-Vec3A::Z);
+        let up = xf.transform_vector3a(Vec3A::Y).normalize_or(Vec3A::Y);
+        let desc = CameraDesc {
+            position: position.into(),
+            look_at: (position + forward).into(),
+            up: up.into(),
+            fov: p.yfov().to_degrees(),
+            fov_axis: FovAxis::Y,
+            origin: Origin::file(&self.file),
+            ..CameraDesc::default()
+        };
+        let resolution = p
+            .aspect_ratio()
+            .filter(|a| *a > 0.0 && a.is_finite())
+            .map(|a| {
+                if a >= 1.0 {
+                    [FILM_SIZE as u32, (FILM_SIZE / a).round().max(1.0) as u32]
+                } else {
+                    [(FILM_SIZE * a).round().max(1.0) as u32, FILM_SIZE as u32]
+                }
+            });
+        if self.desc.camera.is_none() {
+            self.desc.camera = Some(desc.clone());
+            if let Some(r) = resolution {
+                self.desc.film.resolution = r;
+            }
+        }
+        self.desc.cameras.push(NamedCamera {
+            name,
+            camera: desc,
+            resolution,
+        });
+    }
+
+    fn light(
+        &mut self,
+        node: &gltf::Node,
+        light: &gltf::khr_lights_punctual::Light,
+        world: Mat4,
+    ) -> Result<(), SceneError> {
+        use gltf::khr_lights_punctual::Kind;
+        let xf = Affine3A::from_mat4(world);
+        let position: [f32; 3] = xf.transform_point3a(Vec3A::ZERO).into();
+        // Lights point down their local −Z.
+        let direction: [f32; 3] = xf
+            .transform_vector3a(-Vec3A::Z)
+            .normalize_or(-Vec3A::Z)
+            .into();
+        let name = node
+            .name()
+            .or(light.name())
+            .map(str::to_string)
+            .unwrap_or_else(|| format!("light{}", light.index()));
+        let group = extra_strings(node.extras(), "lightgroup")
+            .into_iter()
+            .chain(extra_strings(light.extras(), "lightgroup"))
+            .next()
+            .unwrap_or_else(|| name.clone());
+        let intensity = light.intensity();
+        let (kind, strength) = match light.kind() {
+            Kind::Point => (LightKind::Point { position }, point_intensity(intensity)),
+            Kind::Spot {
+                inner_cone_angle,
+                outer_cone_angle,
+            } => {
+                let (cone_angle, cone_softness) = spot_cone(inner_cone_angle, outer_cone_angle);
+                (
+                    LightKind::Spot {
+                        position,
+                        direction,
+                        cone_angle,
+                        cone_softness,
+                    },
+                    point_intensity(intensity),
+                )
+            }
+            Kind::Directional => (LightKind::Distant { direction }, sun_irradiance(intensity)),
+        };
+        if !(strength.is_finite() && strength >= 0.0) {
+            return Err(self.error(
+                &format!(
+                    "/extensions/KHR_lights_punctual/lights/{}/intensity",
+                    light.index()
+                ),
+                format!("expected a non-negative intensity, got {intensity}"),
+            ));
+        }
+        self.desc.lights.push(LightDesc {
+            kind,
+            name: Some(name),
+            groups: vec![group],
+            color: light.color(),
+            strength,
+            camera_visible: false,
+            two_sided: false,
+            material: None,
+            transform: Affine3A::IDENTITY,
+            include: None,
+            exclude: Vec::new(),
+            origin: Origin::file(&self.file),
+        });
+        Ok(())
+    }
+}
+
+/// A point or spot light's radiant intensity (W/sr) from its luminous intensity (cd):
+/// Blender's importer makes it cd · 4π / 683 W, which Cycles emits as W / 4π per sr.
+pub fn point_intensity(candela: f32) -> f32 {
+    let watts = candela * 4.0 * PI / WATTS_TO_LUMENS;
+    watts / (4.0 * PI)
+}
+
+/// A directional light's irradiance (W/m²) from its illuminance (lux), as Blender's
+/// importer sets a sun's strength.
+pub fn sun_irradiance(lux: f32) -> f32 {
+    lux / WATTS_TO_LUMENS
+}
+
+/// A spot's full cone angle and soft edge (degrees) from glTF's inner and outer cone
+/// half-angles (radians), the way Blender imports them and Cycles shades them: spot
+/// size 2·outer, blend 1 − inner/outer, and a smoothstep over cos θ from cos(outer) up
+/// to cos(outer) + (1 − cos(outer)) · blend.
+pub fn spot_cone(inner: f32, outer: f32) -> (f32, f32) {
+    let outer = outer.clamp(1e-4, PI / 2.0);
+    let blend = (1.0 - inner.clamp(0.0, outer) / outer).clamp(0.0, 1.0);
+    let cos_outer = outer.cos();
+    let cos_inner = cos_outer + (1.0 - cos_outer) * blend;
+    let inner_eff = cos_inner.clamp(-1.0, 1.0).acos();
+    (2.0 * outer.to_degrees(), (outer - inner_eff).to_degrees())
+}
+
+/// The texture coordinate set a material's textures read (0 unless its base colour
+/// texture names another).
+fn uv_set(m: gltf::Material) -> u32 {
+    m.pbr_metallic_roughness()
+        .base_color_texture()
+        .map_or(0, |t| {
+            t.texture_transform()
+                .and_then(|x| x.tex_coord())
+                .unwrap_or(t.tex_coord())
+        })
+}
+
+/// `extras.<key>` as strings: a string, or a list of them.
+fn extra_strings(extras: &gltf::json::Extras, key: &str) -> Vec<String> {
+    let Some(raw) = extras else {
+        return Vec::new();
+    };
+    let Ok(v) = serde_json::from_str::<serde_json::Value>(raw.get()) else {
+        return Vec::new();
+    };
+    match v.get(key) {
+        Some(serde_json::Value::String(s)) => vec![s.clone()],
+        Some(serde_json::Value::Array(a)) => a
+            .iter()
+            .filter_map(|x| x.as_str().map(str::to_string))
+            .collect(),
+        _ => Vec::new(),
+    }
+}
+
+fn base64_decode(s: &str) -> Option<Vec<u8>> {
+    let val = |c: u8| -> Option<u32> {
+        Some(match c {
+            b'A'..=b'Z' => c - b'A',
+            b'a'..=b'z' => c - b'a' + 26,
+            b'0'..=b'9' => c - b'0' + 52,
+            b'+' | b'-' => 62,
+            b'/' | b'_' => 63,
+            _ => return None,
+        } as u32)
+    };
+    let bytes: Vec<u8> = s
+        .bytes()
+        .filter(|c| !c.is_ascii_whitespace() && *c != b'=')
+        .collect();
+    let mut out = Vec::with_capacity(bytes.len() * 3 / 4);
+    for chunk in bytes.chunks(4) {
+        let mut acc = 0u32;
+        for (i, &c) in chunk.iter().enumerate() {
+            acc |= val(c)? << (18 - 6 * i);
+        }
+        let n = match chunk.len() {
+            4 => 3,
+            3 => 2,
+            2 => 1,
+            _ => return None,
+        };
+        out.extend_from_slice(&acc.to_be_bytes()[1..1 + n]);
+    }
+    Some(out)
+}
+
+fn percent_decode(uri: &str) -> String {
+    let b = uri.as_bytes();
+    let mut out = Vec::with_capacity(b.len());
+    let mut i = 0;
+    while i < b.len() {
+        if b[i] == b'%' && i + 2 < b.len() {
+            let hex = |c: u8| (c as char).to_digit(16);
+            if let (Some(h), Some(l)) = (hex(b[i + 1]), hex(b[i + 2])) {
+                out.push((h * 16 + l) as u8);
+                i += 3;
+                continue;
+            }
+        }
+        out.push(b[i]);
+        i += 1;
+    }
+    String::from_utf8_lossy(&out).into_owned()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn base64_round_numbers() {
+        assert_eq!(base64_decode("TWFu").unwrap(), b"Man");
+        assert_eq!(base64_decode("TWE=").unwrap(), b"Ma");
+        assert_eq!(base64_decode("TQ==").unwrap(), b"M");
+        assert!(base64_decode("T").is_none());
+        assert!(base64_decode("T!==").is_none());
+    }
+
+    #[test]
+    fn percent_decoding() {
+        assert_eq!(percent_decode("a%20b.png"), "a b.png");
+        assert_eq!(percent_decode("100%"), "100%");
+        assert_eq!(percent_decode("%é%4"), "%é%4");
+    }
+
+    #[test]
+    fn photometric_units_as_blender_imports_them() {
+        // Blender exports a 1000 W point light as 1000 / 4π · 683 cd.
+        let cd = 1000.0 / (4.0 * PI) * 683.0;
+        assert!((point_intensity(cd) - 1000.0 / (4.0 * PI)).abs() < 1e-2);
+        assert!((sun_irradiance(683.0) - 1.0).abs() < 1e-6);
+        // No blend: a hard edge at the outer angle.
+        let (angle, soft) = spot_cone(0.5, 0.5);
+        assert!((angle - 2.0 * 0.5f32.to_degrees()).abs() < 1e-4);
+        assert!(soft.abs() < 1e-3);
+        // Inner 0: Blender's blend 1, the smoothstep spans cos(outer)..1.
+        let (_, soft) = spot_cone(0.0, 0.5);
+        assert!((soft - 0.5f32.to_degrees()).abs() < 1e-3);
+    }
+}

@@ -1,0 +1,730 @@
+//! glTF scenes written by the tests themselves (JSON plus a .bin buffer, or one .glb):
+//! the node hierarchy places meshes and names their LPE groups, cameras frame as the
+//! file says, lights convert their photometric units as Blender's importer does,
+//! textures are looked up as glTF defines them, and what Lightpath cannot read is an
+//! error or a warning naming it.
+
+use glam::{Affine3A, Quat, Vec3, Vec3A};
+use lightpath::aov::{self, AovSpec};
+use lightpath::film::Film;
+use lightpath::scene::desc::{LightKind, MaterialKind, SceneDesc};
+use lightpath::{render, RenderOptions, Scene};
+use serde_json::{json, Value};
+use std::path::{Path, PathBuf};
+
+/// A glTF document under construction; accessors append to one binary buffer.
+struct Doc {
+    json: Value,
+    bin: Vec<u8>,
+}
+
+impl Doc {
+    fn new() -> Doc {
+        Doc {
+            json: json!({
+                "asset": {"version": "2.0"},
+                "scene": 0,
+                "scenes": [{"nodes": []}],
+                "nodes": [], "meshes": [], "accessors": [], "bufferViews": [],
+                "buffers": [{"byteLength": 0}],
+            }),
+            bin: Vec::new(),
+        }
+    }
+
+    fn push(&mut self, key: &str, v: Value) -> usize {
+        let list = self.json[key].as_array_mut().expect("a list");
+        list.push(v);
+        list.len() - 1
+    }
+
+    fn view(&mut self, bytes: &[u8]) -> usize {
+        while self.bin.len() % 4 != 0 {
+            self.bin.push(0);
+        }
+        let offset = self.bin.len();
+        self.bin.extend_from_slice(bytes);
+        self.push(
+            "bufferViews",
+            json!({"buffer": 0, "byteOffset": offset, "byteLength": bytes.len()}),
+        )
+    }
+
+    fn floats(&mut self, data: &[f32], comps: usize) -> usize {
+        let bytes: Vec<u8> = data.iter().flat_map(|f| f.to_le_bytes()).collect();
+        let view = self.view(&bytes);
+        let ty = ["SCALAR", "VEC2", "VEC3", "VEC4"][comps - 1];
+        let mut acc = json!({"bufferView": view, "componentType": 5126,
+                             "count": data.len() / comps, "type": ty});
+        if comps == 3 {
+            let (mut lo, mut hi) = ([f32::MAX; 3], [f32::MIN; 3]);
+            for p in data.chunks_exact(3) {
+                for k in 0..3 {
+                    lo[k] = lo[k].min(p[k]);
+                    hi[k] = hi[k].max(p[k]);
+                }
+            }
+            acc["min"] = json!(lo);
+            acc["max"] = json!(hi);
+        }
+        self.push("accessors", acc)
+    }
+
+    fn indices(&mut self, data: &[u32]) -> usize {
+        let bytes: Vec<u8> = data.iter().flat_map(|i| i.to_le_bytes()).collect();
+        let view = self.view(&bytes);
+        self.push(
+            "accessors",
+            json!({"bufferView": view, "componentType": 5125, "count": data.len(), "type": "SCALAR"}),
+        )
+    }
+
+    /// A mesh of one primitive; `uvs` per vertex, `material` by index.
+    fn mesh(
+        &mut self,
+        positions: &[f32],
+        indices: &[u32],
+        uvs: Option<&[f32]>,
+        material: Option<usize>,
+    ) -> usize {
+        let p = self.floats(positions, 3);
+        let i = self.indices(indices);
+        let mut prim = json!({"attributes": {"POSITION": p}, "indices": i});
+        if let Some(uv) = uvs {
+            prim["attributes"]["TEXCOORD_0"] = json!(self.floats(uv, 2));
+        }
+        if let Some(m) = material {
+            prim["material"] = json!(m);
+        }
+        self.push("meshes", json!({"primitives": [prim]}))
+    }
+
+    /// The square [-s, s]² in z = 0 facing +z, UVs [0, k]² with v down the image.
+    fn square(&mut self, s: f32, k: f32, material: Option<usize>) -> usize {
+        let pos = [-s, -s, 0.0, s, -s, 0.0, s, s, 0.0, -s, s, 0.0];
+        let uv = [0.0, k, k, k, k, 0.0, 0.0, 0.0];
+        self.mesh(&pos, &[0, 1, 2, 0, 2, 3], Some(&uv), material)
+    }
+
+    fn node(&mut self, v: Value) -> usize {
+        self.push("nodes", v)
+    }
+
+    fn root(&mut self, node: usize) {
+        self.json["scenes"][0]["nodes"]
+            .as_array_mut()
+            .unwrap()
+            .push(json!(node));
+    }
+
+    fn light(&mut self, v: Value) -> usize {
+        let ext = &mut self.json["extensions"]["KHR_lights_punctual"]["lights"];
+        if ext.is_null() {
+            *ext = json!([]);
+        }
+        let list = ext.as_array_mut().unwrap();
+        list.push(v);
+        list.len() - 1
+    }
+
+    fn finish(&mut self) {
+        self.json["buffers"][0]["byteLength"] = json!(self.bin.len());
+        if self.json.get("extensions").is_some() {
+            self.json["extensionsUsed"] = json!(["KHR_lights_punctual"]);
+        }
+    }
+
+    /// Writes `<name>.gltf` and `<name>.bin` into `dir`.
+    fn write(mut self, dir: &Path, name: &str) -> PathBuf {
+        self.finish();
+        self.json["buffers"][0]["uri"] = json!(format!("{name}.bin"));
+        std::fs::write(dir.join(format!("{name}.bin")), &self.bin).unwrap();
+        let path = dir.join(format!("{name}.gltf"));
+        std::fs::write(&path, serde_json::to_vec_pretty(&self.json).unwrap()).unwrap();
+        path
+    }
+
+    /// Writes one binary `.glb`: header, JSON chunk, BIN chunk.
+    fn write_glb(mut self, path: &Path) {
+        self.finish();
+        let mut js = serde_json::to_vec(&self.json).unwrap();
+        while js.len() % 4 != 0 {
+            js.push(b' ');
+        }
+        while self.bin.len() % 4 != 0 {
+            self.bin.push(0);
+        }
+        let total = 12 + 8 + js.len() + 8 + self.bin.len();
+        let mut out = Vec::new();
+        out.extend_from_slice(b"glTF");
+        out.extend_from_slice(&2u32.to_le_bytes());
+        out.extend_from_slice(&(total as u32).to_le_bytes());
+        out.extend_from_slice(&(js.len() as u32).to_le_bytes());
+        out.extend_from_slice(b"JSON");
+        out.extend_from_slice(&js);
+        out.extend_from_slice(&(self.bin.len() as u32).to_le_bytes());
+        out.extend_from_slice(b"BIN\0");
+        out.extend_from_slice(&self.bin);
+        std::fs::write(path, out).unwrap();
+    }
+}
+
+fn temp_dir(tag: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("lightpath-gltf-{tag}-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+fn load(path: &Path) -> SceneDesc {
+    lightpath::load_scene(path.to_str().unwrap()).unwrap()
+}
+
+fn render_desc(desc: &SceneDesc, res: u32, spp: u32, extra: Vec<AovSpec>) -> (Scene, Film) {
+    let mut desc = desc.clone();
+    desc.film.resolution = [res, res];
+    desc.render.spp = spp;
+    desc.render.max_depth = 2;
+    let scene = Scene::build(&desc, &aov::assemble(extra)).unwrap();
+    let (film, _) = render(
+        &scene,
+        &RenderOptions {
+            spp,
+            first_sample: 0,
+        },
+    );
+    (scene, film)
+}
+
+fn aov_sum(scene: &Scene, film: &Film, name: &str) -> f32 {
+    let k = scene.aovs.iter().position(|a| a.name == name).unwrap();
+    let mut s = 0.0;
+    for y in 0..film.height {
+        for x in 0..film.width {
+            s += film.pixel(k, x, y).x;
+        }
+    }
+    s
+}
+
+/// A camera at (0, 0, d) looking down −Z with the given vertical field of view.
+fn camera_node(doc: &mut Doc, name: &str, d: f32, yfov: f32) -> usize {
+    let cam = doc.push(
+        "cameras",
+        json!({"type": "perspective", "perspective": {"yfov": yfov, "znear": 0.01}}),
+    );
+    doc.node(json!({"name": name, "camera": cam, "translation": [0.0, 0.0, d]}))
+}
+
+impl Doc {
+    fn with_cameras(mut self) -> Doc {
+        self.json["cameras"] = json!([]);
+        self
+    }
+}
+
+#[test]
+fn the_hierarchy_places_meshes_and_ancestors_are_lpe_groups() {
+    let dir = temp_dir("hierarchy");
+    let mut doc = Doc::new().with_cameras();
+    let tri = doc.mesh(
+        &[0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0, 0.0],
+        &[0, 1, 2],
+        None,
+        None,
+    );
+    let ball = doc.node(
+        json!({"name": "ball", "mesh": tri, "translation": [0.0, 1.0, 0.0],
+                               "extras": {"lpegroup": ["hero", "metal"]}}),
+    );
+    let props = doc.node(json!({"name": "props", "children": [ball],
+                                "translation": [1.0, 0.0, 0.0], "scale": [2.0, 2.0, 2.0]}));
+    // A rotated node: 90° about z takes x to y.
+    let q = Quat::from_rotation_z(std::f32::consts::FRAC_PI_2);
+    let turned = doc.node(json!({"name": "turned", "mesh": tri, "rotation": [q.x, q.y, q.z, q.w]}));
+    doc.root(props);
+    doc.root(turned);
+    let path = doc.write(&dir, "hierarchy");
+    let desc = load(&path);
+    let ball = desc
+        .objects
+        .iter()
+        .find(|o| o.name.as_deref() == Some("ball"))
+        .unwrap();
+    assert_eq!(
+        ball.lpegroups.as_deref().unwrap(),
+        ["ball", "props", "hero", "metal"].map(String::from)
+    );
+    // Parent (scale 2, then +x) after child (+y): (1, 0, 0) → (1, 1, 0) → (3, 2, 0).
+    let p = ball.transform.transform_point3(Vec3::X);
+    assert!((p - Vec3::new(3.0, 2.0, 0.0)).length() < 1e-5, "{p}");
+    let turned = desc
+        .objects
+        .iter()
+        .find(|o| o.name.as_deref() == Some("turned"))
+        .unwrap();
+    let p = turned.transform.transform_point3(Vec3::X);
+    assert!((p - Vec3::Y).length() < 1e-5, "{p}");
+    assert_eq!(turned.lpegroups.as_deref().unwrap(), ["turned".to_string()]);
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn ancestor_groups_select_light_paths() {
+    // A camera looking at a big square under 'props', lit by a point light: an AOV of
+    // paths through 'props' is the whole beauty, one through another group is nothing.
+    let dir = temp_dir("groups");
+    let mut doc = Doc::new().with_cameras();
+    let sq = doc.square(10.0, 1.0, None);
+    let wall = doc.node(json!({"name": "wall", "mesh": sq}));
+    let props = doc.node(json!({"name": "props", "children": [wall]}));
+    let cam = camera_node(&mut doc, "cam", 5.0, 0.5);
+    let l = doc.light(json!({"type": "point", "intensity": 1000.0}));
+    let light = doc.node(json!({"name": "key", "translation": [0.0, 0.0, 2.0],
+                                "extensions": {"KHR_lights_punctual": {"light": l}}}));
+    for n in [props, cam, light] {
+        doc.root(n);
+    }
+    let desc = load(&doc.write(&dir, "groups"));
+    let (scene, film) = render_desc(
+        &desc,
+        8,
+        1,
+        vec![
+            AovSpec::new("props", "C<..'props'>.*[<L.>O]"),
+            AovSpec::new("key", "C.*<L.'key'>"),
+            AovSpec::new("floor", "C<..'floor'>.*[<L.>O]"),
+        ],
+    );
+    let beauty = aov_sum(&scene, &film, "beauty");
+    assert!(beauty > 0.0);
+    assert!((aov_sum(&scene, &film, "props") - beauty).abs() < 1e-4 * beauty);
+    assert!((aov_sum(&scene, &film, "key") - beauty).abs() < 1e-4 * beauty);
+    assert_eq!(aov_sum(&scene, &film, "floor"), 0.0);
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn cameras_frame_as_the_file_says_and_are_picked_by_name() {
+    let dir = temp_dir("cameras");
+    let mut doc = Doc::new().with_cameras();
+    let wide = doc.push(
+        "cameras",
+        json!({"type": "perspective", "perspective": {"yfov": 1.0, "aspectRatio": 2.0, "znear": 0.1}}),
+    );
+    let n0 = doc.node(json!({"name": "wide", "camera": wide, "translation": [0.0, 0.0, 5.0]}));
+    let q = Quat::from_rotation_y(std::f32::consts::FRAC_PI_2);
+    let n1 = doc.node(
+        json!({"name": "side", "camera": wide, "translation": [5.0, 0.0, 0.0],
+                             "rotation": [q.x, q.y, q.z, q.w]}),
+    );
+    let sq = doc.square(1.0, 1.0, None);
+    let n2 = doc.node(json!({"name": "card", "mesh": sq}));
+    for n in [n0, n1, n2] {
+        doc.root(n);
+    }
+    let path = doc.write(&dir, "cameras");
+    let mut desc = load(&path);
+    let c = desc.camera.clone().unwrap();
+    assert_eq!(c.position, [0.0, 0.0, 5.0]);
+    assert!((Vec3::from(c.look_at) - Vec3::new(0.0, 0.0, 4.0)).length() < 1e-6);
+    assert!((c.fov - 1.0f32.to_degrees()).abs() < 1e-4);
+    assert_eq!(c.fov_axis, lightpath::camera::FovAxis::Y);
+    assert_eq!(desc.film.resolution, [512, 256]);
+    // A camera turned 90° about +y looks down −x.
+    desc.use_camera("side").unwrap();
+    let c = desc.camera.clone().unwrap();
+    assert!(
+        (Vec3::from(c.look_at) - Vec3::new(4.0, 0.0, 0.0)).length() < 1e-5,
+        "{:?}",
+        c.look_at
+    );
+    let e = desc.use_camera("top").unwrap_err().to_string();
+    assert!(
+        e.contains("top") && e.contains("wide") && e.contains("side"),
+        "{e}"
+    );
+    // The card (half-height 1 at distance 5) fills tan⁻¹(1/5) / (yfov / 2) of the frame's
+    // half-height: the rendered silhouette's rows say so.
+    desc.use_camera("wide").unwrap();
+    desc.film.resolution = [64, 64];
+    desc.render.spp = 1;
+    desc.render.max_depth = 1;
+    let scene = Scene::build(&desc, &aov::assemble(vec![])).unwrap();
+    let (film, _) = render(
+        &scene,
+        &RenderOptions {
+            spp: 1,
+            first_sample: 0,
+        },
+    );
+    let alpha = film.alpha();
+    let alpha_rows = (0..64).filter(|&y| alpha[y * 64 + 32] > 0.5).count() as f32;
+    let want = 64.0 * (0.2f32.atan() / 0.5);
+    assert!(
+        (alpha_rows - want).abs() <= 1.5,
+        "{alpha_rows} rows, want {want}"
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn a_file_without_camera_or_lights_gets_defaults_and_warnings() {
+    let dir = temp_dir("defaults");
+    let mut doc = Doc::new();
+    let sq = doc.square(1.0, 1.0, None);
+    let n = doc.node(json!({"name": "card", "mesh": sq, "translation": [10.0, 0.0, 0.0]}));
+    doc.root(n);
+    let desc = load(&doc.write(&dir, "defaults"));
+    let c = desc.camera.as_ref().unwrap();
+    assert!((Vec3::from(c.look_at) - Vec3::new(10.0, 0.0, 0.0)).length() < 1e-5);
+    assert!(matches!(desc.lights[0].kind, LightKind::Dome { .. }));
+    let w = desc.warnings.join("\n");
+    assert!(w.contains("no camera") && w.contains("no light"), "{w}");
+    // The default camera sees the card in the middle of the frame.
+    let (_, film) = render_desc(&desc, 16, 1, vec![]);
+    assert!(film.alpha()[8 * 16 + 8] > 0.5);
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn light_units_convert_as_blenders_importer_does() {
+    // A Lambertian plane (glTF base colour 0.5, metallic 0 → albedo 0.5 × (1 − F0)) under
+    // a point light of 4 · 683 cd at 2 m: E = (4 · 683 / 683) / 2² = 1 W/m².
+    let dir = temp_dir("units");
+    let mut doc = Doc::new().with_cameras();
+    doc.json["materials"] = json!([{"pbrMetallicRoughness":
+        {"baseColorFactor": [0.5, 0.5, 0.5, 1.0], "metallicFactor": 0.0, "roughnessFactor": 1.0}}]);
+    let sq = doc.square(10.0, 1.0, Some(0));
+    let plane = doc.node(json!({"name": "plane", "mesh": sq}));
+    let cam = camera_node(&mut doc, "cam", 5.0, 0.02);
+    let l = doc.light(
+        json!({"type": "point", "intensity": 4.0 * 683.0, "name": "bulb",
+                            "extras": {"lightgroup": "practical"}}),
+    );
+    let bulb = doc.node(json!({"name": "bulbnode", "translation": [0.0, 0.0, 2.0],
+                               "extensions": {"KHR_lights_punctual": {"light": l}}}));
+    let s = doc.light(json!({"type": "directional", "intensity": 683.0}));
+    let sun = doc.node(json!({"name": "sun", "extensions": {"KHR_lights_punctual": {"light": s}}}));
+    let sp = doc.light(json!({"type": "spot", "intensity": 683.0,
+                              "spot": {"innerConeAngle": 0.2, "outerConeAngle": 0.4}}));
+    let spot =
+        doc.node(json!({"name": "spot", "extensions": {"KHR_lights_punctual": {"light": sp}}}));
+    for n in [plane, cam, bulb, sun, spot] {
+        doc.root(n);
+    }
+    let mut desc = load(&doc.write(&dir, "units"));
+    let light = |name: &str| {
+        desc.lights
+            .iter()
+            .find(|l| l.name.as_deref() == Some(name))
+            .unwrap()
+    };
+    assert_eq!(light("bulbnode").groups, ["practical".to_string()]);
+    assert!((light("bulbnode").strength - 4.0).abs() < 1e-5);
+    assert_eq!(light("sun").groups, ["sun".to_string()]);
+    assert!((light("sun").strength - 1.0).abs() < 1e-6);
+    let LightKind::Spot {
+        cone_angle,
+        cone_softness,
+        direction,
+        ..
+    } = light("spot").kind
+    else {
+        panic!("a spot light");
+    };
+    assert_eq!(direction, [0.0, 0.0, -1.0]);
+    assert!((cone_angle - 0.8f32.to_degrees()).abs() < 1e-4);
+    // Blender: blend = 1 − 0.2/0.4 = ½; Cycles' smooth edge ends at
+    // cos = cos 0.4 + (1 − cos 0.4)·½.
+    let inner = (0.4f32.cos() + (1.0 - 0.4f32.cos()) * 0.5).acos();
+    assert!((cone_softness - (0.4 - inner).to_degrees()).abs() < 1e-3);
+    // Only the bulb: the diffuse light of the plane under it is ρE/π (the pixels
+    // straddle the axis within 0.05 m of 2 m, so E varies by under 10⁻³).
+    desc.lights
+        .retain(|l| l.name.as_deref() == Some("bulbnode"));
+    let (scene, film) = render_desc(&desc, 4, 4, vec![AovSpec::new("dd", "C<RD>[<L.>O]")]);
+    let k = scene.aovs.iter().position(|a| a.name == "dd").unwrap();
+    let rho = 0.5 * (1.0 - 0.04);
+    let want = rho / std::f32::consts::PI;
+    let got = film.pixel(k, 2, 2).x;
+    assert!((got - want).abs() < 2e-3 * want, "{got} vs {want}");
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// A 2×2 RGBA PNG: red, (128, 128, 128); green, white (rows top to bottom).
+fn png_2x2() -> Vec<u8> {
+    let mut img = image::RgbaImage::new(2, 2);
+    img.put_pixel(0, 0, image::Rgba([255, 0, 0, 255]));
+    img.put_pixel(1, 0, image::Rgba([128, 128, 128, 255]));
+    img.put_pixel(0, 1, image::Rgba([0, 255, 0, 255]));
+    img.put_pixel(1, 1, image::Rgba([255, 255, 255, 255]));
+    let mut out = Vec::new();
+    img.write_to(&mut std::io::Cursor::new(&mut out), image::ImageFormat::Png)
+        .unwrap();
+    out
+}
+
+#[test]
+fn base_colour_textures_are_srgb_and_repeat() {
+    // A square filling the frame, UVs [0, 2]² with REPEAT: the 2×2 texture appears 2×2
+    // times. The albedo AOV at each texel's centre is that texel, sRGB-decoded.
+    let dir = temp_dir("texture");
+    let mut doc = Doc::new().with_cameras();
+    let png = png_2x2();
+    let view = doc.view(&png);
+    doc.json["images"] = json!([{"bufferView": view, "mimeType": "image/png"}]);
+    doc.json["samplers"] = json!([{"wrapS": 10497, "wrapT": 10497}]);
+    doc.json["textures"] = json!([{"source": 0, "sampler": 0}]);
+    doc.json["materials"] = json!([{"pbrMetallicRoughness":
+        {"baseColorTexture": {"index": 0}, "metallicFactor": 0.0}}]);
+    let sq = doc.square(1.0, 2.0, Some(0));
+    let card = doc.node(json!({"name": "card", "mesh": sq}));
+    // The square spans ±1 at distance 1/tan(0.25): exactly the 0.5 rad field of view.
+    let cam = camera_node(&mut doc, "cam", 1.0 / 0.25f32.tan(), 0.5);
+    doc.root(card);
+    doc.root(cam);
+    let path = dir.join("texture.glb");
+    doc.write_glb(&path);
+    let desc = load(&path);
+    let (scene, film) = render_desc(&desc, 124, 1, vec![AovSpec::new("albedo", "lpe:albedo")]);
+    let k = scene.aovs.iter().position(|a| a.name == "albedo").unwrap();
+    let grey = 0.2158605; // sRGB 128 decoded
+    let want = [
+        [Vec3A::new(1.0, 0.0, 0.0), Vec3A::splat(grey)],
+        [Vec3A::new(0.0, 1.0, 0.0), Vec3A::ONE],
+    ];
+    // The camera's square field maps the square's UV [0, 2] onto 124 px: each texel is
+    // 31 px wide, its centre the centre of pixel 15 + 31·i. A sample jittered within that
+    // pixel is at most half a pixel off in u and in v, so bilinear filtering mixes in at
+    // most 1/62 of the neighbour along each: a channel in [0, 1] moves by under 2/62.
+    for ty in 0..4 {
+        for tx in 0..4 {
+            let got = film.pixel(k, 15 + 31 * tx, 15 + 31 * ty);
+            let w = want[ty as usize % 2][tx as usize % 2];
+            let bound = 2.0 / 62.0 + 1e-4;
+            assert!(
+                (got - w).abs().max_element() < bound,
+                "texel ({tx}, {ty}): {got} vs {w}"
+            );
+        }
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn extensions_we_lack_are_errors_when_required_and_warnings_when_used() {
+    let dir = temp_dir("extensions");
+    let base = || {
+        let mut doc = Doc::new();
+        let sq = doc.square(1.0, 1.0, None);
+        let n = doc.node(json!({"name": "card", "mesh": sq}));
+        doc.root(n);
+        doc
+    };
+    let mut doc = base();
+    doc.json["extensionsUsed"] = json!(["KHR_draco_mesh_compression"]);
+    doc.json["extensionsRequired"] = json!(["KHR_draco_mesh_compression"]);
+    let path = doc.write(&dir, "required");
+    let e = lightpath::load_scene(path.to_str().unwrap())
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("required.gltf")
+            && e.contains("/extensionsRequired")
+            && e.contains("KHR_draco_mesh_compression"),
+        "{e}"
+    );
+    let mut doc = base();
+    doc.json["extensionsUsed"] = json!(["EXT_mesh_gpu_instancing", "KHR_materials_clearcoat"]);
+    doc.json["extensionsRequired"] = json!(["KHR_materials_clearcoat"]);
+    doc.json["materials"] = json!([{"extensions": {"KHR_materials_clearcoat":
+        {"clearcoatFactor": 0.75, "clearcoatRoughnessFactor": 0.25}}}]);
+    doc.json["meshes"][0]["primitives"][0]["material"] = json!(0);
+    let desc = load(&doc.write(&dir, "used"));
+    let w = desc.warnings.join("\n");
+    assert!(
+        w.contains("EXT_mesh_gpu_instancing") && !w.contains("clearcoat"),
+        "{w}"
+    );
+    let m = desc.materials.values().next().unwrap();
+    let MaterialKind::Pbr {
+        clearcoat,
+        clearcoat_roughness,
+        ..
+    } = m.kind
+    else {
+        panic!("a metallic-roughness material");
+    };
+    assert_eq!((clearcoat, clearcoat_roughness), (0.75, 0.25));
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn bad_files_are_errors_naming_the_file_and_where() {
+    let dir = temp_dir("errors");
+    // Not glTF at all: an OBJ given a .gltf name.
+    let obj = dir.join("cube.gltf");
+    std::fs::write(&obj, "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n").unwrap();
+    let e = lightpath::load_scene(obj.to_str().unwrap())
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("cube.gltf") && e.contains("OBJ"), "{e}");
+    // A vertex that is not finite.
+    let mut doc = Doc::new();
+    let m = doc.mesh(
+        &[0.0, 0.0, 0.0, f32::NAN, 0.0, 0.0, 0.0, 1.0, 0.0],
+        &[0, 1, 2],
+        None,
+        None,
+    );
+    let n = doc.node(json!({"mesh": m}));
+    doc.root(n);
+    let path = doc.write(&dir, "nan");
+    let e = lightpath::load_scene(path.to_str().unwrap())
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("nan.gltf")
+            && e.contains("/meshes/0/primitives/0/attributes/POSITION")
+            && e.contains("vertex 1"),
+        "{e}"
+    );
+    // An index past the vertices.
+    let mut doc = Doc::new();
+    let m = doc.mesh(
+        &[0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0, 0.0],
+        &[0, 1, 7],
+        None,
+        None,
+    );
+    let n = doc.node(json!({"mesh": m}));
+    doc.root(n);
+    let path = doc.write(&dir, "index");
+    let e = lightpath::load_scene(path.to_str().unwrap())
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("index.gltf") && e.contains("/meshes/0/primitives/0/indices") && e.contains("7"),
+        "{e}"
+    );
+    // A node index out of range is caught by validation, with its JSON path.
+    let mut doc = Doc::new();
+    doc.root(5);
+    let path = doc.write(&dir, "dangling");
+    let e = lightpath::load_scene(path.to_str().unwrap())
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("dangling.gltf") && e.contains("/scenes/0/nodes"),
+        "{e}"
+    );
+    // A missing buffer file names the OS reason.
+    let mut doc = Doc::new();
+    let m = doc.mesh(
+        &[0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0, 0.0],
+        &[0, 1, 2],
+        None,
+        None,
+    );
+    let n = doc.node(json!({"mesh": m}));
+    doc.root(n);
+    let path = doc.write(&dir, "nobuffer");
+    std::fs::remove_file(dir.join("nobuffer.bin")).unwrap();
+    let e = lightpath::load_scene(path.to_str().unwrap())
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("nobuffer.gltf") && e.contains("/buffers"), "{e}");
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn glb_and_gltf_of_one_document_load_alike() {
+    let dir = temp_dir("glb");
+    let build = || {
+        let mut doc = Doc::new();
+        let sq = doc.square(1.0, 1.0, None);
+        let n = doc.node(json!({"name": "card", "mesh": sq, "translation": [0.0, 2.0, 0.0]}));
+        doc.root(n);
+        doc
+    };
+    let a = load(&build().write(&dir, "card"));
+    let glb = dir.join("card.glb");
+    build().write_glb(&glb);
+    let b = load(&glb);
+    assert_eq!(a.objects.len(), b.objects.len());
+    let pos = |d: &SceneDesc| match d.objects[0].shape.mesh_parts() {
+        Some(parts) => parts[0].positions.clone(),
+        None => panic!("a mesh"),
+    };
+    assert_eq!(pos(&a), pos(&b));
+    assert_eq!(a.objects[0].transform, b.objects[0].transform);
+    assert_eq!(
+        a.objects[0].transform,
+        Affine3A::from_translation(Vec3::new(0.0, 2.0, 0.0))
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn nodes_sharing_a_textured_mesh_are_instances_that_shade_as_copies_do() {
+    // Two placements of one textured square (one turned a quarter and scaled): stored once
+    // as instances, they must read their texture exactly as two separate copies do.
+    let dir = temp_dir("instances");
+    let build = |shared: bool| {
+        let mut doc = Doc::new().with_cameras();
+        let png = png_2x2();
+        let view = doc.view(&png);
+        doc.json["images"] = json!([{"bufferView": view, "mimeType": "image/png"}]);
+        doc.json["textures"] = json!([{"source": 0}]);
+        doc.json["materials"] = json!([{"pbrMetallicRoughness":
+            {"baseColorTexture": {"index": 0}, "metallicFactor": 0.0}}]);
+        let a = doc.square(0.4, 1.0, Some(0));
+        let b = if shared {
+            a
+        } else {
+            doc.square(0.4, 1.0, Some(0))
+        };
+        let left = doc.node(json!({"name": "left", "mesh": a, "translation": [-0.5, 0.0, 0.0]}));
+        let right = doc.node(json!({"name": "right", "mesh": b,
+            "translation": [0.5, 0.0, 0.0], "scale": [1.1, 1.1, 1.1],
+            "rotation": [0.0, 0.0, 0.70710677, 0.70710677]}));
+        let cam = camera_node(&mut doc, "cam", 3.0, 0.7);
+        doc.root(left);
+        doc.root(right);
+        doc.root(cam);
+        let path = dir.join(format!("shared{shared}.glb"));
+        doc.write_glb(&path);
+        render_desc(
+            &load(&path),
+            48,
+            2,
+            vec![AovSpec::new("albedo", "lpe:albedo")],
+        )
+    };
+    let (shared_scene, shared) = build(true);
+    let (copies_scene, copies) = build(false);
+    assert_eq!(shared_scene.accel.instances().len(), 2);
+    assert_eq!(copies_scene.accel.instances().len(), 0);
+    let k = shared_scene
+        .aovs
+        .iter()
+        .position(|a| a.name == "albedo")
+        .unwrap();
+    let mut textured = 0;
+    for y in 0..48 {
+        for x in 0..48 {
+            let (a, b) = (shared.pixel(k, x, y), copies.pixel(k, x, y));
+            // The same rays and texels; only the order of float operations differs.
+            assert!(
+                (a - b).abs().max_element() < 1e-3,
+                "pixel ({x}, {y}): instance {a} vs copy {b}"
+            );
+            textured += usize::from(a.max_element() > 0.0);
+        }
+    }
+    assert!(
+        textured > 48 * 48 / 5,
+        "only {textured} pixels see a square"
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}
