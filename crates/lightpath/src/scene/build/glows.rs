@@ -8,7 +8,7 @@
 //! A glow is sampled when its object is one sphere or made of triangles, its emission is
 //! finite, not black and not textured (a light's radiance is the same all over), and
 //! indirect rays see it (light sampling must not find what a BSDF ray could not). Others
-//! (instances of a shared mesh, emissive textures, infinite emission for the
+//! (instances of a shared mesh, emissive textures, holdouts, infinite emission for the
 //! `noinfinitecheck` prefix, objects hidden from indirect rays) glow as before: found by
 //! rays only.
 
@@ -40,7 +40,9 @@ pub fn add(
                 .as_ref()
                 .is_some_and(|t| t.textures.emissive.is_some())
         });
+        // A holdout's glow reaches only `holdouts` AOVs, through the path that hits it.
         if obj.light.is_some()
+            || obj.holdout
             || textured
             || !desc.visible_indirect
             || !e.is_finite()
