@@ -492,41 +492,7 @@ impl PreparedRender {
             .iter()
             .map(|p| p.iter().filter(|v| !v.is_finite()).count() as u64)
             .sum();
-        let mut text = output::naming::RenderMetadata {
-            scene: source.name.clone(),
-            spp: scene.settings.spp,
-            first_sample: job.first_sample,
-            seed: scene.settings.seed,
-        }
-        .attributes();
-        text.extend(metadata);
-        if let Some(i) = &interrupted {
-            let per_row = film.width as u64 * film.spp as u64;
-            text.push((
-                crate::aov::naming::INTERRUPTED_ATTRIBUTE.to_string(),
-                format!(
-                    "{} of {} rows rendered ({} of {} samples); the other rows are empty: \
-                     run the same command with --resume to finish",
-                    i.rows_done,
-                    i.rows,
-                    i.rows_done as u64 * per_row,
-                    i.rows as u64 * per_row
-                ),
-            ));
-        }
-        let capture_date = job.timestamp.then(|| {
-            let now = std::time::SystemTime::now()
-                .duration_since(std::time::UNIX_EPOCH)
-                .map_or(0, |d| d.as_secs());
-            output::naming::capture_date(now)
-        });
-        let header = output::ExrHeader {
-            world_to_camera: Some(scene.camera.world_to_camera().to_cols_array()),
-            world_to_ndc: Some(scene.camera.world_to_ndc().to_cols_array()),
-            capture_date,
-            text,
-            ..output::ExrHeader::default()
-        };
+        let header = exr_header(&job, &source, &scene, metadata, &film, interrupted.as_ref());
         let derived = output::derived_aovs(&film, &scene.aovs);
         let png =
             output::stage_png(&paths.png, &film, 0, job.preview_exposure).map_err(Error::Output)?;
@@ -535,15 +501,7 @@ impl PreparedRender {
             .map_err(Error::Output)?;
         output::atomic::commit_pair(exr, png).map_err(Error::Output)?;
         if interrupted.is_none() {
-            match std::fs::remove_file(&checkpoint_path) {
-                Err(e) if e.kind() != std::io::ErrorKind::NotFound => {
-                    return Err(Error::Output(format!(
-                        "cannot remove the finished render's checkpoint {}: {e}",
-                        checkpoint_path.display()
-                    )))
-                }
-                _ => {}
-            }
+            remove_checkpoint(&checkpoint_path)?;
         }
         // An interrupted render's rows are unfinished: it is denoised once it is resumed.
         let denoised = match job.denoise {
@@ -563,6 +521,64 @@ impl PreparedRender {
             interrupted,
             denoised,
         })
+    }
+}
+
+/// The EXR header of a render: its settings, the AOVs' metadata, the camera, the date if
+/// asked, and how far an interrupted render got.
+fn exr_header(
+    job: &RenderJob,
+    source: &Source,
+    scene: &Scene,
+    metadata: Vec<(String, String)>,
+    film: &Film,
+    interrupted: Option<&Interrupted>,
+) -> output::ExrHeader {
+    let mut text = output::naming::RenderMetadata {
+        scene: source.name.clone(),
+        spp: scene.settings.spp,
+        first_sample: job.first_sample,
+        seed: scene.settings.seed,
+    }
+    .attributes();
+    text.extend(metadata);
+    if let Some(i) = interrupted {
+        let per_row = film.width as u64 * film.spp as u64;
+        text.push((
+            crate::aov::naming::INTERRUPTED_ATTRIBUTE.to_string(),
+            format!(
+                "{} of {} rows rendered ({} of {} samples); the other rows are empty: \
+                 run the same command with --resume to finish",
+                i.rows_done,
+                i.rows,
+                i.rows_done as u64 * per_row,
+                i.rows as u64 * per_row
+            ),
+        ));
+    }
+    let capture_date = job.timestamp.then(|| {
+        let now = std::time::SystemTime::now()
+            .duration_since(std::time::UNIX_EPOCH)
+            .map_or(0, |d| d.as_secs());
+        output::naming::capture_date(now)
+    });
+    output::ExrHeader {
+        world_to_camera: Some(scene.camera.world_to_camera().to_cols_array()),
+        world_to_ndc: Some(scene.camera.world_to_ndc().to_cols_array()),
+        capture_date,
+        text,
+        ..output::ExrHeader::default()
+    }
+}
+
+/// A finished render's checkpoint is stale: removed (none there is fine).
+fn remove_checkpoint(path: &std::path::Path) -> Result<(), Error> {
+    match std::fs::remove_file(path) {
+        Err(e) if e.kind() != std::io::ErrorKind::NotFound => Err(Error::Output(format!(
+            "cannot remove the finished render's checkpoint {}: {e}",
+            path.display()
+        ))),
+        _ => Ok(()),
     }
 }
 

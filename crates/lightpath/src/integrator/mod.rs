@@ -180,71 +180,50 @@ pub fn render_resumable(
         max_band_rows,
     } = resume;
     let start = std::time::Instant::now();
-    let cam = &scene.camera;
-    let (fw, fh) = (cam.width, cam.height);
     let win = request.window;
-    debug_assert!(win.check(fw, fh).is_ok());
-    let (w, h) = (win.width(), win.height());
-    let stride = Film::stride_with(scene.aovs.len(), scene.variance_aovs.len());
-    let tracer = Tracer::new(scene);
-    let rays = AtomicU64::new(0);
-    let nonfinite = AtomicU64::new(0);
-    let done: Vec<AtomicBool> = (0..h as usize)
-        .map(|y| AtomicBool::new(resumed_rows.get(y).copied().unwrap_or(false)))
-        .collect();
-    let rows_before = done.iter().filter(|d| d.load(Ordering::Relaxed)).count() as u64;
-    let samples_taken = AtomicU64::new(0);
-    progress.start(h as u64, w as u64 * h as u64 * options.spp as u64);
-    progress.advance(rows_before);
-    let stopped = || cancel.is_some_and(|c| c.load(Ordering::Relaxed));
+    debug_assert!(win.check(scene.camera.width, scene.camera.height).is_ok());
+    let (w, h) = (win.width() as usize, win.height() as usize);
+    let frame = FrameRender {
+        tracer: Tracer::new(scene),
+        options,
+        window: win,
+        stride: Film::stride_with(scene.aovs.len(), scene.variance_aovs.len()),
+        table: request.mattes.as_ref(),
+        done: (0..h)
+            .map(|y| AtomicBool::new(resumed_rows.get(y).copied().unwrap_or(false)))
+            .collect(),
+        cancel,
+        progress,
+        counters: Counters::default(),
+    };
+    let rows_before = frame
+        .done
+        .iter()
+        .filter(|d| d.load(Ordering::Relaxed))
+        .count();
+    progress.start(h as u64, (w * h) as u64 * options.spp as u64);
+    progress.advance(rows_before as u64);
     // Rows are rendered a band at a time into one reused interleaved buffer (a sample
     // writes one contiguous run), and each band is moved into the film's planes: the
     // peak memory is the film plus one band, with no allocation churn.
-    let row_len = stride * w as usize;
-    // At least 8 rows (or the whole window when it is shorter).
-    let band_rows = (BAND_BYTES / (4 * row_len))
-        .min(max_band_rows.unwrap_or(usize::MAX))
-        .max(8)
-        .min(h.max(1) as usize);
-    // A live preview asks for smaller bands, to show rows sooner; pixels do not depend on it.
-    let band_rows = progress
-        .band_rows()
-        .map_or(band_rows, |r| r.clamp(1, band_rows));
+    let row_len = frame.stride * w;
+    let band_rows = band_rows(row_len, h, max_band_rows, progress);
     let mut band = vec![0.0f32; band_rows * row_len];
     let adaptive = scene.settings.noise_threshold > 0.0;
-    let mut counts = vec![0u32; if adaptive { band_rows * w as usize } else { 0 }];
-    let mut film = resumed
-        .filter(|f| {
-            (f.width, f.height, f.aovs, &f.squared)
-                == (w, h, scene.aovs.len(), &scene.variance_aovs)
-        })
-        .map(|f| Film {
-            window: win,
-            frame: [fw, fh],
-            ..f
-        })
-        .unwrap_or_else(|| {
-            Film::for_window(win, [fw, fh], scene.aovs.len(), options.spp)
-                .summing_squares(scene.variance_aovs.clone())
-        });
-    if adaptive && film.sample_counts.is_none() {
-        film.sample_counts = Some(vec![0; w as usize * h as usize]);
-    }
+    let mut counts = vec![0u32; if adaptive { band_rows * w } else { 0 }];
+    let mut film = starting_film(scene, options, win, resumed);
     // Cryptomatte values, band by band beside the AOVs' (one dummy value per row without).
-    let table = request.mattes.as_ref();
-    let matte_stride = table.map_or(0, |t| t.stride());
-    let matte_row = (matte_stride * w as usize).max(1);
+    let matte_stride = frame.table.map_or(0, |t| t.stride());
+    let matte_row = (matte_stride * w).max(1);
     let mut matte_band = vec![0.0f32; band_rows * matte_row];
-    let mut matte_planes: Vec<Vec<f32>> = (0..matte_stride)
-        .map(|_| vec![0.0; w as usize * h as usize])
-        .collect();
-    for first_row in (0..h as usize).step_by(band_rows) {
-        let rows_here = band_rows.min(h as usize - first_row);
-        let band_done = &done[first_row..first_row + rows_here];
-        if stopped() || band_done.iter().all(|d| d.load(Ordering::Relaxed)) {
+    let mut matte_planes: Vec<Vec<f32>> = (0..matte_stride).map(|_| vec![0.0; w * h]).collect();
+    for first_row in (0..h).step_by(band_rows) {
+        let rows = first_row..first_row + band_rows.min(h - first_row);
+        let band_done = &frame.done[rows.clone()];
+        if frame.stopped() || band_done.iter().all(|d| d.load(Ordering::Relaxed)) {
             continue;
         }
-        let band = &mut band[..rows_here * row_len];
+        let band = &mut band[..rows.len() * row_len];
         // The band starts as the film holds it: zero, or a resumed row's finished sums,
         // which the skipped row leaves as they are.
         if band_done.iter().any(|d| d.load(Ordering::Relaxed)) {
@@ -252,23 +231,149 @@ pub fn render_resumable(
         } else {
             band.fill(0.0);
         }
-        let matte_band = &mut matte_band[..rows_here * matte_row];
-        // Per row: its sample counts (adaptive sampling), or nothing.
         // A finished (resumed) row keeps its counts; a row left unrendered keeps the film's.
-        if let Some(film_counts) = &film.sample_counts {
-            let start = first_row * w as usize;
-            let n = rows_here * w as usize;
-            counts[..n].copy_from_slice(&film_counts[start..start + n]);
+        let counts = &mut counts[..if adaptive { rows.len() * w } else { 0 }];
+        if let (true, Some(film_counts)) = (adaptive, &film.sample_counts) {
+            counts.copy_from_slice(&film_counts[first_row * w..rows.end * w]);
         }
-        let count_rows: Vec<&mut [u32]> = if adaptive {
-            counts[..rows_here * w as usize]
-                .chunks_mut(w as usize)
-                .collect()
+        let matte_band = &mut matte_band[..rows.len() * matte_row];
+        frame.render_band(rows.clone(), band, matte_band, counts);
+        film.store_rows(first_row, band);
+        film.store_counts(first_row, counts);
+        for (c, plane) in matte_planes.iter_mut().enumerate() {
+            for (d, px) in plane[first_row * w..rows.end * w]
+                .iter_mut()
+                .zip(matte_band.chunks_exact(matte_stride))
+            {
+                *d = px[c];
+            }
+        }
+        progress.rows_done(&film, rows);
+        if let Some(f) = after_band.as_mut() {
+            f(&film, &frame.rows_done());
+        }
+    }
+    if let Some(t) = frame.table {
+        film.mattes = Some(Mattes {
+            table: t.clone(),
+            planes: matte_planes,
+        });
+    }
+    progress.finish();
+    let rows_done = frame.rows_done();
+    let c = frame.counters;
+    let stats = RenderStats {
+        samples: c.samples.into_inner(),
+        rays: c.rays.into_inner(),
+        nonfinite: c.nonfinite.into_inner(),
+        seconds: start.elapsed().as_secs_f64(),
+    };
+    Rendered {
+        film,
+        stats,
+        rows_done,
+    }
+}
+
+/// Rows per band: as many as `BAND_BYTES` holds, at least 8 (or the whole window when it
+/// is shorter), at most what the caller or a live preview asks (pixels do not depend on
+/// it).
+fn band_rows(
+    row_len: usize,
+    height: usize,
+    max_band_rows: Option<usize>,
+    progress: &dyn Progress,
+) -> usize {
+    let rows = (BAND_BYTES / (4 * row_len))
+        .min(max_band_rows.unwrap_or(usize::MAX))
+        .max(8)
+        .min(height.max(1));
+    progress.band_rows().map_or(rows, |r| r.clamp(1, rows))
+}
+
+/// The film a render adds to: a resumed one of the same shape, or an empty one (with
+/// per-pixel counts under adaptive sampling).
+fn starting_film(
+    scene: &Scene,
+    options: &RenderOptions,
+    win: PixelWindow,
+    resumed: Option<Film>,
+) -> Film {
+    let (w, h) = (win.width(), win.height());
+    let frame = [scene.camera.width, scene.camera.height];
+    let mut film = resumed
+        .filter(|f| {
+            (f.width, f.height, f.aovs, &f.squared)
+                == (w, h, scene.aovs.len(), &scene.variance_aovs)
+        })
+        .map(|f| Film {
+            window: win,
+            frame,
+            ..f
+        })
+        .unwrap_or_else(|| {
+            Film::for_window(win, frame, scene.aovs.len(), options.spp)
+                .summing_squares(scene.variance_aovs.clone())
+        });
+    if scene.settings.noise_threshold > 0.0 && film.sample_counts.is_none() {
+        film.sample_counts = Some(vec![0; w as usize * h as usize]);
+    }
+    film
+}
+
+/// What every row of one render shares: the tracer, the window, which rows are done,
+/// and the counters the rows add to.
+struct FrameRender<'a> {
+    tracer: Tracer<'a>,
+    options: &'a RenderOptions,
+    window: PixelWindow,
+    /// Values per pixel in a row (Film::stride_with).
+    stride: usize,
+    table: Option<&'a MatteTable>,
+    done: Vec<AtomicBool>,
+    cancel: Option<&'a AtomicBool>,
+    progress: &'a dyn Progress,
+    counters: Counters,
+}
+
+#[derive(Default)]
+struct Counters {
+    samples: AtomicU64,
+    rays: AtomicU64,
+    nonfinite: AtomicU64,
+}
+
+impl FrameRender<'_> {
+    fn stopped(&self) -> bool {
+        self.cancel.is_some_and(|c| c.load(Ordering::Relaxed))
+    }
+
+    fn rows_done(&self) -> Vec<bool> {
+        self.done
+            .iter()
+            .map(|d| d.load(Ordering::Relaxed))
+            .collect()
+    }
+
+    /// Renders the unfinished rows `rows` of the window into `band` (interleaved sums),
+    /// `mattes` (Cryptomatte values) and `counts` (per-pixel samples; empty when not
+    /// adaptive), a row per task.
+    fn render_band(
+        &self,
+        rows: std::ops::Range<usize>,
+        band: &mut [f32],
+        mattes: &mut [f32],
+        counts: &mut [u32],
+    ) {
+        let scene = self.tracer.scene;
+        let w = self.window.width() as usize;
+        let count_rows: Vec<&mut [u32]> = if counts.is_empty() {
+            (0..rows.len()).map(|_| &mut [][..]).collect()
         } else {
-            (0..rows_here).map(|_| &mut [][..]).collect()
+            counts.chunks_mut(w).collect()
         };
-        band.par_chunks_mut(row_len)
-            .zip(matte_band.par_chunks_mut(matte_row))
+        band.par_chunks_mut(self.stride * w)
+            .zip(mattes.par_chunks_mut(mattes.len() / rows.len()))
             .zip(count_rows)
             .enumerate()
             .for_each_init(
@@ -278,90 +383,69 @@ pub fn render_resumable(
                             scene.aovs.len(),
                             scene.variance_aovs.clone(),
                         ),
-                        PixelMatte::new(table.map_or(0, |t| t.layers.len())),
+                        PixelMatte::new(self.table.map_or(0, |t| t.layers.len())),
                     )
                 },
                 |(acc, matte), (i, ((row, matte_row), row_counts))| {
-                    if band_done[i].load(Ordering::Relaxed) || stopped() {
+                    let y = rows.start + i;
+                    if self.done[y].load(Ordering::Relaxed) || self.stopped() {
                         return;
                     }
-                    let y = win.y0 + (first_row + i) as u32;
-                    let mut out = Sink {
-                        acc,
-                        rays: 0,
-                        nonfinite: 0,
-                        holdout: false,
-                        first_object: None,
-                    };
-                    let mut row_samples = 0u64;
-                    for (col, x) in (win.x0..win.x1).enumerate() {
-                        let mut after_sample = |out: &Sink| {
-                            if let Some(t) = table {
-                                matte.add(t, out.first_object);
-                            }
-                        };
-                        let job = PixelJob {
-                            x,
-                            y,
-                            run: &mut row[col * stride..(col + 1) * stride],
-                            first_sample: options.first_sample,
-                            spp: options.spp,
-                            after_sample: &mut after_sample,
-                        };
-                        let taken = tracer.render_pixel(job, &mut out);
-                        row_samples += taken as u64;
-                        if let Some(c) = row_counts.get_mut(col) {
-                            *c = taken;
-                        }
-                        if let Some(t) = table {
-                            let run = col * matte_stride..(col + 1) * matte_stride;
-                            matte.flush(t, &mut matte_row[run]);
-                        }
-                    }
-                    rays.fetch_add(out.rays, Ordering::Relaxed);
-                    nonfinite.fetch_add(out.nonfinite, Ordering::Relaxed);
-                    band_done[i].store(true, Ordering::Relaxed);
-                    samples_taken.fetch_add(row_samples, Ordering::Relaxed);
-                    progress.advance(1);
+                    self.render_row(y, row, (matte, matte_row), row_counts, acc);
+                    self.done[y].store(true, Ordering::Relaxed);
+                    self.progress.advance(1);
                 },
             );
-        film.store_rows(first_row, band);
-        if adaptive {
-            film.store_counts(first_row, &counts[..rows_here * w as usize]);
-        }
-        if matte_stride > 0 {
-            let start = first_row * w as usize;
-            for (c, plane) in matte_planes.iter_mut().enumerate() {
-                for (d, px) in plane[start..start + rows_here * w as usize]
-                    .iter_mut()
-                    .zip(matte_band.chunks_exact(matte_stride))
-                {
-                    *d = px[c];
+    }
+
+    /// Renders row `y` of the window: its pixels' sums into `row`, their Cryptomatte
+    /// values into `mattes.1`, their sample counts into `counts` (if not empty).
+    fn render_row(
+        &self,
+        y: usize,
+        row: &mut [f32],
+        mattes: (&mut PixelMatte, &mut [f32]),
+        counts: &mut [u32],
+        acc: &mut SampleAccumulator,
+    ) {
+        let (matte, matte_row) = mattes;
+        let matte_stride = self.table.map_or(0, |t| t.stride());
+        let mut out = Sink {
+            acc,
+            rays: 0,
+            nonfinite: 0,
+            holdout: false,
+            first_object: None,
+        };
+        let mut samples = 0u64;
+        let y = self.window.y0 + y as u32;
+        for (col, x) in (self.window.x0..self.window.x1).enumerate() {
+            let mut after_sample = |out: &Sink| {
+                if let Some(t) = self.table {
+                    matte.add(t, out.first_object);
                 }
+            };
+            let job = PixelJob {
+                x,
+                y,
+                run: &mut row[col * self.stride..(col + 1) * self.stride],
+                first_sample: self.options.first_sample,
+                spp: self.options.spp,
+                after_sample: &mut after_sample,
+            };
+            let taken = self.tracer.render_pixel(job, &mut out);
+            samples += taken as u64;
+            if let Some(c) = counts.get_mut(col) {
+                *c = taken;
+            }
+            if let Some(t) = self.table {
+                let run = col * matte_stride..(col + 1) * matte_stride;
+                matte.flush(t, &mut matte_row[run]);
             }
         }
-        progress.rows_done(&film, first_row..first_row + rows_here);
-        if let Some(f) = after_band.as_mut() {
-            let rows: Vec<bool> = done.iter().map(|d| d.load(Ordering::Relaxed)).collect();
-            f(&film, &rows);
-        }
-    }
-    if let Some(t) = table {
-        film.mattes = Some(Mattes {
-            table: t.clone(),
-            planes: matte_planes,
-        });
-    }
-    progress.finish();
-    let stats = RenderStats {
-        samples: samples_taken.into_inner(),
-        rays: rays.into_inner(),
-        nonfinite: nonfinite.into_inner(),
-        seconds: start.elapsed().as_secs_f64(),
-    };
-    Rendered {
-        film,
-        stats,
-        rows_done: done.into_iter().map(AtomicBool::into_inner).collect(),
+        let c = &self.counters;
+        c.rays.fetch_add(out.rays, Ordering::Relaxed);
+        c.nonfinite.fetch_add(out.nonfinite, Ordering::Relaxed);
+        c.samples.fetch_add(samples, Ordering::Relaxed);
     }
 }
