@@ -568,6 +568,13 @@ fn farm_command(cmd: FarmCommand) -> Result<String, String> {
     let spp = parsed.spp.unwrap_or(desc.render.spp).max(1);
     let resolution = parsed.resolution.unwrap_or(desc.film.resolution);
     let parts = split(farm.by, farm.tasks, spp, resolution)?;
+    // The parts render noisy; only the merged frame is denoised.
+    let (render, denoise) = lightpath::farm::split_denoise(
+        &render,
+        parsed.denoise,
+        parsed.keep_noisy,
+        parsed.denoise_quality.as_str(),
+    );
     // Each sample range sets its own --spp; tiles all render the frame's.
     let mut render = lightpath::farm::without_option(&render, "--spp");
     if farm.by == lightpath::farm::SplitBy::Tiles {
@@ -589,6 +596,7 @@ fn farm_command(cmd: FarmCommand) -> Result<String, String> {
         parts,
         output: absolute(&farm.output),
         sbatch_args: Vec::new(),
+        denoise,
     };
     Ok(script(&job))
 }
