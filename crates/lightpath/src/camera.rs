@@ -160,6 +160,12 @@ impl Camera {
     }
 
     /// The primary ray through film position `film` (in pixels, origin top-left).
+    /// Camera-space depth of `p`: its distance from the camera along the view axis
+    /// (what compositors call Z).
+    pub fn depth(&self, p: Vec3A) -> f32 {
+        (p - self.position).dot(self.forward)
+    }
+
     pub fn ray(&self, film: Vec2, lens: Vec2) -> Ray {
         let ndc = Vec2::new(
             2.0 * film.x / self.width as f32 - 1.0,

@@ -102,19 +102,30 @@ impl<W: Write> Summed<W> {
     }
 }
 
-/// Reads a checkpoint for a render of `width × height` with `aovs` AOVs at `spp`, made by
-/// a job with this `fingerprint`; anything else is an error naming the difference.
-pub fn read(
-    path: &Path,
-    fingerprint: u64,
-    width: u32,
-    height: u32,
-    aovs: usize,
-    spp: u32,
-) -> Result<Checkpoint, String> {
+/// The film a checkpoint must hold: its size, AOV count, spp, and the AOVs whose squared
+/// samples it sums (`--variance`).
+#[derive(Clone, Debug)]
+pub struct FilmShape {
+    pub width: u32,
+    pub height: u32,
+    pub aovs: usize,
+    pub spp: u32,
+    pub squared: Vec<u32>,
+}
+
+/// Reads a checkpoint for a render whose film is `shape`, made by a job with this
+/// `fingerprint`; anything else is an error naming the difference.
+pub fn read(path: &Path, fingerprint: u64, shape: FilmShape) -> Result<Checkpoint, String> {
+    let FilmShape {
+        width,
+        height,
+        aovs,
+        spp,
+        squared,
+    } = shape;
     let bad = |what: &str| format!("checkpoint {}: {what}", path.display());
     let bytes = crate::limits::read_input(path).map_err(|e| bad(&e))?;
-    let planes = Film::stride_for(aovs);
+    let planes = Film::stride_with(aovs, squared.len());
     let pixels = width as usize * height as usize;
     let header = 8 + 8 + 16;
     let expected = header + height as usize + planes * pixels * 4 + 8;
@@ -149,7 +160,7 @@ pub fn read(
         .iter()
         .map(|&b| b == 1)
         .collect();
-    let mut film = Film::new(width, height, aovs, spp);
+    let mut film = Film::with_squares(width, height, aovs, spp, squared);
     let values = &body[header + height as usize..];
     for (plane, bytes) in film.planes.iter_mut().zip(values.chunks_exact(pixels * 4)) {
         for (v, b) in plane.iter_mut().zip(bytes.chunks_exact(4)) {
@@ -168,29 +179,45 @@ mod tests {
         let dir = std::env::temp_dir().join(format!("lightpath-ckpt-{}", std::process::id()));
         std::fs::create_dir_all(&dir).unwrap();
         let path = dir.join("a.exr.checkpoint");
-        let mut film = Film::new(3, 2, 1, 4);
+        let shape = |aovs: usize, squared: Vec<u32>| FilmShape {
+            width: 3,
+            height: 2,
+            aovs,
+            spp: 4,
+            squared,
+        };
+        let mut film = Film::with_squares(3, 2, 1, 4, vec![0]);
         for (i, plane) in film.planes.iter_mut().enumerate() {
             for (j, v) in plane.iter_mut().enumerate() {
                 *v = (i * 10 + j) as f32 * 0.1 + f32::EPSILON;
             }
         }
         write(&path, 42, &film, &[true, false]).unwrap();
-        let back = read(&path, 42, 3, 2, 1, 4).unwrap();
+        let back = read(&path, 42, shape(1, vec![0])).unwrap();
         assert_eq!(back.rows_done, vec![true, false]);
         for (a, b) in back.film.planes.iter().zip(&film.planes) {
             assert!(a.iter().zip(b).all(|(x, y)| x.to_bits() == y.to_bits()));
         }
-        assert!(read(&path, 43, 3, 2, 1, 4)
+        assert!(read(&path, 43, shape(1, vec![0]))
             .unwrap_err()
             .contains("different render"));
-        assert!(read(&path, 42, 3, 2, 2, 4).unwrap_err().contains("size"));
+        assert_eq!(back.film.squared, vec![0]);
+        assert!(read(&path, 42, shape(2, vec![0]))
+            .unwrap_err()
+            .contains("size"));
+        // The same film without the variance planes is another film.
+        assert!(read(&path, 42, shape(1, vec![]))
+            .unwrap_err()
+            .contains("size"));
         let mut bytes = std::fs::read(&path).unwrap();
         let n = bytes.len();
         bytes[n - 20] ^= 1;
         std::fs::write(&path, &bytes).unwrap();
-        assert!(read(&path, 42, 3, 2, 1, 4).unwrap_err().contains("damaged"));
+        assert!(read(&path, 42, shape(1, vec![0]))
+            .unwrap_err()
+            .contains("damaged"));
         std::fs::write(&path, &bytes[..n / 2]).unwrap();
-        assert!(read(&path, 42, 3, 2, 1, 4).is_err());
+        assert!(read(&path, 42, shape(1, vec![0])).is_err());
         std::fs::remove_dir_all(&dir).unwrap();
     }
 }

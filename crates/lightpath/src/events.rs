@@ -21,16 +21,20 @@ pub enum DataLobe {
     Position,
     Normal,
     UserColor,
+    /// The camera-space depth of the point (Lightpath's own lobe number, `U7`).
+    Depth,
 }
 
 impl DataLobe {
-    /// Its lobe: `U2` albedo, `U3` position, `U4` user colour, `U6` normal.
+    /// Its lobe: `U2` albedo, `U3` position, `U4` user colour, `U6` normal (RenderMan's
+    /// numbers), `U7` depth.
     pub fn scatter(self) -> Scatter {
         Scatter::user(match self {
             DataLobe::Albedo => 2,
             DataLobe::Position => 3,
             DataLobe::UserColor => 4,
             DataLobe::Normal => 6,
+            DataLobe::Depth => 7,
         })
     }
 }
@@ -99,7 +103,12 @@ impl Vocabulary {
                         Use::Lobe { object },
                     );
                 }
-                let mut kinds = vec![DataLobe::Albedo, DataLobe::Position, DataLobe::Normal];
+                let mut kinds = vec![
+                    DataLobe::Albedo,
+                    DataLobe::Position,
+                    DataLobe::Normal,
+                    DataLobe::Depth,
+                ];
                 if m.user_color.is_some() {
                     kinds.push(DataLobe::UserColor);
                 }

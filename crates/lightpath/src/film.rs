@@ -12,11 +12,14 @@ pub struct Film {
     pub aovs: usize,
     /// Samples accumulated per pixel.
     pub spp: u32,
-    /// `3 × aovs + 1` planes of `width × height` sums: R, G, B of each AOV, then alpha.
+    /// `3 × (aovs + squared) + 1` planes of `width × height` sums: R, G, B of each AOV,
+    /// then of the squared samples of each AOV in `squared`, then alpha.
     pub planes: Vec<Vec<f32>>,
     /// Samples each pixel took, when adaptive sampling let pixels stop early (`None`:
     /// every pixel took `spp`). Every AOV and alpha of a pixel share its count.
     pub sample_counts: Option<Vec<u32>>,
+    /// AOVs whose squared samples are summed too, for their variance (`--variance`).
+    pub squared: Vec<u32>,
     /// The pixels of the frame this film holds (a `--crop` window; else the whole frame).
     pub window: PixelWindow,
     /// The whole frame's size (the EXR's display window).
@@ -111,6 +114,11 @@ impl Film {
         3 * aovs + 1
     }
 
+    /// Values per pixel in a row buffer when `squared` AOVs also sum their squares.
+    pub fn stride_with(aovs: usize, squared: usize) -> usize {
+        3 * (aovs + squared) + 1
+    }
+
     /// Where alpha sits in a pixel's run of `stride` values (after every AOV's RGB).
     #[inline(always)]
     pub fn alpha_slot(stride: usize) -> usize {
@@ -119,8 +127,15 @@ impl Film {
 
     /// An empty film (planes are allocated zeroed, so untouched pages cost nothing).
     pub fn new(width: u32, height: u32, aovs: usize, spp: u32) -> Film {
+        Film::with_squares(width, height, aovs, spp, Vec::new())
+    }
+
+    /// An empty film that also sums the squared samples of the `squared` AOVs.
+    pub fn with_squares(width: u32, height: u32, aovs: usize, spp: u32, squared: Vec<u32>) -> Film {
         let n = width as usize * height as usize;
-        let planes = (0..Film::stride_for(aovs)).map(|_| vec![0.0; n]).collect();
+        let planes = (0..Film::stride_with(aovs, squared.len()))
+            .map(|_| vec![0.0; n])
+            .collect();
         Film {
             width,
             height,
@@ -128,9 +143,19 @@ impl Film {
             spp,
             planes,
             sample_counts: None,
+            squared,
             window: PixelWindow::full(width, height),
             frame: [width, height],
             mattes: None,
+        }
+    }
+
+    /// The same empty film, also summing the squared samples of the `squared` AOVs.
+    pub fn summing_squares(self, squared: Vec<u32>) -> Film {
+        Film {
+            window: self.window,
+            frame: self.frame,
+            ..Film::with_squares(self.width, self.height, self.aovs, self.spp, squared)
         }
     }
 
@@ -167,7 +192,7 @@ impl Film {
     /// `first_row` into the planes, one plane per thread.
     pub fn store_rows(&mut self, first_row: usize, rows: &[f32]) {
         use rayon::prelude::*;
-        let stride = Film::stride_for(self.aovs);
+        let stride = Film::stride_with(self.aovs, self.squared.len());
         let start = first_row * self.width as usize;
         let pixels = rows.len() / stride;
         self.planes
@@ -186,7 +211,7 @@ impl Film {
     /// The inverse of [`Film::store_rows`]: copies rows starting at `first_row` from the
     /// planes into an interleaved band (`width × stride` per row).
     pub fn load_rows(&self, first_row: usize, rows: &mut [f32]) {
-        let stride = Film::stride_for(self.aovs);
+        let stride = Film::stride_with(self.aovs, self.squared.len());
         let start = first_row * self.width as usize;
         for (c, plane) in self.planes.iter().enumerate() {
             for (px, s) in rows.chunks_exact_mut(stride).zip(&plane[start..]) {
@@ -215,14 +240,15 @@ impl Film {
     }
 
     pub fn alpha(&self) -> Vec<f32> {
-        self.planes[3 * self.aovs]
+        self.planes[Film::alpha_slot(self.planes.len())]
             .iter()
             .zip(self.inverse_counts())
             .map(|(v, inv)| v * inv)
             .collect()
     }
 
-    /// All planes as means, consuming the film (no copy): R, G, B per AOV, then alpha.
+    /// All planes as means, consuming the film (no copy): R, G, B per AOV, the mean
+    /// squares of the `squared` AOVs, then alpha.
     pub fn into_means(self) -> Vec<Vec<f32>> {
         let inverse: Option<Vec<f32>> = self
             .sample_counts
@@ -242,10 +268,11 @@ impl Film {
     /// Merges a film of the same frame rendered with other samples (a farm's sample
     /// ranges): the result is the film of all samples.
     pub fn merge(&mut self, other: &Film) -> Result<(), String> {
-        if (self.width, self.height, self.aovs) != (other.width, other.height, other.aovs)
+        if (self.width, self.height, self.aovs, &self.squared)
+            != (other.width, other.height, other.aovs, &other.squared)
             || (self.window, self.frame) != (other.window, other.frame)
         {
-            return Err("films differ in size, window or AOV count".into());
+            return Err("films differ in size, window, AOV count or variance AOVs".into());
         }
         for (a, b) in self.planes.iter_mut().zip(&other.planes) {
             for (x, y) in a.iter_mut().zip(b) {
@@ -289,6 +316,8 @@ impl Film {
 /// nothing.
 pub struct SampleAccumulator {
     values: Vec<Vec3A>,
+    /// AOVs whose squared sample is added too, after every AOV's RGB in the pixel run.
+    squared: Vec<u32>,
     /// A bit per AOV: has this sample touched it? (A list of touched AOVs cost a push
     /// with its capacity check per first touch.)
     touched: Vec<u64>,
@@ -296,8 +325,14 @@ pub struct SampleAccumulator {
 
 impl SampleAccumulator {
     pub fn new(aovs: usize) -> SampleAccumulator {
+        SampleAccumulator::with_squares(aovs, Vec::new())
+    }
+
+    /// An accumulator that also adds the squared samples of the `squared` AOVs.
+    pub fn with_squares(aovs: usize, squared: Vec<u32>) -> SampleAccumulator {
         SampleAccumulator {
             values: vec![Vec3A::ZERO; aovs],
+            squared,
             touched: vec![0; aovs.div_ceil(64)],
         }
     }
@@ -327,6 +362,17 @@ impl SampleAccumulator {
     /// Adds the sample to a pixel's run of the film and clears it.
     #[inline]
     pub fn flush(&mut self, pixel: &mut [f32]) {
+        let base = 3 * self.values.len();
+        for (j, &k) in self.squared.iter().enumerate() {
+            let k = k as usize;
+            if self.touched[k >> 6] & (1u64 << (k & 63)) != 0 {
+                let v = self.values[k] * self.values[k];
+                let p = &mut pixel[base + 3 * j..base + 3 * j + 3];
+                p[0] += v.x;
+                p[1] += v.y;
+                p[2] += v.z;
+            }
+        }
         for (w, word) in self.touched.iter_mut().enumerate() {
             let mut bits = std::mem::take(word);
             while bits != 0 {
@@ -339,5 +385,44 @@ impl SampleAccumulator {
                 p[2] += v.z;
             }
         }
+    }
+}
+
+/// The estimated variance of a pixel mean from `n` samples with mean `mean` and mean
+/// square `mean_square`: the sample variance over `n`, `(E[x²] − E[x]²) / (n − 1)`; zero
+/// with fewer than two samples, where it cannot be estimated.
+#[inline]
+pub fn variance_of_mean(mean: f32, mean_square: f32, n: u32) -> f32 {
+    if n < 2 {
+        return 0.0;
+    }
+    ((mean_square as f64 - mean as f64 * mean as f64).max(0.0) / (n - 1) as f64) as f32
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn squared_samples_give_the_variance_of_the_mean() {
+        // Two AOVs, the second with squares; four samples of 1, 2, 3, 6 (mean 3, sample
+        // variance 14/3, variance of the mean 14/12).
+        let mut acc = SampleAccumulator::with_squares(2, vec![1]);
+        let stride = Film::stride_with(2, 1);
+        let mut pixel = vec![0.0; stride];
+        for x in [1.0f32, 2.0, 3.0, 6.0] {
+            acc.add(1, Vec3A::splat(x), false);
+            acc.add(0, Vec3A::ONE, false);
+            acc.flush(&mut pixel);
+        }
+        let mut film = Film::with_squares(1, 1, 2, 4, vec![1]);
+        film.store_rows(0, &pixel);
+        let planes = film.into_means();
+        assert_eq!(planes.len(), stride);
+        let (mean, msq) = (planes[3][0], planes[6][0]);
+        assert_eq!((mean, msq), (3.0, 12.5));
+        let v = variance_of_mean(mean, msq, 4);
+        assert!((v - 14.0 / 12.0).abs() < 1e-6, "{v}");
+        assert_eq!(variance_of_mean(1.0, 1.0, 1), 0.0);
     }
 }

@@ -53,6 +53,16 @@ pub struct RenderJob {
     /// Set (by a SIGINT/SIGTERM handler) to stop after the rows in flight: the outputs
     /// then hold the rows done and a checkpoint is written beside them.
     pub cancel: Option<Arc<AtomicBool>>,
+    /// Denoise the EXR after rendering (`render --denoise`; feature `denoise`).
+    pub denoise: Option<DenoiseRequest>,
+}
+
+/// `render --denoise`: the written EXR is the denoised one (post/denoise.rs).
+#[derive(Clone, Copy, Debug, Default)]
+pub struct DenoiseRequest {
+    /// Keep each filtered AOV's input as `<aov>_noisy`.
+    pub keep_noisy: bool,
+    pub quality: crate::post::denoise::Quality,
 }
 
 /// Render settings the command line overrides; `None` keeps the scene's value.
@@ -84,6 +94,8 @@ pub struct AovRequest {
     pub light_groups: bool,
     /// Further AOVs to split per light group.
     pub light_group_aovs: Vec<String>,
+    /// AOVs whose per-pixel variance to write as `<aov>_var` (besides the scene's).
+    pub variance: Vec<String>,
 }
 
 /// A job whose scene is loaded, planned and built: ready to render, with what the user
@@ -117,6 +129,8 @@ pub struct RenderSummary {
     /// Set when the render was stopped: rows finished of all rows, and the checkpoint
     /// written beside the outputs.
     pub interrupted: Option<Interrupted>,
+    /// `render --denoise`: what the denoiser did (its summary line).
+    pub denoised: Option<String>,
 }
 
 /// How far a stopped render got.
@@ -176,11 +190,16 @@ impl RenderJob {
             resume: false,
             checkpoint_every: None,
             cancel: None,
+            denoise: None,
         }
     }
 
     /// Loads the scene, applies the overrides, plans the AOVs and builds the scene.
     pub fn prepare(self) -> Result<PreparedRender, Error> {
+        // Before the render: a build without denoising must not render for nothing.
+        if self.denoise.is_some() && !crate::post::denoise::AVAILABLE {
+            return Err(Error::Output(crate::post::denoise::UNAVAILABLE.into()));
+        }
         let source = crate::load_source(&self.scene)?;
         let mut desc = source.parse()?;
         if let Some(name) = &self.camera {
@@ -197,7 +216,8 @@ impl RenderJob {
         crate::limits::Limits::current()
             .check_aovs(specs.len() as u64, "this render's AOV plan")
             .map_err(Error::Setting)?;
-        let scene = Scene::build(&desc, &specs)?;
+        let mut scene = Scene::build(&desc, &specs)?;
+        scene.variance_aovs = self.variance_aovs(&desc, &scene)?;
         checks::film(&scene).map_err(Error::Setting)?;
         warnings.extend(checks::scene_warnings(&scene));
         for w in scene.automaton.warnings() {
@@ -241,10 +261,13 @@ impl RenderJob {
             let checkpoint = checkpoint::read(
                 &checkpoint_path,
                 fingerprint(&source, &scene, self.first_sample, window),
-                window.width(),
-                window.height(),
-                scene.aovs.len(),
-                scene.settings.spp,
+                checkpoint::FilmShape {
+                    width: window.width(),
+                    height: window.height(),
+                    aovs: scene.aovs.len(),
+                    spp: scene.settings.spp,
+                    squared: scene.variance_aovs.clone(),
+                },
             )
             .map_err(Error::Setting)?;
             Some(checkpoint)
@@ -268,6 +291,33 @@ impl RenderJob {
             metadata,
             resume,
         })
+    }
+
+    /// The AOVs whose variance is written: the command line's and the scene's, by name
+    /// (light-group parts included), each once.
+    fn variance_aovs(&self, desc: &SceneDesc, scene: &Scene) -> Result<Vec<u32>, Error> {
+        let mut out: Vec<u32> = Vec::new();
+        for name in self.aovs.variance.iter().chain(&desc.variance) {
+            let k = scene
+                .aovs
+                .iter()
+                .position(|a| &a.name == name)
+                .ok_or_else(|| {
+                    Error::Plan(format!(
+                        "--variance names '{name}', which is not an AOV of this render"
+                    ))
+                })?;
+            let var = crate::aov::naming::variance_name(name);
+            if scene.aovs.iter().any(|a| a.name == var) {
+                return Err(Error::Plan(format!(
+                    "the variance of '{name}' would be named '{var}', which is already an AOV"
+                )));
+            }
+            if !out.contains(&(k as u32)) {
+                out.push(k as u32);
+            }
+        }
+        Ok(out)
     }
 
     /// The AOV plan from the request and the scene description.
@@ -495,6 +545,13 @@ impl PreparedRender {
                 _ => {}
             }
         }
+        // An interrupted render's rows are unfinished: it is denoised once it is resumed.
+        let denoised = match job.denoise {
+            Some(d) if interrupted.is_none() => {
+                Some(denoise_in_place(&paths, d, job.preview_exposure)?)
+            }
+            _ => None,
+        };
         Ok(RenderSummary {
             width,
             height,
@@ -504,6 +561,7 @@ impl PreparedRender {
             overflowed,
             paths,
             interrupted,
+            denoised,
         })
     }
 }
@@ -527,4 +585,31 @@ fn fingerprint(source: &Source, scene: &Scene, first_sample: u32, window: PixelW
         settings.as_bytes(),
         aovs.as_bytes(),
     ])
+}
+
+/// Replaces a render's EXR by its denoised version and its preview by the denoised beauty.
+fn denoise_in_place(
+    paths: &output::naming::OutputPaths,
+    request: DenoiseRequest,
+    exposure: f32,
+) -> Result<String, Error> {
+    use crate::aov::naming::{channel_names, BEAUTY};
+    let job = crate::post::denoise::DenoiseJob {
+        input: paths.exr.clone(),
+        output: paths.exr.clone(),
+        keep_noisy: request.keep_noisy,
+        quality: request.quality,
+    };
+    let summary = crate::post::denoise::run(&job).map_err(Error::Output)?;
+    let exr = output::read_exr(&paths.exr).map_err(Error::Output)?;
+    let rgb = channel_names(BEAUTY).map(|c| exr.channel(&c).unwrap_or_default().to_vec());
+    output::write_png_rgb(
+        &paths.png,
+        exr.width as u32,
+        exr.height as u32,
+        &rgb,
+        exposure,
+    )
+    .map_err(Error::Output)?;
+    Ok(summary.line())
 }

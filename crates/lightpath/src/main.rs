@@ -1,7 +1,7 @@
 //! The `lightpath` command: render scenes and work with Light Path Expressions.
 
 use clap::{Parser, Subcommand};
-use lightpath::job::{AovRequest, RenderJob, SettingOverrides};
+use lightpath::job::{AovRequest, DenoiseRequest, RenderJob, SettingOverrides};
 use lightpath::light::select::LightSelection;
 use lightpath::lpe_tools;
 use lightpath::output;
@@ -11,7 +11,7 @@ use lightpath::view;
 use std::io::{BufRead, IsTerminal, Write};
 use std::path::PathBuf;
 use std::process::ExitCode;
-use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::atomic::AtomicBool;
 use std::sync::Arc;
 
 /// `println!` that ignores a closed stdout (`lightpath … | head` must not panic).
@@ -70,6 +70,20 @@ enum Command {
         inputs: Vec<PathBuf>,
         #[arg(short, long)]
         output: PathBuf,
+    },
+    /// Denoise every light AOV of an EXR with Intel Open Image Denoise (albedo and normal
+    /// as auxiliary images, diffuse AOVs divided by albedo), keeping its partitions summing
+    /// (needs a build with the `denoise` feature).
+    Denoise {
+        input: PathBuf,
+        #[arg(short, long)]
+        output: PathBuf,
+        /// Keep each filtered AOV's input as <aov>_noisy.
+        #[arg(long)]
+        keep_noisy: bool,
+        /// Open Image Denoise quality: high, balanced or fast.
+        #[arg(long, default_value = "high", value_parser = lightpath::post::denoise::Quality::parse)]
+        quality: lightpath::post::denoise::Quality,
     },
     /// Compare two EXRs of one frame channel by channel: print the largest relative
     /// difference; exit 1 if it exceeds --tolerance (0: every value's bits must match).
@@ -206,6 +220,10 @@ struct RenderArgs {
     /// Also split these AOVs per light group (comma-separated names).
     #[arg(long, value_delimiter = ',')]
     light_group_aovs: Vec<String>,
+    /// Also write the per-pixel variance of these AOVs (comma-separated names) as
+    /// <aov>_var: the estimated variance of the pixel mean (RenderMan's `mse`).
+    #[arg(long, value_delimiter = ',')]
+    variance: Vec<String>,
     /// Add bounce AOVs bounce0 … bounce<K-1> and bounce<K>plus (they sum to beauty).
     #[arg(long)]
     bounces: Option<u32>,
@@ -287,6 +305,16 @@ struct RenderArgs {
     /// then loses at most that much).
     #[arg(long, value_name = "SECONDS", value_parser = parse_seconds)]
     checkpoint_every: Option<f64>,
+    /// Denoise the EXR after rendering (as `lightpath denoise`; needs a build with the
+    /// `denoise` feature).
+    #[arg(long)]
+    denoise: bool,
+    /// With --denoise: keep each filtered AOV's input as <aov>_noisy.
+    #[arg(long, requires = "denoise")]
+    keep_noisy: bool,
+    /// With --denoise: Open Image Denoise quality, high, balanced or fast.
+    #[arg(long, default_value = "high", value_parser = lightpath::post::denoise::Quality::parse)]
+    denoise_quality: lightpath::post::denoise::Quality,
 }
 
 fn parse_seconds(s: &str) -> Result<f64, String> {
@@ -296,24 +324,7 @@ fn parse_seconds(s: &str) -> Result<f64, String> {
     }
 }
 
-/// Exit status of a render stopped by SIGINT or SIGTERM (128 + SIGINT, as shells report).
-const EXIT_INTERRUPTED: u8 = 130;
-
-/// SIGINT and SIGTERM set `cancel`: the render finishes the rows in flight and writes what
-/// it has with a checkpoint. A second signal exits at once, removing temporary files.
-fn install_interrupt_handler(cancel: Arc<AtomicBool>) {
-    let result = ctrlc::set_handler(move || {
-        if cancel.swap(true, Ordering::SeqCst) {
-            lightpath::output::atomic::remove_temporary_files();
-            tell!("interrupted again: exiting without writing");
-            std::process::exit(EXIT_INTERRUPTED as i32);
-        }
-        tell!("\ninterrupted: finishing the rows in flight, then writing the rows done and a checkpoint (interrupt again to quit at once)");
-    });
-    if let Err(e) = result {
-        tell!("warning: cannot catch interrupts ({e}): Ctrl-C will lose the render");
-    }
-}
+use lightpath::interrupt::EXIT_INTERRUPTED;
 
 /// A `comp` expression starting with '-' (`-0.5*beauty + …`) reads as an option unless it
 /// follows `--`; clap's own tip names only its first characters, so say it whole.
@@ -436,6 +447,30 @@ fn main() -> ExitCode {
             }
         },
         Command::View { exr, serve } => view_command(exr, &serve),
+        Command::Denoise {
+            input,
+            output,
+            keep_noisy,
+            quality,
+        } => {
+            let job = lightpath::post::denoise::DenoiseJob {
+                input,
+                output,
+                keep_noisy,
+                quality,
+            };
+            match lightpath::post::denoise::run(&job) {
+                Ok(summary) => {
+                    say!("{}", summary.line());
+                    say!("wrote {}", job.output.display());
+                    ExitCode::SUCCESS
+                }
+                Err(e) => {
+                    tell!("error: {e}");
+                    ExitCode::FAILURE
+                }
+            }
+        }
     }
 }
 
@@ -455,19 +490,19 @@ fn start_viewer(
 
 /// Blocks until Ctrl-C (SIGINT, or SIGTERM).
 fn wait_for_ctrl_c() {
-    let (tx, rx) = std::sync::mpsc::channel();
-    if let Err(e) = ctrlc::set_handler(move || {
-        let _ = tx.send(());
-    }) {
-        tell!("warning: cannot catch Ctrl-C ({e}); stop with a signal");
+    if let Err(e) = lightpath::interrupt::wait() {
+        tell!("warning: {e}; stop with another signal");
         loop {
             std::thread::park();
         }
     }
-    let _ = rx.recv();
 }
 
 fn view_command(exr: PathBuf, serve: &ServeArgs) -> ExitCode {
+    // Before the URL is printed: a Ctrl-C right after it must stop the viewer cleanly.
+    if let Err(e) = lightpath::interrupt::catch() {
+        tell!("warning: {e}");
+    }
     let data = match view::open(&exr) {
         Ok(d) => d,
         Err(e) => {
@@ -688,6 +723,7 @@ fn render(args: RenderArgs) -> ExitCode {
             bounces: args.bounces,
             light_groups: args.light_groups,
             light_group_aovs: args.light_group_aovs,
+            variance: args.variance,
         },
         first_sample: args.first_sample,
         exr: output::ExrOptions {
@@ -704,6 +740,10 @@ fn render(args: RenderArgs) -> ExitCode {
             .checkpoint_every
             .map(std::time::Duration::from_secs_f64),
         cancel: Some(Arc::new(AtomicBool::new(false))),
+        denoise: args.denoise.then_some(DenoiseRequest {
+            keep_noisy: args.keep_noisy,
+            quality: args.denoise_quality,
+        }),
     };
     let prepared = match job.prepare() {
         Ok(p) => p,
@@ -716,7 +756,9 @@ fn render(args: RenderArgs) -> ExitCode {
         tell!("warning: {w}");
     }
     if let Some(cancel) = &prepared.job.cancel {
-        install_interrupt_handler(cancel.clone());
+        if let Err(e) = lightpath::interrupt::render_started(cancel.clone()) {
+            tell!("warning: {e}: Ctrl-C will lose the render");
+        }
     }
     let progress = progress_reporter(choose_progress(args.quiet, std::io::stderr().is_terminal()));
     if args.preview {
@@ -744,6 +786,9 @@ fn render(args: RenderArgs) -> ExitCode {
         }
         Ok(summary) => {
             say!("{}", summary.line());
+            if let Some(d) = &summary.denoised {
+                say!("{d}");
+            }
             say!(
                 "wrote {} and {}",
                 summary.paths.exr.display(),
@@ -774,7 +819,10 @@ fn render_with_preview(
         }
     };
     let preview = view::preview::LivePreview::new(progress, viewer.shared().clone(), height);
-    let summary = match prepared.run(&preview) {
+    let summary = prepared.run(&preview);
+    // From here a Ctrl-C stops the viewer.
+    lightpath::interrupt::render_finished();
+    let summary = match summary {
         Ok(s) => s,
         Err(e) => {
             tell!("error: {e}");

@@ -533,3 +533,95 @@ fn comp_and_aovs_read_parts_from_structured_attributes_not_prose() {
         "{refused}"
     );
 }
+
+#[cfg(not(feature = "denoise"))]
+#[test]
+fn a_build_without_denoising_says_how_to_get_it() {
+    let dir = Scratch::new("nodenoise");
+    let err = refuse(
+        lightpath()
+            .args(["denoise", "in.exr", "-o"])
+            .arg(dir.join("o.exr")),
+    );
+    assert!(err.contains("--features denoise"), "{err}");
+    assert!(err.contains("pip install pyoidn==2.5.1.0"), "{err}");
+    assert!(err.contains("OIDN_DIR"), "{err}");
+    // `render --denoise` refuses before rendering: nothing is written.
+    let out = dir.join("r.exr");
+    let err = refuse(
+        lightpath()
+            .args([
+                "render",
+                "cornell-classic",
+                "--spp",
+                "1",
+                "--resolution",
+                "8x8",
+            ])
+            .args(["--denoise", "-q", "-o"])
+            .arg(&out),
+    );
+    assert!(err.contains("--features denoise"), "{err}");
+    assert!(!out.exists());
+}
+
+#[cfg(feature = "denoise")]
+#[test]
+fn render_denoise_in_one_step_keeps_partitions_and_relighting() {
+    let dir = Scratch::new("denoise");
+    let out = dir.join("d.exr");
+    let stdout = succeed(
+        lightpath()
+            .args([
+                "render",
+                "cornell-classic",
+                "--spp",
+                "4",
+                "--resolution",
+                "32x32",
+            ])
+            .args([
+                "--light-groups",
+                "--bounces",
+                "2",
+                "--denoise",
+                "--keep-noisy",
+                "-q",
+            ])
+            .arg("-o")
+            .arg(&out),
+    )
+    .stdout;
+    let stdout = String::from_utf8(stdout).unwrap();
+    assert!(stdout.contains("denoised"), "{stdout}");
+    let aovs = succeed(lightpath().arg("aovs").arg(&out)).stdout;
+    let aovs = String::from_utf8(aovs).unwrap();
+    assert_eq!(aovs.matches("ok  ").count(), 3, "{aovs}");
+    assert!(aovs.contains("beauty_noisy"), "{aovs}");
+    // Rebuilding the beauty from the denoised light groups in comp gives the denoised
+    // beauty (to float rounding).
+    let relit = dir.join("relit.exr");
+    succeed(
+        lightpath()
+            .arg("comp")
+            .arg(&out)
+            .args(["beauty_light + beauty__default", "-o"])
+            .arg(&relit),
+    );
+    let (a, b) = (
+        lightpath::output::read_exr(&out).unwrap(),
+        lightpath::output::read_exr(&relit).unwrap(),
+    );
+    for (x, y) in a.channel("G").unwrap().iter().zip(b.channel("G").unwrap()) {
+        assert!((x - y).abs() <= 1e-5 * x.abs().max(1e-3), "{x} vs {y}");
+    }
+    // A denoised file is not denoised again.
+    let err = refuse(
+        lightpath()
+            .arg("denoise")
+            .arg(&out)
+            .arg("-o")
+            .arg(dir.join("again.exr")),
+    );
+    assert!(err.contains("already denoised"), "{err}");
+}

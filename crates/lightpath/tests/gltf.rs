@@ -265,6 +265,10 @@ fn the_hierarchy_places_meshes_and_ancestors_are_lpe_groups() {
     let p = turned.transform.transform_point3(Vec3::X);
     assert!((p - Vec3::Y).length() < 1e-5, "{p}");
     assert_eq!(turned.lpegroups.as_deref().unwrap(), ["turned".to_string()]);
+    // Cryptomatte's asset (issue 14): the top-level node a mesh is under, or the mesh's
+    // own node at the top.
+    assert_eq!(ball.asset.as_deref(), Some("props"));
+    assert_eq!(turned.asset.as_deref(), Some("turned"));
     let _ = std::fs::remove_dir_all(&dir);
 }
 

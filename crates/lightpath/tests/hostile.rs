@@ -440,7 +440,14 @@ fn a_cancelled_render_resumed_from_its_checkpoint_equals_the_uninterrupted_one_b
     std::fs::create_dir_all(&dir).unwrap();
     let path = dir.join("a.exr.checkpoint");
     lightpath::checkpoint::write(&path, 7, &part.film, &part.rows_done).unwrap();
-    let back = lightpath::checkpoint::read(&path, 7, 24, 40, scene.aovs.len(), 4).unwrap();
+    let shape = lightpath::checkpoint::FilmShape {
+        width: 24,
+        height: 40,
+        aovs: scene.aovs.len(),
+        spp: 4,
+        squared: Vec::new(),
+    };
+    let back = lightpath::checkpoint::read(&path, 7, shape).unwrap();
     std::fs::remove_dir_all(&dir).unwrap();
     let resumed = render_resumable(
         &scene,

@@ -5,7 +5,7 @@ pub mod naming;
 pub mod plan;
 
 use lpe::STANDARD_NAMES;
-use naming::{bounce_name, bounce_plus_name, BEAUTY};
+use naming::{bounce_name, bounce_plus_name, BEAUTY, DEPTH, NORMAL};
 
 /// An AOV to render: its channel name and its LPE definition.
 #[derive(Clone, Debug, PartialEq, Eq)]
@@ -43,6 +43,9 @@ impl AovSpec {
             }
         }
         let word = arg.trim().trim_start_matches("lpe:");
+        if let Some((name, def)) = STANDARD_DATA.iter().find(|(n, _)| *n == word) {
+            return Ok(AovSpec::new(*name, *def));
+        }
         match lpe::standard_name(word) {
             Some((name, _)) => Ok(AovSpec::new(name, format!("lpe:{name}"))),
             None => Err(format!(
@@ -52,12 +55,27 @@ impl AovSpec {
     }
 }
 
-/// The standard AOVs of LPE.md §7 other than beauty.
+/// The data AOVs Lightpath adds to LPE.md §7's set: the first hit's world-space shading
+/// normal (`U6`) and camera-space depth (`U7`), one value per sample like `albedo`. With
+/// `albedo` they are what a denoiser takes as auxiliary images.
+pub const STANDARD_DATA: [(&str, &str); 2] = [
+    (
+        NORMAL,
+        "nothruput;noinfinitecheck;noclamp;unoccluded;overwrite;CU6L",
+    ),
+    (
+        DEPTH,
+        "nothruput;noinfinitecheck;noclamp;unoccluded;overwrite;CU7L",
+    ),
+];
+
+/// The standard AOVs of LPE.md §7 other than beauty, then `normal` and `depth`.
 pub fn standard() -> Vec<AovSpec> {
     STANDARD_NAMES
         .iter()
         .filter(|(n, _)| *n != BEAUTY)
         .map(|(n, _)| AovSpec::new(*n, format!("lpe:{n}")))
+        .chain(STANDARD_DATA.iter().map(|(n, d)| AovSpec::new(*n, *d)))
         .collect()
 }
 

@@ -18,11 +18,21 @@
 //!   sampler, filter, resolution): parts of one frame must agree on all of them.
 //! - Standard attributes: `software`, `chromaticities`, `worldToCamera`, `worldToNDC`,
 //!   and `capDate` only with `--timestamp`; `cryptomatte/<key>/…` for Cryptomatte layers.
+//! - `lightpath/kind/<name>`: what AOV `<name>` holds: `light` (radiance: what a denoiser
+//!   filters), `data` (albedo, normal, depth: one value per sample, never summed),
+//!   `variance` (`<aov>_var`: the variance of `<aov>`'s pixel mean) or `derived`.
+//! - `lightpath/variance/<aov>_var`: the AOV whose variance it is.
+//! - `lightpath/denoised`: how a denoised file was filtered; `lightpath/noisy/<aov>_noisy`:
+//!   the AOV a kept noisy input belongs to.
 
 /// The beauty AOV, stored as the plain `R, G, B` channels (plus `A`).
 pub const BEAUTY: &str = "beauty";
 /// The alpha channel.
 pub const ALPHA: &str = "A";
+/// The data AOVs a denoiser takes as auxiliary images, and the depth of the first hit.
+pub const ALBEDO: &str = "albedo";
+pub const NORMAL: &str = "normal";
+pub const DEPTH: &str = "depth";
 /// The group of lights without a group, as a split's suffix and an attribute value.
 pub const DEFAULT_GROUP: &str = "__default";
 /// How `--gain` names the default group (`_default`: `beauty` + `_` + `_default`).
@@ -83,6 +93,101 @@ pub fn parse_ranges(s: &str) -> Option<Vec<(u64, u64)>> {
             (a < b).then_some((a, b))
         })
         .collect()
+}
+
+pub const KIND_ATTRIBUTE_PREFIX: &str = "lightpath/kind/";
+pub const VARIANCE_ATTRIBUTE_PREFIX: &str = "lightpath/variance/";
+pub const NOISY_ATTRIBUTE_PREFIX: &str = "lightpath/noisy/";
+pub const DENOISED_ATTRIBUTE: &str = "lightpath/denoised";
+
+/// What an AOV holds (`lightpath/kind/<name>`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum AovKind {
+    /// Light: contributions summed over a path's vertices.
+    Light,
+    /// Data (`overwrite` or `nothruput` rules: albedo, normal, depth): one value per
+    /// sample, never summed.
+    Data,
+    /// `<aov>_var`: the estimated variance of `<aov>`'s pixel mean.
+    Variance,
+    /// Computed from other AOVs after rendering (the shadow matte).
+    Derived,
+}
+
+impl AovKind {
+    pub fn as_str(self) -> &'static str {
+        match self {
+            AovKind::Light => "light",
+            AovKind::Data => "data",
+            AovKind::Variance => "variance",
+            AovKind::Derived => "derived",
+        }
+    }
+    pub fn parse(s: &str) -> Option<AovKind> {
+        [
+            AovKind::Light,
+            AovKind::Data,
+            AovKind::Variance,
+            AovKind::Derived,
+        ]
+        .into_iter()
+        .find(|k| k.as_str() == s)
+    }
+    /// A rule's kind from its prefixes: `overwrite` and `nothruput` make data.
+    pub fn of_flags(flags: lpe::Flags) -> AovKind {
+        if flags.contains(lpe::Prefix::Overwrite) || flags.contains(lpe::Prefix::NoThruput) {
+            AovKind::Data
+        } else {
+            AovKind::Light
+        }
+    }
+}
+
+/// Attribute name holding AOV `name`'s kind.
+pub fn kind_attribute(name: &str) -> String {
+    format!("{KIND_ATTRIBUTE_PREFIX}{name}")
+}
+
+/// The kind a header gives AOV `name`; `None` for files written before kinds existed.
+pub fn kind_of(attributes: &[(String, String)], name: &str) -> Option<AovKind> {
+    let key = kind_attribute(name);
+    attributes
+        .iter()
+        .find(|(k, _)| *k == key)
+        .and_then(|(_, v)| AovKind::parse(v))
+}
+
+/// The variance AOV of `aov`: `<aov>_var` (RenderMan writes the same estimate with its
+/// `mse` pixel filter, as `<aov>_mse`).
+pub fn variance_name(aov: &str) -> String {
+    format!("{aov}_var")
+}
+
+/// Attribute naming the AOV a variance AOV belongs to.
+pub fn variance_attribute(variance_aov: &str) -> String {
+    format!("{VARIANCE_ATTRIBUTE_PREFIX}{variance_aov}")
+}
+
+/// The noisy input of denoised AOV `aov`, kept by `denoise --keep-noisy`.
+pub fn noisy_name(aov: &str) -> String {
+    format!("{aov}_noisy")
+}
+
+/// Attribute naming the AOV a kept noisy input belongs to.
+pub fn noisy_attribute(noisy_aov: &str) -> String {
+    format!("{NOISY_ATTRIBUTE_PREFIX}{noisy_aov}")
+}
+
+/// RenderMan's denoiser divides these AOVs by the albedo before filtering (their names
+/// start with one of these, case-insensitively) and filters the others as they are.
+/// `subsurface` is Lightpath's diffuse transmission (`TD`), textured by the same albedo.
+pub const ALBEDO_DIVIDED_PREFIXES: [&str; 4] =
+    ["diffuse", "directdiffuse", "indirectdiffuse", "subsurface"];
+
+/// Whether a denoiser divides AOV `name` by the albedo (RenderMan's naming convention).
+pub fn is_albedo_divided(name: &str) -> bool {
+    let lower = name.to_ascii_lowercase();
+    ALBEDO_DIVIDED_PREFIXES.iter().any(|p| lower.starts_with(p))
 }
 
 /// A kind of partition an AOV can be a part of.

@@ -185,7 +185,7 @@ pub fn render_resumable(
     let win = request.window;
     debug_assert!(win.check(fw, fh).is_ok());
     let (w, h) = (win.width(), win.height());
-    let stride = Film::stride_for(scene.aovs.len());
+    let stride = Film::stride_with(scene.aovs.len(), scene.variance_aovs.len());
     let tracer = Tracer::new(scene);
     let rays = AtomicU64::new(0);
     let nonfinite = AtomicU64::new(0);
@@ -214,13 +214,19 @@ pub fn render_resumable(
     let adaptive = scene.settings.noise_threshold > 0.0;
     let mut counts = vec![0u32; if adaptive { band_rows * w as usize } else { 0 }];
     let mut film = resumed
-        .filter(|f| (f.width, f.height, f.aovs) == (w, h, scene.aovs.len()))
+        .filter(|f| {
+            (f.width, f.height, f.aovs, &f.squared)
+                == (w, h, scene.aovs.len(), &scene.variance_aovs)
+        })
         .map(|f| Film {
             window: win,
             frame: [fw, fh],
             ..f
         })
-        .unwrap_or_else(|| Film::for_window(win, [fw, fh], scene.aovs.len(), options.spp));
+        .unwrap_or_else(|| {
+            Film::for_window(win, [fw, fh], scene.aovs.len(), options.spp)
+                .summing_squares(scene.variance_aovs.clone())
+        });
     if adaptive && film.sample_counts.is_none() {
         film.sample_counts = Some(vec![0; w as usize * h as usize]);
     }
@@ -268,7 +274,10 @@ pub fn render_resumable(
             .for_each_init(
                 || {
                     (
-                        SampleAccumulator::new(scene.aovs.len()),
+                        SampleAccumulator::with_squares(
+                            scene.aovs.len(),
+                            scene.variance_aovs.clone(),
+                        ),
                         PixelMatte::new(table.map_or(0, |t| t.layers.len())),
                     )
                 },

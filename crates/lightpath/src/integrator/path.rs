@@ -207,10 +207,12 @@ impl Tracer<'_> {
                 continue;
             }
             let value = match kind {
-                DataLobe::Albedo => v.bsdf.albedo(),
+                // A denoiser's albedo is a reflectance: never above 1.
+                DataLobe::Albedo => v.bsdf.albedo().min(Vec3A::ONE),
                 DataLobe::Position => v.hit.p,
                 DataLobe::Normal => v.sh.frame.n,
                 DataLobe::UserColor => v.material.user_color.unwrap_or(Vec3A::ZERO),
+                DataLobe::Depth => Vec3A::splat(scene.camera.depth(v.hit.p)),
             };
             let origin = Origin {
                 via: Via::Data,

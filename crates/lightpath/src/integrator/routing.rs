@@ -215,6 +215,12 @@ impl Tracer<'_> {
         // weighted.
         let full = throughput * local;
         let values = [[local, local * mis], [full, full * mis]];
+        // Data (`overwrite`) AOVs take emission as its colour, no channel above 1: an
+        // emitter's albedo is its base colour, not its radiance.
+        let data_scale = match origin.via {
+            Via::Hit { .. } | Via::Glow => 1.0 / local.max_element().max(1.0),
+            _ => 1.0,
+        };
         for rule in rules {
             let k = rule.0 as usize;
             let r = &self.routes[k];
@@ -223,6 +229,9 @@ impl Tracer<'_> {
                 continue;
             }
             let mut v = values[!r.nothruput as usize][(take == Take::Weighted) as usize];
+            if r.overwrite {
+                v *= data_scale;
+            }
             if !r.noinfinitecheck && !v.is_finite() {
                 dropped = true;
                 continue;

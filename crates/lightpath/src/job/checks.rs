@@ -36,7 +36,7 @@ pub fn settings(desc: &SceneDesc, first_sample: u32) -> Result<(), String> {
 /// The film's memory and the AOVs' channel names, once the AOVs are known.
 pub fn film(scene: &Scene) -> Result<(), String> {
     let (w, h) = (scene.camera.width as u64, scene.camera.height as u64);
-    let stride = Film::stride_for(scene.aovs.len()) as u64;
+    let stride = Film::stride_with(scene.aovs.len(), scene.variance_aovs.len()) as u64;
     // The film's planes and the EXR encoder's blocks in flight: the peak is 1.04× the
     // film with `zips`, 1.33× with `piz` (docs/performance.md), so 1.5× with a margin.
     let bytes = w * h * stride * 4 * 3 / 2;

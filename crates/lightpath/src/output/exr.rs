@@ -81,10 +81,23 @@ pub fn derived_aovs(film: &Film, aovs: &[Aov]) -> Vec<DerivedAov> {
     if find(naming::SHADOW).is_some() {
         return Vec::new();
     }
-    let rgb = [0, 1, 2].map(|c| {
-        let (o, u) = (film.channel(occ, c), film.channel(unocc, c));
-        o.iter()
-            .zip(&u)
+    let o = [0, 1, 2].map(|c| film.channel(occ, c));
+    let u = [0, 1, 2].map(|c| film.channel(unocc, c));
+    let rgb = shadow_matte([&o[0], &o[1], &o[2]], [&u[0], &u[1], &u[2]]);
+    vec![DerivedAov {
+        name: naming::SHADOW.into(),
+        definition: naming::SHADOW_DEFINITION.into(),
+        rgb,
+    }]
+}
+
+/// The shadow matte `1 - occluded/unoccluded` (where unoccluded > 0, else 0), clamped to
+/// [0, 1], channel by channel.
+pub fn shadow_matte(occluded: [&[f32]; 3], unoccluded: [&[f32]; 3]) -> [Vec<f32>; 3] {
+    [0, 1, 2].map(|c| {
+        occluded[c]
+            .iter()
+            .zip(unoccluded[c])
             .map(|(o, u)| {
                 if *u > 0.0 {
                     (1.0 - o / u).clamp(0.0, 1.0)
@@ -93,12 +106,7 @@ pub fn derived_aovs(film: &Film, aovs: &[Aov]) -> Vec<DerivedAov> {
                 }
             })
             .collect()
-    });
-    vec![DerivedAov {
-        name: naming::SHADOW.into(),
-        definition: naming::SHADOW_DEFINITION.into(),
-        rgb,
-    }]
+    })
 }
 
 /// Writes the film (consumed: its planes become the EXR's channels without a copy).
@@ -148,6 +156,9 @@ pub fn stage_film(
     header.frame = Some(film.frame);
     header.origin = [film.window.x0, film.window.y0];
     let mattes = film.mattes.clone();
+    let squared = film.squared.clone();
+    // Each pixel's sample count: its own under adaptive sampling, else the film's.
+    let samples: Vec<u32> = (0..width * height).map(|i| film.samples_at(i)).collect();
     let mut planes = film.into_means().into_iter();
     let mut channels = Vec::new();
     let mut attributes = aov_attributes(aovs);
@@ -155,6 +166,32 @@ pub fn stage_film(
         for name in channel_names(&aov.name) {
             channels.push((name, planes.next().unwrap_or_default()));
         }
+    }
+    for &k in &squared {
+        let Some(aov) = aovs.get(k as usize) else {
+            continue;
+        };
+        let name = naming::variance_name(&aov.name);
+        for (c, ch) in channel_names(&name).into_iter().enumerate() {
+            let mut v = planes.next().unwrap_or_default();
+            let mean = &channels[3 * k as usize + c].1;
+            for ((v, m), n) in v.iter_mut().zip(mean).zip(&samples) {
+                *v = crate::film::variance_of_mean(*m, *v, *n);
+            }
+            channels.push((ch, v));
+        }
+        attributes.push((
+            naming::aov_attribute(&name),
+            format!(
+                "variance of the pixel mean of '{}' (RenderMan's mse, {}_mse)",
+                aov.name, aov.name
+            ),
+        ));
+        attributes.push((
+            naming::kind_attribute(&name),
+            naming::AovKind::Variance.as_str().into(),
+        ));
+        attributes.push((naming::variance_attribute(&name), aov.name.clone()));
     }
     channels.push((naming::ALPHA.into(), planes.next().unwrap_or_default()));
     if let Some(counts) = counts {
@@ -164,6 +201,10 @@ pub fn stage_film(
         for (name, values) in channel_names(&d.name).into_iter().zip(d.rgb) {
             channels.push((name, values));
         }
+        attributes.push((
+            naming::kind_attribute(&d.name),
+            naming::AovKind::Derived.as_str().into(),
+        ));
         attributes.push((naming::aov_attribute(&d.name), d.definition));
     }
     if let Some(m) = mattes {
@@ -184,6 +225,10 @@ pub fn aov_attributes(aovs: &[Aov]) -> Vec<(String, String)> {
         attributes.push((
             naming::expression_attribute(&aov.name),
             aov.expression.clone(),
+        ));
+        attributes.push((
+            naming::kind_attribute(&aov.name),
+            naming::AovKind::of_flags(aov.flags).as_str().into(),
         ));
     }
     let parts: Vec<naming::PartInfo> = aovs

@@ -11,9 +11,9 @@ mod png;
 pub mod target;
 
 pub use self::exr::{
-    aov_attributes, check_exr_file, derived_aovs, read_exr, software, stage_film, write_channels,
-    write_exr, write_film, write_image, DerivedAov, ExrCompression, ExrContents, ExrHeader,
-    ExrOptions,
+    aov_attributes, check_exr_file, derived_aovs, read_exr, shadow_matte, software, stage_film,
+    write_channels, write_exr, write_film, write_image, DerivedAov, ExrCompression, ExrContents,
+    ExrHeader, ExrOptions,
 };
 pub use self::png::{stage_png, write_png, write_png_rgb};
 pub use crate::aov::naming::{channel_names, AOV_ATTRIBUTE_PREFIX};

@@ -2,7 +2,7 @@
 //! and subtraction, never a re-render.
 
 use crate::aov::naming::{self, channel_names};
-use crate::output::{read_exr, write_channels, write_png_rgb, ExrContents};
+use crate::output::{read_exr, write_image, write_png_rgb, ExrContents, ExrHeader};
 use glam::Vec3A;
 use std::path::PathBuf;
 
@@ -295,12 +295,21 @@ pub fn run(job: &CompJob) -> Result<PathBuf, String> {
         naming::aov_attribute(naming::BEAUTY),
         format!("comp of {}: {}", job.exr.display(), description.trim()),
     )];
-    write_channels(
+    // A comp of a tile stays that tile of its frame, seen by the same camera.
+    let header = ExrHeader {
+        frame: Some(exr.frame),
+        origin: exr.origin,
+        world_to_camera: exr.world_to_camera,
+        world_to_ndc: exr.world_to_ndc,
+        text: attributes,
+        ..ExrHeader::default()
+    };
+    write_image(
         &job.output,
         exr.width,
         exr.height,
         channels,
-        &attributes,
+        &header,
         Default::default(),
     )?;
     write_png_rgb(
@@ -328,5 +337,40 @@ mod tests {
         assert_eq!(t[1].scale, Vec3A::splat(2.0));
         assert!(parse("beauty +").is_err());
         assert!(parse("beauty ^ 2").is_err());
+    }
+
+    #[test]
+    fn a_comp_of_a_tile_keeps_its_place_in_the_frame() {
+        let dir = std::env::temp_dir().join(format!("lightpath-comp-crop-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let (input, output) = (dir.join("tile.exr"), dir.join("relit.exr"));
+        let (w, h) = (3usize, 2usize);
+        let mut channels = Vec::new();
+        for aov in ["beauty", "key"] {
+            for (c, name) in channel_names(aov).into_iter().enumerate() {
+                channels.push((name, vec![0.25 * (c + 1) as f32; w * h]));
+            }
+        }
+        let header = ExrHeader {
+            frame: Some([16, 8]),
+            origin: [5, 4],
+            text: vec![(naming::aov_attribute("key"), "C<L.'key'>".into())],
+            ..ExrHeader::default()
+        };
+        write_image(&input, w, h, channels, &header, Default::default()).unwrap();
+        let job = CompJob {
+            exr: input,
+            expression: Some("beauty + key".into()),
+            gains: Vec::new(),
+            base: naming::BEAUTY.into(),
+            output: output.clone(),
+            exposure: 0.0,
+        };
+        run(&job).unwrap();
+        let back = read_exr(&output).unwrap();
+        assert_eq!((back.frame, back.origin), ([16, 8], [5, 4]));
+        assert_eq!((back.width, back.height), (w, h));
+        assert_eq!(back.channel("R").unwrap()[0], 0.5);
+        std::fs::remove_dir_all(&dir).unwrap();
     }
 }

@@ -10,7 +10,8 @@
 //! Parts with different windows are tiles: they may not overlap, must hold the same
 //! samples, and must leave no hole in the rectangle they cover.
 //!
-//! Channels are averaged with weights: each part's per-pixel `sampleCount` where the
+//! Variance channels (`<aov>_var`) are recomputed from each part's sums of squares, so
+//! they are the variance of the merged mean. Channels are averaged with weights: each part's per-pixel `sampleCount` where the
 //! parts have that channel (adaptive sampling), else its sample count. `sampleCount`
 //! itself adds up, and Cryptomatte pairs are merged by id and ranked again. Parts are read
 //! one at a time: the memory is one part plus the merged window's sums.
@@ -401,6 +402,8 @@ fn merge_tile(
         .any(|c| c == SAMPLE_COUNT_CHANNEL);
     let mut sums: BTreeMap<String, Vec<f64>> = BTreeMap::new();
     let mut weight_sum: Vec<f64> = Vec::new();
+    // Per variance channel (`<aov>_var`), per pixel: the sum of squared samples.
+    let mut squares: BTreeMap<(String, String), Vec<f64>> = BTreeMap::new();
     // Per layer, per pixel: the merged (id, weighted coverage) pairs.
     let mut mattes: Vec<Vec<f32>> = Vec::new();
     for (i, part) in members.iter().enumerate() {
@@ -425,6 +428,7 @@ fn merge_tile(
         for (s, w) in weight_sum.iter_mut().zip(&weights) {
             *s += w;
         }
+        add_squares(&exr, &weights, &mut squares);
         for (name, values) in &exr.channels {
             if is_matte(name) {
                 continue;
@@ -459,6 +463,27 @@ fn merge_tile(
             }
         }
     }
+    // Variances are not averages: the variance of the merged mean, from every sample's
+    // sum of squares and the merged sum.
+    let variances: Vec<((String, String), Vec<f32>)> = squares
+        .iter()
+        .filter_map(|((var, mean), sq)| {
+            let sum = sums.get(mean)?;
+            let values = sq
+                .iter()
+                .zip(sum)
+                .zip(&weight_sum)
+                .map(|((q, s), n)| {
+                    if *n < 2.0 {
+                        0.0
+                    } else {
+                        ((q - s * s / n).max(0.0) / (n - 1.0) / n) as f32
+                    }
+                })
+                .collect();
+            Some(((var.clone(), mean.clone()), values))
+        })
+        .collect();
     let mut out: BTreeMap<String, Vec<f32>> = sums
         .into_iter()
         .map(|(name, s)| {
@@ -473,6 +498,9 @@ fn merge_tile(
             (name, values)
         })
         .collect();
+    for ((var, _), values) in variances {
+        out.insert(var, values);
+    }
     for (names, acc) in matte_channels.iter().zip(&mattes) {
         let stride = names.len();
         let mut planes = vec![vec![0.0f32; weight_sum.len()]; stride];
@@ -486,4 +514,31 @@ fn merge_tile(
         out.extend(names.iter().cloned().zip(planes));
     }
     Ok(out)
+}
+
+/// Adds one part's sums of squared samples to `squares`, for each of its variance
+/// channels (from the `lightpath/variance/<aov>_var` attributes): with `n` samples, mean
+/// `m` and variance of the mean `v`, `Σx² = (n − 1)·n·v + n·m²`.
+fn add_squares(
+    exr: &crate::output::ExrContents,
+    weights: &[f64],
+    squares: &mut BTreeMap<(String, String), Vec<f64>>,
+) {
+    use crate::aov::naming::{channel_names, VARIANCE_ATTRIBUTE_PREFIX};
+    for (k, base) in &exr.attributes {
+        let Some(var) = k.strip_prefix(VARIANCE_ATTRIBUTE_PREFIX) else {
+            continue;
+        };
+        for (vc, mc) in channel_names(var).into_iter().zip(channel_names(base)) {
+            let (Some(v), Some(m)) = (exr.channel(&vc), exr.channel(&mc)) else {
+                continue;
+            };
+            let sq = squares
+                .entry((vc, mc))
+                .or_insert_with(|| vec![0.0; weights.len()]);
+            for (((s, v), m), n) in sq.iter_mut().zip(v).zip(m).zip(weights) {
+                *s += (n - 1.0) * n * *v as f64 + n * (*m as f64).powi(2);
+            }
+        }
+    }
 }

@@ -1,9 +1,11 @@
 //! Post-processing of rendered EXRs: additive compositing (`comp`), merging sample
-//! ranges (`merge`) and checking that partitions sum to their whole (`partitions`).
+//! ranges (`merge`), checking that partitions sum to their whole (`partitions`) and
+//! denoising every AOV with the partitions kept (`denoise`).
 //! Each reads the structured header attributes of `aov::naming`, never definitions' prose.
 
 pub mod comp;
 pub mod cryptomatte;
+pub mod denoise;
 pub mod diff;
 pub mod merge;
 pub mod partitions;

@@ -66,6 +66,8 @@ pub struct SceneDesc {
     /// What the loaders want the user told (a default camera or light added, statements
     /// skipped, unsupported glTF extensions), each naming its file.
     pub warnings: Vec<String>,
+    /// Write these AOVs' per-pixel variance too (`<aov>_var`).
+    pub variance: Vec<String>,
 }
 
 impl SceneDesc {

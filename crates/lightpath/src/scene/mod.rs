@@ -125,4 +125,6 @@ pub struct Scene {
     /// Per automaton state: can some object's data lobe be accepted from here? Most
     /// states cannot, and the integrator skips the data lobes there.
     pub data_live: Vec<bool>,
+    /// AOVs whose per-pixel variance is written too (`<aov>_var`); set by the render job.
+    pub variance_aovs: Vec<u32>,
 }

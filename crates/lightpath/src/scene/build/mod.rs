@@ -91,6 +91,7 @@ impl Scene {
             light_parts,
             any_unoccluded,
             data_live,
+            variance_aovs: Vec::new(),
         })
     }
 }

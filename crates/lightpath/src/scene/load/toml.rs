@@ -37,6 +37,9 @@ struct SceneFile {
     /// Also split these AOVs per light group.
     #[serde(default)]
     light_group_aovs: Vec<String>,
+    /// Write these AOVs' per-pixel variance too (`<aov>_var`).
+    #[serde(default)]
+    variance: Vec<String>,
     /// Scene files (OBJ, PLY, glTF) merged into this one, their objects overridden by
     /// name.
     #[serde(default)]
@@ -564,6 +567,7 @@ pub fn load(src: &Source) -> Result<d::SceneDesc, SceneError> {
         cameras: Vec::new(),
         light_group_aovs: file.light_group_aovs,
         warnings,
+        variance: file.variance,
     })
 }
 

@@ -1,0 +1,960 @@
+//! `lightpath denoise`: every light AOV of an EXR filtered with Intel Open Image Denoise,
+//! the partitions the file declares still adding up afterwards.
+//!
+//! Per AOV (its kind from the header's `lightpath/kind/<name>`, see `aov::naming`):
+//! - light AOVs are filtered with OIDN's `RT` filter (HDR), with the `albedo` and `normal`
+//!   AOVs as auxiliary images. Following RenderMan's naming convention, AOVs whose names
+//!   start with `diffuse`, `directDiffuse`, `indirectDiffuse` or `subsurface` are divided
+//!   by the albedo first (textures do not smear) and multiplied back after, with a white
+//!   albedo as their auxiliary image; the others (`specular…`, `emission`, light-group
+//!   parts of beauty, user AOVs) are filtered as they are. Light-group parts are filtered
+//!   one by one, like any AOV. An AOV that is zero everywhere stays zero (no filtering).
+//! - emission seen directly (`emission`, `bounce0`) is kept as rendered: it has only
+//!   antialiasing noise, and filtering blurs a light's HDR edges into its surroundings.
+//!   Beauty is filtered without it (`beauty − emission`) and gets it back after.
+//! - data (albedo, normal, depth), variance (`<aov>_var`, describing the noisy input) and
+//!   alpha are kept as they are; the derived shadow matte is recomputed from the
+//!   denoised `occluded` and `unoccluded`.
+//! - Reconciliation: filtering each AOV alone breaks additivity. The whole of each
+//!   declared partition is authoritative (beauty is the image with the most signal);
+//!   its parts are scaled, per pixel and channel, by `whole / Σ parts`, so they sum to it
+//!   to float rounding (emission parts keep their value and the others share the rest,
+//!   wherever the whole holds it). Where the denoised parts hold (almost) nothing of a whole that is
+//!   not zero (`Σ parts < 10⁻³·whole`), the whole is shared in the noisy parts'
+//!   proportions (equally if those are zero too). Wholes are reconciled before their own
+//!   parts (beauty, then `directDiffuse`, then `directDiffuse_<group>`), and denoised
+//!   light is clamped at zero first. So `lightpath aovs` passes on the result, and
+//!   relighting with `comp --gain` from the denoised light groups equals the denoised
+//!   beauty when every gain is 1.
+
+use crate::aov::naming::{self, channel_names, AovKind};
+use crate::output::{read_exr, write_image, ExrContents, ExrHeader, ExrOptions};
+use std::collections::HashMap;
+use std::path::PathBuf;
+
+/// What a build without the `denoise` feature says when asked to denoise.
+pub const UNAVAILABLE: &str = "this lightpath was built without denoising (cargo feature \
+`denoise`, Intel Open Image Denoise). To get it: `pip install pyoidn==2.5.1.0`, then \
+`export OIDN_DIR=\"$(python3 -c 'import importlib.util, os; \
+print(os.path.dirname(importlib.util.find_spec(\"pyoidn\").origin))')/oidn\"` and \
+`cargo install --path crates/lightpath --features denoise` (or `cargo run --release \
+--features denoise -- …`); any Open Image Denoise 2.x install works as OIDN_DIR";
+
+/// Whether this build can denoise.
+pub const AVAILABLE: bool = cfg!(feature = "denoise");
+
+/// The albedo below which a pixel's channel is not divided (divided by this instead):
+/// dark surfaces reflect little light, and dividing by a near-zero albedo would magnify
+/// their noise.
+const MIN_ALBEDO: f32 = 0.01;
+
+/// OIDN's quality setting.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub enum Quality {
+    /// The best images (OIDN's default for final frames).
+    #[default]
+    High,
+    Balanced,
+    /// A smaller network: about twice as fast on a CPU, for previews.
+    Fast,
+}
+
+impl Quality {
+    pub fn parse(s: &str) -> Result<Quality, String> {
+        match s {
+            "high" => Ok(Quality::High),
+            "balanced" => Ok(Quality::Balanced),
+            "fast" => Ok(Quality::Fast),
+            other => Err(format!(
+                "unknown quality '{other}': expected high, balanced or fast"
+            )),
+        }
+    }
+    pub fn as_str(self) -> &'static str {
+        match self {
+            Quality::High => "high",
+            Quality::Balanced => "balanced",
+            Quality::Fast => "fast",
+        }
+    }
+}
+
+/// One `lightpath denoise` run.
+#[derive(Clone, Debug)]
+pub struct DenoiseJob {
+    pub input: PathBuf,
+    pub output: PathBuf,
+    /// Keep each filtered AOV's input as `<aov>_noisy`.
+    pub keep_noisy: bool,
+    pub quality: Quality,
+}
+
+/// How one AOV is treated.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Treatment {
+    /// Divided by the albedo, filtered with a white albedo, multiplied back.
+    AlbedoDivided,
+    /// Filtered as it is, with the albedo and normal.
+    AsIs,
+    /// Kept as it is (data, variance, AOVs of unknown kind…).
+    Kept,
+    /// Recomputed from denoised AOVs (the shadow matte).
+    Recomputed,
+    /// Emission seen directly (`emission`, `bounce0`): kept as it is. It has no Monte
+    /// Carlo noise beyond antialiasing, and a denoiser blurs its HDR edges (a light of
+    /// radiance 18 next to a wall of 0.5 lost a third of its value at 16 spp).
+    Emission,
+}
+
+/// What `run` did.
+#[derive(Clone, Debug, Default)]
+pub struct DenoiseSummary {
+    /// AOVs filtered (zero AOVs excluded).
+    pub filtered: usize,
+    /// Light AOVs that were zero everywhere, left as they are.
+    pub zero: usize,
+    /// Partitions reconciled.
+    pub partitions: usize,
+    /// Auxiliary images used: albedo, normal.
+    pub albedo: bool,
+    pub normal: bool,
+    pub seconds: f64,
+}
+
+impl DenoiseSummary {
+    /// The line `lightpath denoise` prints.
+    pub fn line(&self) -> String {
+        let aux = match (self.albedo, self.normal) {
+            (true, true) => "albedo and normal",
+            (true, false) => "albedo only (no normal AOV)",
+            _ => "no auxiliary images (no albedo AOV)",
+        };
+        format!(
+            "denoised {} AOVs ({} zero AOVs left as they are) with {aux}, {} partitions \
+             reconciled: {:.2} s",
+            self.filtered, self.zero, self.partitions, self.seconds
+        )
+    }
+}
+
+/// The treatment of each AOV of an EXR, by name, in the header's order.
+pub fn plan(exr: &ExrContents) -> Vec<(String, Treatment)> {
+    let names: Vec<String> = exr.aovs().into_iter().map(|(n, _)| n).collect();
+    let has = |n: &str| names.iter().any(|m| m == n);
+    let albedo = has(naming::ALBEDO);
+    names
+        .iter()
+        .map(|name| {
+            let kind = naming::kind_of(&exr.attributes, name).unwrap_or_else(|| {
+                // Files written before kinds were recorded: the standard data AOVs.
+                if [naming::ALBEDO, naming::NORMAL, naming::DEPTH].contains(&name.as_str()) {
+                    AovKind::Data
+                } else {
+                    AovKind::Light
+                }
+            });
+            let t = match kind {
+                AovKind::Light if is_emission(name) => Treatment::Emission,
+                AovKind::Light if albedo && naming::is_albedo_divided(name) => {
+                    Treatment::AlbedoDivided
+                }
+                AovKind::Light => Treatment::AsIs,
+                AovKind::Derived
+                    if name == naming::SHADOW
+                        && has(naming::OCCLUDED)
+                        && has(naming::UNOCCLUDED) =>
+                {
+                    Treatment::Recomputed
+                }
+                _ => Treatment::Kept,
+            };
+            (name.clone(), t)
+        })
+        .collect()
+}
+
+/// Whether AOV `name` is emission seen directly: the standard `emission` (`CO`) or the
+/// bounce partition's `bounce0` (`C[<L.>O]`).
+fn is_emission(name: &str) -> bool {
+    name == EMISSION || name == naming::bounce_name(0)
+}
+
+/// The standard AOV of emission seen directly.
+const EMISSION: &str = "emission";
+
+/// RGB planes of one AOV.
+type Planes = [Vec<f32>; 3];
+
+/// An EXR's named channels.
+type Channels = Vec<(String, Vec<f32>)>;
+
+/// An image filter over interleaved RGB of the file's size: OIDN, or a stand-in in
+/// tests. `albedo_divided`: the input was divided by the albedo (filter it with a white
+/// albedo).
+pub trait Filter {
+    fn filter(&mut self, rgb: &mut [f32], albedo_divided: bool) -> Result<(), String>;
+}
+
+/// The auxiliary images, interleaved RGB: albedo clamped to [0, 1], normal as rendered.
+pub struct Aux {
+    pub albedo: Option<Vec<f32>>,
+    pub normal: Option<Vec<f32>>,
+}
+
+fn interleave(p: [&[f32]; 3]) -> Vec<f32> {
+    let mut out = Vec::with_capacity(p[0].len() * 3);
+    for ((r, g), b) in p[0].iter().zip(p[1]).zip(p[2]) {
+        out.extend([*r, *g, *b]);
+    }
+    out
+}
+
+fn planes_of(exr: &ExrContents, aov: &str) -> Option<Planes> {
+    let names = channel_names(aov);
+    let get = |c: usize| exr.channel(&names[c]).map(|v| v.to_vec());
+    Some([get(0)?, get(1)?, get(2)?])
+}
+
+/// The auxiliary images of an EXR: its `albedo` and `normal` AOVs.
+pub fn aux_images(exr: &ExrContents) -> Aux {
+    let albedo = planes_of(exr, naming::ALBEDO).map(|p| {
+        let mut v = interleave([&p[0], &p[1], &p[2]]);
+        v.iter_mut().for_each(|a| {
+            *a = if a.is_finite() {
+                a.clamp(0.0, 1.0)
+            } else {
+                0.0
+            }
+        });
+        v
+    });
+    let normal = albedo.as_ref().and_then(|_| {
+        planes_of(exr, naming::NORMAL).map(|p| {
+            let mut v = interleave([&p[0], &p[1], &p[2]]);
+            v.iter_mut().for_each(|n| {
+                *n = if n.is_finite() {
+                    n.clamp(-1.0, 1.0)
+                } else {
+                    0.0
+                }
+            });
+            v
+        })
+    });
+    Aux { albedo, normal }
+}
+
+/// Filters one AOV: sanitises it (non-finite → 0, negative → 0), divides by the albedo
+/// if asked, filters, multiplies back and clamps at zero.
+fn filter_aov(
+    planes: &Planes,
+    treatment: Treatment,
+    albedo: Option<&[f32]>,
+    filter: &mut dyn Filter,
+) -> Result<Planes, String> {
+    let mut rgb = interleave([&planes[0], &planes[1], &planes[2]]);
+    for v in &mut rgb {
+        if !v.is_finite() || *v < 0.0 {
+            *v = 0.0;
+        }
+    }
+    let divide = treatment == Treatment::AlbedoDivided && albedo.is_some();
+    if let (true, Some(a)) = (divide, albedo) {
+        for (v, a) in rgb.iter_mut().zip(a) {
+            *v /= a.max(MIN_ALBEDO);
+        }
+    }
+    filter.filter(&mut rgb, divide)?;
+    if let (true, Some(a)) = (divide, albedo) {
+        for (v, a) in rgb.iter_mut().zip(a) {
+            *v *= a.max(MIN_ALBEDO);
+        }
+    }
+    let n = planes[0].len();
+    let mut out = [vec![0.0; n], vec![0.0; n], vec![0.0; n]];
+    for (i, px) in rgb.chunks_exact(3).enumerate() {
+        for c in 0..3 {
+            out[c][i] = if px[c].is_finite() {
+                px[c].max(0.0)
+            } else {
+                0.0
+            };
+        }
+    }
+    Ok(out)
+}
+
+/// `a − b`, channel by channel.
+fn minus(a: &Planes, b: &Planes) -> Planes {
+    [0, 1, 2].map(|c| a[c].iter().zip(&b[c]).map(|(x, y)| x - y).collect())
+}
+
+/// One declared partition: a whole and its parts.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct Partition {
+    pub whole: String,
+    pub parts: Vec<String>,
+}
+
+/// The partitions an EXR's header declares, wholes before their own parts' partitions
+/// (a whole that is itself a part comes after the partition it is in).
+pub fn partitions(exr: &ExrContents) -> Vec<Partition> {
+    let mut sorted = naming::parts_from_attributes(&exr.attributes);
+    let whole_of: HashMap<String, String> = sorted
+        .iter()
+        .map(|p| (p.name.clone(), p.whole.clone()))
+        .collect();
+    // Ancestors of a name (bounded: a malformed header could hold a cycle).
+    let depth = |name: &str| {
+        let (mut n, mut d) = (name.to_string(), 0);
+        while let Some(w) = whole_of.get(&n) {
+            n = w.clone();
+            d += 1;
+            if d > whole_of.len() {
+                break;
+            }
+        }
+        d
+    };
+    let mut groups: Vec<(usize, String, naming::PartitionKind, Vec<String>)> = Vec::new();
+    sorted.sort_by_key(|p| (p.whole.clone(), p.kind, naming::part_order(p)));
+    for p in sorted {
+        match groups.last_mut() {
+            Some((_, w, k, names)) if *w == p.whole && *k == p.kind => names.push(p.name),
+            _ => groups.push((depth(&p.whole), p.whole.clone(), p.kind, vec![p.name])),
+        }
+    }
+    groups.sort_by(|a, b| (a.0, &a.1, a.2).cmp(&(b.0, &b.1, b.2)));
+    groups
+        .into_iter()
+        .map(|(_, whole, _, parts)| Partition { whole, parts })
+        .collect()
+}
+
+/// Scales `parts` so they sum to `whole`, per pixel and channel (see the module doc);
+/// `noisy` are the parts before filtering, for pixels where the filtered parts are empty.
+/// `fixed` parts (emission, kept as rendered) keep their value where the whole holds it,
+/// and the others share the rest.
+pub fn reconcile(whole: &Planes, parts: &mut [&mut Planes], noisy: &[&Planes], fixed: &[bool]) {
+    let n = whole[0].len();
+    let free: Vec<usize> = (0..parts.len()).filter(|k| !fixed[*k]).collect();
+    for c in 0..3 {
+        for i in 0..n {
+            let kept: f32 = (0..parts.len())
+                .filter(|k| fixed[*k])
+                .map(|k| parts[k][c][i])
+                .sum();
+            // Where the whole is below its fixed parts, every part is scaled instead.
+            let (w, share): (f32, &[usize]) = if whole[c][i] >= kept && !free.is_empty() {
+                (whole[c][i] - kept, &free)
+            } else {
+                (whole[c][i], &[])
+            };
+            let all: Vec<usize>;
+            let share = if share.is_empty() {
+                all = (0..parts.len()).collect();
+                &all[..]
+            } else {
+                share
+            };
+            let sum: f32 = share.iter().map(|&k| parts[k][c][i]).sum();
+            if sum > 0.0 && sum >= 1e-3 * w {
+                let s = w / sum;
+                share.iter().for_each(|&k| parts[k][c][i] *= s);
+                continue;
+            }
+            let noisy_sum: f32 = share.iter().map(|&k| noisy[k][c][i].max(0.0)).sum();
+            for &k in share {
+                parts[k][c][i] = if noisy_sum > 0.0 {
+                    w * noisy[k][c][i].max(0.0) / noisy_sum
+                } else {
+                    w / share.len() as f32
+                };
+            }
+        }
+    }
+}
+
+/// Denoises an EXR's contents with `filter`: the output's channels and attributes.
+pub fn denoise_contents(
+    exr: &ExrContents,
+    aux: &Aux,
+    filter: &mut dyn Filter,
+    keep_noisy: bool,
+    summary: &mut DenoiseSummary,
+) -> Result<(Channels, Vec<(String, String)>), String> {
+    if exr
+        .attributes
+        .iter()
+        .any(|(k, _)| k == naming::DENOISED_ATTRIBUTE)
+    {
+        return Err(
+            "it is already denoised (it has a lightpath/denoised attribute): \
+                    denoise the noisy render instead"
+                .into(),
+        );
+    }
+    let plan = plan(exr);
+    summary.albedo = aux.albedo.is_some();
+    summary.normal = aux.normal.is_some();
+    let mut noisy: HashMap<String, Planes> = HashMap::new();
+    let mut denoised: HashMap<String, Planes> = HashMap::new();
+    // Beauty is filtered without the emission seen directly, which is added back after.
+    let emission = plan
+        .iter()
+        .any(|(n, t)| n == EMISSION && *t == Treatment::Emission)
+        .then(|| planes_of(exr, EMISSION))
+        .flatten();
+    for (name, t) in &plan {
+        if !matches!(
+            t,
+            Treatment::AsIs | Treatment::AlbedoDivided | Treatment::Emission
+        ) {
+            continue;
+        }
+        let Some(p) = planes_of(exr, name) else {
+            continue;
+        };
+        let out = if *t == Treatment::Emission {
+            p.clone().map(|c| {
+                c.into_iter()
+                    .map(|v| if v.is_finite() { v.max(0.0) } else { 0.0 })
+                    .collect()
+            })
+        } else if p.iter().all(|c| c.iter().all(|v| *v == 0.0)) {
+            summary.zero += 1;
+            p.clone()
+        } else {
+            summary.filtered += 1;
+            let unlit = match (&emission, name == naming::BEAUTY) {
+                (Some(e), true) => Some(minus(&p, e)),
+                _ => None,
+            };
+            let mut out = filter_aov(
+                unlit.as_ref().unwrap_or(&p),
+                *t,
+                aux.albedo.as_deref(),
+                filter,
+            )
+            .map_err(|e| format!("filtering AOV '{name}': {e}"))?;
+            if let (Some(e), Some(_)) = (&emission, &unlit) {
+                for c in 0..3 {
+                    for (o, e) in out[c].iter_mut().zip(&e[c]) {
+                        *o += e.max(0.0);
+                    }
+                }
+            }
+            out
+        };
+        denoised.insert(name.clone(), out);
+        noisy.insert(name.clone(), p);
+    }
+    for part in partitions(exr) {
+        let all = std::iter::once(&part.whole).chain(&part.parts);
+        if !all.clone().all(|n| denoised.contains_key(n)) {
+            continue;
+        }
+        let whole = denoised[&part.whole].clone();
+        let noisy_parts: Vec<&Planes> = part.parts.iter().map(|p| &noisy[p]).collect();
+        let mut taken: Vec<Planes> = part
+            .parts
+            .iter()
+            .map(|p| denoised.remove(p).unwrap_or_default())
+            .collect();
+        let mut refs: Vec<&mut Planes> = taken.iter_mut().collect();
+        let fixed: Vec<bool> = part.parts.iter().map(|p| is_emission(p)).collect();
+        reconcile(&whole, &mut refs, &noisy_parts, &fixed);
+        for (name, planes) in part.parts.iter().zip(taken) {
+            denoised.insert(name.clone(), planes);
+        }
+        summary.partitions += 1;
+    }
+    if plan
+        .iter()
+        .any(|(n, t)| n == naming::SHADOW && *t == Treatment::Recomputed)
+    {
+        let get = |n: &str| {
+            denoised
+                .get(n)
+                .cloned()
+                .or_else(|| planes_of(exr, n))
+                .unwrap_or_default()
+        };
+        let (occ, unocc) = (get(naming::OCCLUDED), get(naming::UNOCCLUDED));
+        let matte = crate::output::shadow_matte(
+            [&occ[0], &occ[1], &occ[2]],
+            [&unocc[0], &unocc[1], &unocc[2]],
+        );
+        denoised.insert(naming::SHADOW.into(), matte);
+    }
+    // Every input channel, the denoised AOVs' replaced.
+    let mut replaced: HashMap<String, Vec<f32>> = HashMap::new();
+    for (name, planes) in &denoised {
+        for (ch, v) in channel_names(name).into_iter().zip(planes) {
+            replaced.insert(ch, v.clone());
+        }
+    }
+    let mut channels: Vec<(String, Vec<f32>)> = exr
+        .channels
+        .iter()
+        .map(|(n, v)| (n.clone(), replaced.remove(n).unwrap_or_else(|| v.clone())))
+        .collect();
+    let mut attributes = exr.attributes.clone();
+    if keep_noisy {
+        let definitions: HashMap<String, String> = exr.aovs().into_iter().collect();
+        let mut names: Vec<&String> = noisy.keys().filter(|n| !is_emission(n)).collect();
+        names.sort();
+        for name in names {
+            let kept = naming::noisy_name(name);
+            if definitions.contains_key(&kept) {
+                return Err(format!(
+                    "--keep-noisy would name the noisy '{name}' '{kept}', which the file \
+                     already has"
+                ));
+            }
+            for (ch, v) in channel_names(&kept).into_iter().zip(&noisy[name]) {
+                channels.push((ch, v.clone()));
+            }
+            attributes.push((
+                naming::aov_attribute(&kept),
+                format!(
+                    "{} (the noisy input of '{name}')",
+                    definitions.get(name).map(String::as_str).unwrap_or("")
+                ),
+            ));
+            attributes.push((naming::noisy_attribute(&kept), name.clone()));
+            attributes.push((
+                naming::kind_attribute(&kept),
+                AovKind::Light.as_str().into(),
+            ));
+        }
+    }
+    attributes.push((naming::DENOISED_ATTRIBUTE.into(), describe(summary)));
+    Ok((channels, attributes))
+}
+
+/// The `lightpath/denoised` attribute: how the file was filtered.
+fn describe(s: &DenoiseSummary) -> String {
+    let aux = match (s.albedo, s.normal) {
+        (true, true) => "albedo and normal auxiliary images",
+        (true, false) => "albedo auxiliary image",
+        _ => "no auxiliary images",
+    };
+    format!(
+        "Intel Open Image Denoise RT filter (hdr), {aux}; AOVs named diffuse*, \
+         directDiffuse*, indirectDiffuse*, subsurface* divided by albedo; every declared \
+         partition's parts scaled to sum to its denoised whole"
+    )
+}
+
+/// Runs a denoise: reads the input, filters, writes the output atomically.
+pub fn run(job: &DenoiseJob) -> Result<DenoiseSummary, String> {
+    // Said first: without the denoiser no input could be of use.
+    if !AVAILABLE {
+        return Err(UNAVAILABLE.into());
+    }
+    let start = std::time::Instant::now();
+    let exr = read_exr(&job.input)?;
+    let aux = aux_images(&exr);
+    let mut summary = DenoiseSummary::default();
+    let (channels, attributes) = with_oidn(exr.width, exr.height, &aux, job.quality, |f| {
+        denoise_contents(&exr, &aux, f, job.keep_noisy, &mut summary)
+    })
+    .and_then(|r| r)
+    .map_err(|e| format!("cannot denoise {}: {e}", job.input.display()))?;
+    // The input's header with the denoiser's attributes: a crop stays a crop of its frame.
+    let header = ExrHeader {
+        frame: Some(exr.frame),
+        origin: exr.origin,
+        world_to_camera: exr.world_to_camera,
+        world_to_ndc: exr.world_to_ndc,
+        capture_date: exr.capture_date.clone(),
+        text: attributes,
+    };
+    write_image(
+        &job.output,
+        exr.width,
+        exr.height,
+        channels,
+        &header,
+        ExrOptions::default(),
+    )?;
+    summary.seconds = start.elapsed().as_secs_f64();
+    Ok(summary)
+}
+
+/// Runs `body` with OIDN's RT filter for images of this size and these auxiliary images.
+#[cfg(feature = "denoise")]
+fn with_oidn<R>(
+    width: usize,
+    height: usize,
+    aux: &Aux,
+    quality: Quality,
+    body: impl FnOnce(&mut dyn Filter) -> R,
+) -> Result<R, String> {
+    let device = oidn::Device::new().map_err(|e| format!("Open Image Denoise: {e}"))?;
+    let quality = match quality {
+        Quality::High => oidn::Quality::High,
+        Quality::Balanced => oidn::Quality::Balanced,
+        Quality::Fast => oidn::Quality::Fast,
+    };
+    let new_filter = |albedo: Option<&[f32]>| -> Result<oidn::RayTracing<'_>, String> {
+        let mut f =
+            oidn::RayTracing::try_new(&device).map_err(|e| format!("Open Image Denoise: {e}"))?;
+        f.image_dimensions(width, height)
+            .hdr(true)
+            .filter_quality(quality);
+        match (albedo, &aux.normal) {
+            (Some(a), Some(n)) => {
+                f.albedo_normal(a, n);
+            }
+            (Some(a), None) => {
+                f.albedo(a);
+            }
+            _ => {}
+        }
+        Ok(f)
+    };
+    let white = aux.albedo.as_ref().map(|a| vec![1.0f32; a.len()]);
+    let plain = new_filter(aux.albedo.as_deref())?;
+    let divided = match &white {
+        Some(w) => Some(new_filter(Some(w))?),
+        None => None,
+    };
+    struct Oidn<'a> {
+        device: &'a oidn::Device,
+        plain: oidn::RayTracing<'a>,
+        divided: Option<oidn::RayTracing<'a>>,
+    }
+    impl Filter for Oidn<'_> {
+        fn filter(&mut self, rgb: &mut [f32], albedo_divided: bool) -> Result<(), String> {
+            let f = match (&self.divided, albedo_divided) {
+                (Some(d), true) => d,
+                _ => &self.plain,
+            };
+            f.filter_in_place(rgb)
+                .map_err(|e| format!("Open Image Denoise: {e}"))?;
+            self.device
+                .get_error()
+                .map_err(|e| format!("Open Image Denoise: {e}"))
+        }
+    }
+    let mut filter = Oidn {
+        device: &device,
+        plain,
+        divided,
+    };
+    Ok(body(&mut filter))
+}
+
+#[cfg(not(feature = "denoise"))]
+fn with_oidn<R>(
+    _width: usize,
+    _height: usize,
+    _aux: &Aux,
+    _quality: Quality,
+    _body: impl FnOnce(&mut dyn Filter) -> R,
+) -> Result<R, String> {
+    Err(UNAVAILABLE.into())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A 3×3 box blur: a real (if crude) denoiser with OIDN's interface.
+    struct BoxBlur {
+        width: usize,
+        height: usize,
+        divided_calls: usize,
+    }
+
+    impl Filter for BoxBlur {
+        fn filter(&mut self, rgb: &mut [f32], albedo_divided: bool) -> Result<(), String> {
+            self.divided_calls += albedo_divided as usize;
+            let src = rgb.to_vec();
+            let (w, h) = (self.width as i64, self.height as i64);
+            for y in 0..h {
+                for x in 0..w {
+                    for c in 0..3 {
+                        let (mut s, mut n) = (0.0, 0.0);
+                        for dy in -1..=1 {
+                            for dx in -1..=1 {
+                                let (xx, yy) = (x + dx, y + dy);
+                                if xx >= 0 && yy >= 0 && xx < w && yy < h {
+                                    s += src[((yy * w + xx) * 3 + c) as usize];
+                                    n += 1.0;
+                                }
+                            }
+                        }
+                        rgb[((y * w + x) * 3 + c) as usize] = s / n;
+                    }
+                }
+            }
+            Ok(())
+        }
+    }
+
+    fn noise(seed: u32, n: usize) -> Vec<f32> {
+        let mut s = seed.wrapping_mul(747_796_405).wrapping_add(1);
+        (0..n)
+            .map(|_| {
+                s = s.wrapping_mul(1_664_525).wrapping_add(1_013_904_223);
+                (s >> 8) as f32 / 16_777_216.0
+            })
+            .collect()
+    }
+
+    /// A 6×5 file: beauty = emission + directDiffuse + … (only two non-zero parts), a
+    /// light-group split of beauty, albedo, normal and a depth.
+    fn file() -> ExrContents {
+        let n = 30;
+        let dd = [noise(1, n), noise(2, n), noise(3, n)];
+        let ds = [noise(4, n), noise(5, n), noise(6, n)];
+        let key = [noise(7, n), noise(8, n), noise(9, n)];
+        let beauty: Planes =
+            [0, 1, 2].map(|c| dd[c].iter().zip(&ds[c]).map(|(a, b)| a + b).collect());
+        let rest: Planes =
+            [0, 1, 2].map(|c| beauty[c].iter().zip(&key[c]).map(|(b, k)| b * k).collect());
+        let keyp: Planes =
+            [0, 1, 2].map(|c| beauty[c].iter().zip(&rest[c]).map(|(b, r)| b - r).collect());
+        let zero = [vec![0.0; n], vec![0.0; n], vec![0.0; n]];
+        let albedo = [vec![0.5; n], noise(10, n), vec![0.005; n]];
+        let normal = [vec![0.0; n], vec![0.0; n], vec![1.0; n]];
+        let mut aovs: Vec<(&str, Planes, AovKind)> = vec![
+            ("beauty", beauty, AovKind::Light),
+            ("directDiffuse", dd, AovKind::Light),
+            ("directSpecular", ds, AovKind::Light),
+            ("beauty_key", keyp, AovKind::Light),
+            ("beauty__default", rest, AovKind::Light),
+            ("albedo", albedo, AovKind::Data),
+            ("normal", normal, AovKind::Data),
+            (
+                "depth",
+                [vec![2.0; n], vec![2.0; n], vec![2.0; n]],
+                AovKind::Data,
+            ),
+        ];
+        for z in lpe::BEAUTY_PARTITION {
+            if z != "directDiffuse" && z != "directSpecular" {
+                aovs.push((z, zero.clone(), AovKind::Light));
+            }
+        }
+        let mut channels = Vec::new();
+        let mut attributes = Vec::new();
+        let mut infos = Vec::new();
+        for (name, planes, kind) in &aovs {
+            for (ch, v) in channel_names(name).into_iter().zip(planes.clone()) {
+                channels.push((ch, v));
+            }
+            attributes.push((naming::aov_attribute(name), format!("def of {name}")));
+            attributes.push((naming::kind_attribute(name), kind.as_str().to_string()));
+            infos.push(naming::PartInfo {
+                name,
+                split_of: name.starts_with("beauty_").then_some("beauty"),
+            });
+        }
+        attributes.extend(naming::partition_attributes(&infos));
+        channels.push(("A".into(), vec![1.0; n]));
+        ExrContents {
+            width: 6,
+            height: 5,
+            channels,
+            attributes,
+            frame: [6, 5],
+            origin: [0, 0],
+            world_to_camera: None,
+            world_to_ndc: None,
+            capture_date: None,
+        }
+    }
+
+    fn run_box(exr: &ExrContents, keep: bool) -> (ExrContents, DenoiseSummary, usize) {
+        let aux = aux_images(exr);
+        let mut f = BoxBlur {
+            width: 6,
+            height: 5,
+            divided_calls: 0,
+        };
+        let mut s = DenoiseSummary::default();
+        let (channels, attributes) = denoise_contents(exr, &aux, &mut f, keep, &mut s).unwrap();
+        let out = ExrContents {
+            width: exr.width,
+            height: exr.height,
+            channels,
+            attributes,
+            frame: exr.frame,
+            origin: exr.origin,
+            world_to_camera: None,
+            world_to_ndc: None,
+            capture_date: None,
+        };
+        (out, s, f.divided_calls)
+    }
+
+    #[test]
+    fn plan_follows_the_naming_convention_and_kinds() {
+        let exr = file();
+        let plan: HashMap<String, Treatment> = plan(&exr).into_iter().collect();
+        assert_eq!(plan["directDiffuse"], Treatment::AlbedoDivided);
+        assert_eq!(plan["subsurface"], Treatment::AlbedoDivided);
+        assert_eq!(plan["directSpecular"], Treatment::AsIs);
+        assert_eq!(plan["beauty_key"], Treatment::AsIs);
+        assert_eq!(plan["albedo"], Treatment::Kept);
+        assert_eq!(plan["depth"], Treatment::Kept);
+    }
+
+    #[test]
+    fn partitions_sum_after_filtering_and_data_is_kept() {
+        let exr = file();
+        let (out, s, divided) = run_box(&exr, false);
+        // beauty, directDiffuse, directSpecular and the two light-group parts; four zero
+        // members of the standard set are left alone, and emission is kept as it is.
+        assert_eq!((s.filtered, s.zero, s.partitions), (5, 4, 2));
+        assert_eq!(divided, 1);
+        let checks = crate::post::check_partitions(&out);
+        assert_eq!(checks.len(), 2);
+        for c in &checks {
+            assert!(c.max_relative_error < 1e-5, "{c:?}");
+        }
+        // Filtering did something, data did not change.
+        assert_ne!(out.channel("R"), exr.channel("R"));
+        assert_eq!(out.channel("depth.R"), exr.channel("depth.R"));
+        assert_eq!(out.channel("albedo.G"), exr.channel("albedo.G"));
+        assert_eq!(out.channel("A"), exr.channel("A"));
+        // The box blur keeps a constant image constant: the mean is preserved to
+        // within the blur's edge effects.
+        let mean = |v: &[f32]| v.iter().sum::<f32>() / v.len() as f32;
+        let (a, b) = (
+            mean(out.channel("R").unwrap()),
+            mean(exr.channel("R").unwrap()),
+        );
+        assert!((a - b).abs() < 0.1 * b, "{a} vs {b}");
+    }
+
+    #[test]
+    fn albedo_division_round_trips_where_filtering_is_the_identity() {
+        struct Identity;
+        impl Filter for Identity {
+            fn filter(&mut self, _: &mut [f32], _: bool) -> Result<(), String> {
+                Ok(())
+            }
+        }
+        let exr = file();
+        let aux = aux_images(&exr);
+        let p = planes_of(&exr, "directDiffuse").unwrap();
+        let out = filter_aov(
+            &p,
+            Treatment::AlbedoDivided,
+            aux.albedo.as_deref(),
+            &mut Identity,
+        )
+        .unwrap();
+        for c in 0..3 {
+            for (a, b) in out[c].iter().zip(&p[c]) {
+                assert!((a - b).abs() <= 1e-6 * b.abs().max(1.0), "{a} vs {b}");
+            }
+        }
+    }
+
+    #[test]
+    fn keep_noisy_adds_the_inputs_and_a_second_denoise_is_refused() {
+        let exr = file();
+        let (out, _, _) = run_box(&exr, true);
+        assert_eq!(out.channel("beauty_noisy.R"), exr.channel("R"));
+        assert_eq!(
+            out.channel("directDiffuse_noisy.G"),
+            exr.channel("directDiffuse.G")
+        );
+        // The noisy copies are in no partition: the checks are the same two.
+        assert_eq!(crate::post::check_partitions(&out).len(), 2);
+        let aux = aux_images(&out);
+        let mut f = BoxBlur {
+            width: 6,
+            height: 5,
+            divided_calls: 0,
+        };
+        let err = denoise_contents(&out, &aux, &mut f, false, &mut DenoiseSummary::default())
+            .unwrap_err();
+        assert!(err.contains("already denoised"), "{err}");
+    }
+
+    #[test]
+    fn reconcile_shares_a_whole_the_filtered_parts_lost() {
+        let whole: Planes = [vec![2.0, 1.0], vec![0.0, 0.0], vec![1.0, 1.0]];
+        let mut a: Planes = [vec![1.0, 0.0], vec![0.5, 0.0], vec![0.0, 0.0]];
+        let mut b: Planes = [vec![3.0, 0.0], vec![0.5, 0.0], vec![0.0, 0.0]];
+        let na: Planes = [vec![0.0, 1.0], vec![0.0, 0.0], vec![0.0, 0.0]];
+        let nb: Planes = [vec![0.0, 3.0], vec![0.0, 0.0], vec![0.0, 0.0]];
+        reconcile(&whole, &mut [&mut a, &mut b], &[&na, &nb], &[false, false]);
+        // Scaled: 1 and 3 of 2 → 0.5 and 1.5.
+        assert_eq!((a[0][0], b[0][0]), (0.5, 1.5));
+        // The filtered parts are empty: the noisy proportions, 1:3.
+        assert_eq!((a[0][1], b[0][1]), (0.25, 0.75));
+        // A zero whole empties its parts.
+        assert_eq!((a[1][0], b[1][0]), (0.0, 0.0));
+        // Nothing anywhere: shared equally.
+        assert_eq!((a[2][1], b[2][1]), (0.5, 0.5));
+    }
+
+    #[test]
+    fn reconcile_keeps_fixed_emission_and_shares_the_rest() {
+        let whole: Planes = [vec![5.0, 1.0], vec![0.0; 2], vec![0.0; 2]];
+        let mut e: Planes = [vec![4.0, 2.0], vec![0.0; 2], vec![0.0; 2]];
+        let mut a: Planes = [vec![3.0, 1.0], vec![0.0; 2], vec![0.0; 2]];
+        let ne = e.clone();
+        let na = a.clone();
+        reconcile(&whole, &mut [&mut e, &mut a], &[&ne, &na], &[true, false]);
+        // Emission 4 kept, the other part takes 5 − 4.
+        assert_eq!((e[0][0], a[0][0]), (4.0, 1.0));
+        // A whole below its emission: both scaled by 1/3.
+        assert!((e[0][1] - 2.0 / 3.0).abs() < 1e-6 && (a[0][1] - 1.0 / 3.0).abs() < 1e-6);
+    }
+
+    #[test]
+    fn partitions_order_wholes_before_their_parts() {
+        let names = [
+            "beauty",
+            "directDiffuse",
+            "directDiffuse_key",
+            "directDiffuse__default",
+        ];
+        let infos: Vec<naming::PartInfo> = names
+            .iter()
+            .map(|n| naming::PartInfo {
+                name: n,
+                split_of: n.starts_with("directDiffuse_").then_some("directDiffuse"),
+            })
+            .collect();
+        let mut attributes = naming::partition_attributes(&infos);
+        attributes.push((
+            format!("{}directDiffuse", naming::PART_ATTRIBUTE_PREFIX),
+            "beauty".into(),
+        ));
+        attributes.push((
+            format!("{}directDiffuse", naming::PARTITION_ATTRIBUTE_PREFIX),
+            "standard".into(),
+        ));
+        let exr = ExrContents {
+            width: 1,
+            height: 1,
+            channels: vec![],
+            attributes,
+            frame: [1, 1],
+            origin: [0, 0],
+            world_to_camera: None,
+            world_to_ndc: None,
+            capture_date: None,
+        };
+        let p = partitions(&exr);
+        assert_eq!(p.len(), 2);
+        assert_eq!(p[0].whole, "beauty");
+        assert_eq!(p[1].whole, "directDiffuse");
+    }
+
+    #[test]
+    fn quality_parses() {
+        assert_eq!(Quality::parse("fast"), Ok(Quality::Fast));
+        assert!(Quality::parse("best").is_err());
+    }
+}
