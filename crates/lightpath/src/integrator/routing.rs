@@ -218,7 +218,7 @@ impl Tracer<'_> {
         // Data (`overwrite`) AOVs take emission as its colour, no channel above 1: an
         // emitter's albedo is its base colour, not its radiance.
         let data_scale = match origin.via {
-            Via::Hit { .. } => 1.0 / local.max_element().max(1.0),
+            Via::Hit { .. } | Via::Glow => 1.0 / local.max_element().max(1.0),
             _ => 1.0,
         };
         for rule in rules {
