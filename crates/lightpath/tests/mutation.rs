@@ -235,3 +235,110 @@ fn mutated_exr_files_are_read_or_refused_and_never_panic() {
     }
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+/// Loads a scene file of any format (by extension) and builds it.
+fn load_file_and_build(path: &std::path::Path) -> Result<(), String> {
+    let desc = lightpath::load_scene(path.to_str().unwrap_or("")).map_err(|e| e.to_string())?;
+    let specs = vec![lightpath::aov::AovSpec::new("beauty", "lpe:beauty")];
+    Scene::build(&desc, &specs)
+        .map(|_| ())
+        .map_err(|e| e.to_string())
+}
+
+/// A small glTF with a camera, a point light, a material and one triangle (its buffer a
+/// data URI, so the file stands alone).
+const GLTF: &str = r#"{
+  "asset": {"version": "2.0"},
+  "extensionsUsed": ["KHR_lights_punctual"],
+  "extensions": {"KHR_lights_punctual": {"lights": [
+    {"type": "point", "color": [1, 1, 1], "intensity": 10, "name": "key"}]}},
+  "scene": 0,
+  "scenes": [{"nodes": [0, 1, 2]}],
+  "nodes": [
+    {"name": "tri", "mesh": 0, "translation": [0, 0, -2], "extras": {"lpegroup": "props"}},
+    {"name": "cam", "camera": 0},
+    {"name": "lamp", "extensions": {"KHR_lights_punctual": {"light": 0}}, "translation": [0, 1, 0]}
+  ],
+  "cameras": [{"type": "perspective", "perspective": {"yfov": 0.8, "znear": 0.01}}],
+  "materials": [{"pbrMetallicRoughness": {"baseColorFactor": [0.8, 0.5, 0.2, 1], "metallicFactor": 0.5, "roughnessFactor": 0.3}}],
+  "meshes": [{"primitives": [{"attributes": {"POSITION": 0}, "indices": 1, "material": 0}]}],
+  "accessors": [
+    {"bufferView": 0, "componentType": 5126, "count": 3, "type": "VEC3", "min": [0, 0, 0], "max": [1, 1, 0]},
+    {"bufferView": 1, "componentType": 5123, "count": 3, "type": "SCALAR"}
+  ],
+  "bufferViews": [
+    {"buffer": 0, "byteOffset": 0, "byteLength": 36},
+    {"buffer": 0, "byteOffset": 36, "byteLength": 6}
+  ],
+  "buffers": [{"byteLength": 44, "uri": "data:application/octet-stream;base64,AAAAAAAAAAAAAAAAAACAPwAAAAAAAAAAAAAAAAAAgD8AAAAAAAABAAIAAAA="}]
+}"#;
+
+#[test]
+fn mutated_gltf_files_load_or_fail_naming_the_file_and_never_panic() {
+    let dir = std::env::temp_dir().join(format!("lightpath-mutation-gltf-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let path = dir.join("m.gltf");
+    std::fs::write(&path, GLTF).unwrap();
+    load_file_and_build(&path).expect("the unmutated file loads");
+    let mut rng = Rng(0x5eed);
+    let mut loaded = 0;
+    for i in 0..1200 {
+        let text = if i % 2 == 0 {
+            mutate(&mut rng, GLTF)
+        } else {
+            // Numbers in the JSON replaced by hostile ones (keeps the syntax valid more often).
+            let mut t = GLTF.to_string();
+            for _ in 0..1 + rng.below(3) {
+                let digits: Vec<usize> = t
+                    .char_indices()
+                    .filter(|(_, c)| c.is_ascii_digit())
+                    .map(|(k, _)| k)
+                    .collect();
+                let at = digits[rng.below(digits.len())];
+                let token = ["-1", "1e300", "4294967295", "0", "65535", "-0", "3"][rng.below(7)];
+                t.replace_range(at..at + 1, token);
+            }
+            t
+        };
+        std::fs::write(&path, &text).unwrap();
+        match catch_unwind(AssertUnwindSafe(|| load_file_and_build(&path))) {
+            Ok(Ok(())) => loaded += 1,
+            Ok(Err(e)) => assert!(
+                e.contains("m.gltf"),
+                "an error that does not name the file: {e}"
+            ),
+            Err(_) => panic!("panicked on this glTF:\n{text}"),
+        }
+    }
+    std::fs::remove_dir_all(&dir).unwrap();
+    assert!(loaded > 50, "only {loaded} mutants loaded");
+}
+
+#[test]
+fn mutated_ply_files_load_or_fail_naming_the_file_and_never_panic() {
+    let dir = std::env::temp_dir().join(format!("lightpath-mutation-ply-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let original = "ply\nformat ascii 1.0\nelement vertex 4\nproperty float x\nproperty float y\n\
+                    property float z\nproperty float nx\nproperty float ny\nproperty float nz\n\
+                    property uchar red\nproperty uchar green\nproperty uchar blue\n\
+                    element face 2\nproperty list uchar int vertex_indices\nend_header\n\
+                    0 0 0 0 0 1 255 0 0\n1 0 0 0 0 1 0 255 0\n1 1 0 0 0 1 0 0 255\n\
+                    0 1 0 0 0 1 255 255 255\n3 0 1 2\n4 0 1 2 3\n";
+    let path = dir.join("m.ply");
+    std::fs::write(&path, original).unwrap();
+    load_file_and_build(&path).expect("the unmutated file loads");
+    let mut rng = Rng(0x91a);
+    for _ in 0..1200 {
+        let text = mutate(&mut rng, original);
+        std::fs::write(&path, &text).unwrap();
+        match catch_unwind(AssertUnwindSafe(|| load_file_and_build(&path))) {
+            Ok(Ok(())) => {}
+            Ok(Err(e)) => assert!(
+                e.contains("m.ply"),
+                "an error that does not name the file: {e}"
+            ),
+            Err(_) => panic!("panicked on this PLY:\n{text}"),
+        }
+    }
+    std::fs::remove_dir_all(&dir).unwrap();
+}

@@ -76,6 +76,129 @@ struct Loader {
     meshes: HashMap<(usize, usize, bool), std::sync::Arc<Vec<MeshData>>>,
 }
 
+/// Every accessor's data within its buffer view and every view within its buffer, in
+/// checked arithmetic: the `gltf` crate's readers compute `offset + stride · (count − 1)`
+/// unchecked (a `count` of 0 or a huge one overflows, in release builds silently), and
+/// its validator indexes before it checks.
+fn check_accessor_bounds(json: &gltf::json::Root) -> Result<(), String> {
+    use gltf::json::validation::Checked;
+    let view_end = |v: usize| -> Result<u64, String> {
+        let view = json
+            .buffer_views
+            .get(v)
+            .ok_or_else(|| format!("/bufferViews/{v} does not exist"))?;
+        let buffer = json
+            .buffers
+            .get(view.buffer.value())
+            .ok_or_else(|| format!("/bufferViews/{v}/buffer: no such buffer"))?;
+        let start = view.byte_offset.map_or(0, |o| o.0);
+        match start.checked_add(view.byte_length.0) {
+            Some(end) if end <= buffer.byte_length.0 => Ok(view.byte_length.0),
+            _ => Err(format!(
+                "/bufferViews/{v}: bytes {start}..+{} lie outside its buffer of {} bytes",
+                view.byte_length.0, buffer.byte_length.0
+            )),
+        }
+    };
+    for v in 0..json.buffer_views.len() {
+        view_end(v)?;
+    }
+    check_primitive_types(json)?;
+    for (i, a) in json.accessors.iter().enumerate() {
+        let (Checked::Valid(component), Checked::Valid(ty)) = (&a.component_type, &a.type_) else {
+            continue; // the crate's validation names it
+        };
+        let element = (component.0.size() * ty.multiplicity()) as u64;
+        if a.count.0 == 0 {
+            return Err(format!(
+                "/accessors/{i}/count: expected at least 1, found 0"
+            ));
+        }
+        let Some(v) = a.buffer_view.map(|v| v.value()) else {
+            continue;
+        };
+        let length = view_end(v)?;
+        let stride = json.buffer_views[v]
+            .byte_stride
+            .map_or(element, |s| s.0 as u64);
+        let end = (a.count.0 - 1)
+            .checked_mul(stride.max(element))
+            .and_then(|n| n.checked_add(a.byte_offset.map_or(0, |o| o.0)))
+            .and_then(|n| n.checked_add(element));
+        if stride < element || end.is_none_or(|end| end > length) {
+            return Err(format!(
+                "/accessors/{i}: {} elements of {element} bytes (stride {stride}) do not fit \
+                 in buffer view {v} of {length} bytes",
+                a.count.0
+            ));
+        }
+        if a.sparse.is_some() {
+            return Err(format!(
+                "/accessors/{i}/sparse: sparse accessors are not supported"
+            ));
+        }
+    }
+    Ok(())
+}
+
+/// The types the `gltf` crate's readers assume (they reach `unreachable!` on others):
+/// indices unsigned scalars, positions and normals float VEC3, tangents float VEC4,
+/// texture coordinates VEC2 and colours VEC3/VEC4 of floats or normalised integers.
+fn check_primitive_types(json: &gltf::json::Root) -> Result<(), String> {
+    use gltf::json::accessor::{ComponentType as C, Type as T};
+    use gltf::json::mesh::Semantic as S;
+    use gltf::json::validation::Checked;
+    let kind = |i: usize| match json.accessors.get(i) {
+        Some(a) => match (&a.component_type, &a.type_) {
+            (Checked::Valid(c), Checked::Valid(t)) => Some((c.0, *t)),
+            _ => None,
+        },
+        None => None,
+    };
+    for (m, mesh) in json.meshes.iter().enumerate() {
+        for (p, prim) in mesh.primitives.iter().enumerate() {
+            let at = format!("/meshes/{m}/primitives/{p}");
+            if let Some(i) = prim.indices {
+                if !matches!(
+                    kind(i.value()),
+                    Some((C::U8 | C::U16 | C::U32, T::Scalar)) | None
+                ) {
+                    return Err(format!(
+                        "{at}/indices: accessor {} is not of unsigned integer scalars",
+                        i.value()
+                    ));
+                }
+            }
+            for (semantic, a) in &prim.attributes {
+                let Checked::Valid(semantic) = semantic else {
+                    continue;
+                };
+                let ok = match (semantic, kind(a.value())) {
+                    (_, None) => true,
+                    (S::Positions | S::Normals, Some(k)) => k == (C::F32, T::Vec3),
+                    (S::Tangents, Some(k)) => k == (C::F32, T::Vec4),
+                    (S::TexCoords(_), Some((c, t))) => {
+                        t == T::Vec2 && matches!(c, C::F32 | C::U8 | C::U16)
+                    }
+                    (S::Colors(_), Some((c, t))) => {
+                        matches!(t, T::Vec3 | T::Vec4) && matches!(c, C::F32 | C::U8 | C::U16)
+                    }
+                    _ => true,
+                };
+                if !ok {
+                    return Err(format!(
+                        "{at}/attributes/{}: accessor {} has a type the glTF \
+                         specification does not allow for it",
+                        semantic.to_string(),
+                        a.value()
+                    ));
+                }
+            }
+        }
+    }
+    Ok(())
+}
+
 fn pointer_of(path: &gltf::json::Path) -> String {
     // "nodes[3].mesh" → "/nodes/3/mesh"
     let mut out = String::new();
@@ -122,6 +245,28 @@ impl Loader {
                 ));
             }
         }
+        // gltf-json 1.4's validator indexes a primitive's POSITION accessor before it
+        // checks the index (it panics on an index out of range): checked here first.
+        let json = document.as_json();
+        for (m, mesh) in json.meshes.iter().enumerate() {
+            for (p, prim) in mesh.primitives.iter().enumerate() {
+                for (semantic, accessor) in &prim.attributes {
+                    if accessor.value() >= json.accessors.len() {
+                        let name = match semantic {
+                            gltf::json::validation::Checked::Valid(s) => s.to_string(),
+                            gltf::json::validation::Checked::Invalid => "?".into(),
+                        };
+                        return Err(at.error(format!(
+                            "/meshes/{m}/primitives/{p}/attributes/{name}: accessor {} does \
+                             not exist (the file has {})",
+                            accessor.value(),
+                            json.accessors.len()
+                        )));
+                    }
+                }
+            }
+        }
+        check_accessor_bounds(json).map_err(|e| at.error(e))?;
         // The crate's validation (index ranges, accessor types) with its JSON paths.
         if let Err(gltf::Error::Validation(errors)) = gltf::Gltf::from_slice(bytes) {
             if let Some((path, e)) = errors.iter().find(|(p, _)| {
