@@ -92,6 +92,7 @@ fn bumpy_sphere(levels: u32) -> MeshData {
         normals: None,
         uvs: None,
         tangents: None,
+        colors: None,
     }
 }
 

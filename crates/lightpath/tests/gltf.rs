@@ -732,3 +732,272 @@ fn nodes_sharing_a_textured_mesh_are_instances_that_shade_as_copies_do() {
     );
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+#[test]
+fn color_0_multiplies_the_base_colour_linearly_and_interpolates() {
+    // A square filling the frame (as in the texture test) whose COLOR_0 runs from red on
+    // its left edge to blue on its right, with green 128/255 throughout, as normalised
+    // RGBA bytes. glTF's vertex colours are linear: no sRGB decoding. They multiply the
+    // base colour factor (here (1, 1, 0.5)).
+    let dir = temp_dir("color0");
+    let mut doc = Doc::new().with_cameras();
+    doc.json["materials"] = json!([{"pbrMetallicRoughness":
+        {"baseColorFactor": [1.0, 1.0, 0.5, 1.0], "metallicFactor": 0.0}}]);
+    let pos = [
+        -1.0, -1.0, 0.0, 1.0, -1.0, 0.0, 1.0, 1.0, 0.0, -1.0, 1.0, 0.0,
+    ];
+    let sq = doc.mesh(&pos, &[0, 1, 2, 0, 2, 3], None, Some(0));
+    let colors: [u8; 16] = [
+        255, 128, 0, 255, 0, 128, 255, 255, 0, 128, 255, 255, 255, 128, 0, 255,
+    ];
+    let view = doc.view(&colors);
+    let acc = doc.push(
+        "accessors",
+        json!({"bufferView": view, "componentType": 5121, "normalized": true,
+               "count": 4, "type": "VEC4"}),
+    );
+    doc.json["meshes"][sq]["primitives"][0]["attributes"]["COLOR_0"] = json!(acc);
+    let card = doc.node(json!({"name": "card", "mesh": sq}));
+    let cam = camera_node(&mut doc, "cam", 1.0 / 0.25f32.tan(), 0.5);
+    doc.root(card);
+    doc.root(cam);
+    let path = dir.join("color0.glb");
+    doc.write_glb(&path);
+    let desc = load(&path);
+    let res = 32;
+    let (scene, film) = render_desc(&desc, res, 4, vec![AovSpec::new("albedo", "lpe:albedo")]);
+    let k = scene.aovs.iter().position(|a| a.name == "albedo").unwrap();
+    let green = 128.0 / 255.0;
+    // The square's x runs across the image: at pixel x, u = (x + ½)/res of the way from
+    // red to blue. Samples jitter within their pixel: u is off by at most ½/res.
+    let bound = 0.5 / res as f32 + 1e-3;
+    for y in [3, res / 2, res - 4] {
+        for x in 0..res {
+            let u = (x as f32 + 0.5) / res as f32;
+            let want = Vec3A::new(1.0 - u, green, 0.5 * u);
+            let got = film.pixel(k, x, y);
+            assert!(
+                (got - want).abs().max_element() < bound,
+                "pixel ({x}, {y}): albedo {got}, expected {want}"
+            );
+        }
+    }
+    // A colour that is not finite is an error at its accessor.
+    let mut bad = Doc::new();
+    let sq = bad.mesh(&pos, &[0, 1, 2], None, None);
+    let c = bad.floats(
+        &[
+            1.0,
+            0.0,
+            0.0,
+            f32::NAN,
+            0.0,
+            0.0,
+            1.0,
+            1.0,
+            1.0,
+            0.0,
+            0.0,
+            0.0,
+        ],
+        3,
+    );
+    bad.json["meshes"][sq]["primitives"][0]["attributes"]["COLOR_0"] = json!(c);
+    let n = bad.node(json!({"name": "card", "mesh": sq}));
+    bad.root(n);
+    let path = bad.write(&dir, "nan");
+    let e = lightpath::load_scene(path.to_str().unwrap()).unwrap_err();
+    assert!(
+        e.to_string()
+            .contains("/meshes/0/primitives/0/attributes/COLOR_0")
+            && e.to_string().contains("colour 1"),
+        "{e}"
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn a_toml_scene_includes_a_glb_and_overrides_its_objects_by_name() {
+    // A .glb with a card (filling the view of its camera) and a ball under a `props`
+    // node; the TOML includes it, gives the card its own material and groups, and hides
+    // the ball from the camera as a holdout.
+    let dir = temp_dir("include");
+    let mut doc = Doc::new().with_cameras();
+    doc.json["materials"] = json!([{"pbrMetallicRoughness":
+        {"baseColorFactor": [0.9, 0.9, 0.9, 1.0], "metallicFactor": 0.0}}]);
+    let sq = doc.square(1.0, 1.0, Some(0));
+    let small = doc.square(0.1, 1.0, Some(0));
+    let card = doc.node(json!({"name": "card", "mesh": sq}));
+    let ball = doc.node(json!({"name": "ball", "mesh": small, "translation": [0.0, 0.0, 0.5]}));
+    let props = doc.node(json!({"name": "props", "children": [ball]}));
+    let cam = camera_node(&mut doc, "cam", 1.0 / 0.25f32.tan(), 0.5);
+    for n in [card, props, cam] {
+        doc.root(n);
+    }
+    doc.write_glb(&dir.join("shot.glb"));
+    let toml = "
+[materials.blue]
+type = \"diffuse\"
+albedo = [0.1, 0.1, 0.8]
+
+[[lights]]
+type = \"dome\"
+radiance = [1, 1, 1]
+
+[[include]]
+file = \"shot.glb\"
+
+[include.objects.card]
+material = \"blue\"
+lpegroups = [\"hero\"]
+
+[include.objects.ball]
+holdout = true
+visible_camera = false
+casts_shadows = false
+";
+    let path = dir.join("scene.toml");
+    std::fs::write(&path, toml).unwrap();
+    let desc = lightpath::Source::from_file(&path)
+        .and_then(|s| s.parse())
+        .unwrap();
+    let by_name = |n: &str| {
+        desc.objects
+            .iter()
+            .find(|o| o.name.as_deref() == Some(n))
+            .unwrap_or_else(|| panic!("no object {n}"))
+    };
+    assert_eq!(by_name("card").material.as_ref().unwrap().name, "blue");
+    assert_eq!(
+        by_name("card").lpegroups.as_deref().unwrap(),
+        ["hero".to_string()]
+    );
+    let b = by_name("ball");
+    assert!(b.holdout && !b.visible_camera && !b.casts_shadows && b.visible_indirect);
+    // The ball keeps its imported material and its groups (its name and its parent's).
+    assert_ne!(b.material.as_ref().unwrap().name, "blue");
+    let groups = b.lpegroups.as_deref().unwrap();
+    assert!(groups.contains(&"ball".to_string()) && groups.contains(&"props".to_string()));
+    // The included camera is used: the card fills the frame, blue, in the 'hero' group;
+    // the ball in front of it is not seen.
+    let (scene, film) = render_desc(
+        &desc,
+        8,
+        4,
+        vec![
+            AovSpec::new("albedo", "lpe:albedo"),
+            AovSpec::new("hero", "C<RD'hero'>.*[<L.>O]"),
+            AovSpec::new("props", "C<..'props'>.*[<L.>O]"),
+        ],
+    );
+    let k = scene.aovs.iter().position(|a| a.name == "albedo").unwrap();
+    for (x, y) in [(0, 0), (4, 4), (7, 3)] {
+        let got = film.pixel(k, x, y);
+        assert!(
+            (got - Vec3A::new(0.1, 0.1, 0.8)).abs().max_element() < 1e-4,
+            "pixel ({x}, {y}): {got}"
+        );
+    }
+    assert!(aov_sum(&scene, &film, "hero") > 0.0);
+    assert_eq!(aov_sum(&scene, &film, "props"), 0.0);
+    // An override naming no object of the file lists the file's objects.
+    std::fs::write(&path, toml.replace("objects.card", "objects.Card")).unwrap();
+    let e = lightpath::Source::from_file(&path)
+        .and_then(|s| s.parse())
+        .unwrap_err();
+    assert!(
+        e.message.contains("'Card'") && e.message.contains("card"),
+        "{e}"
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn material_extensions_and_textures_map_to_the_pbr_material() {
+    // Glass (transmission, ior), a coated metal with metallic-roughness and normal
+    // textures, and an emissive card with KHR_materials_emissive_strength.
+    let dir = temp_dir("materials");
+    let mut doc = Doc::new().with_cameras();
+    let png = png_2x2();
+    let view = doc.view(&png);
+    doc.json["images"] = json!([{"bufferView": view, "mimeType": "image/png"}]);
+    doc.json["textures"] = json!([{"source": 0}]);
+    doc.json["materials"] = json!([
+        {"name": "glass", "pbrMetallicRoughness": {"baseColorFactor": [0.9, 1.0, 0.9, 1.0],
+            "metallicFactor": 0.0, "roughnessFactor": 0.0},
+         "extensions": {"KHR_materials_transmission": {"transmissionFactor": 1.0},
+                        "KHR_materials_ior": {"ior": 1.33}}},
+        {"name": "coated", "pbrMetallicRoughness": {"metallicFactor": 0.25,
+            "roughnessFactor": 0.4, "metallicRoughnessTexture": {"index": 0}},
+         "normalTexture": {"index": 0, "scale": 0.5},
+         "extensions": {"KHR_materials_clearcoat": {"clearcoatFactor": 0.7,
+                        "clearcoatRoughnessFactor": 0.2}}},
+        {"name": "lamp", "emissiveFactor": [1.0, 0.5, 0.25],
+         "extensions": {"KHR_materials_emissive_strength": {"emissiveStrength": 4.0}}},
+    ]);
+    doc.json["extensionsUsed"] = json!([
+        "KHR_materials_transmission",
+        "KHR_materials_ior",
+        "KHR_materials_clearcoat",
+        "KHR_materials_emissive_strength"
+    ]);
+    let glass = doc.square(1.0, 1.0, Some(0));
+    let coated = doc.square(0.2, 1.0, Some(1));
+    let lamp = doc.square(0.2, 1.0, Some(2));
+    let g = doc.node(json!({"name": "pane", "mesh": glass}));
+    let c = doc.node(json!({"name": "coin", "mesh": coated, "translation": [5.0, 0.0, 0.0]}));
+    // The lamp card behind the pane, seen through it.
+    let l = doc.node(json!({"name": "lampcard", "mesh": lamp, "translation": [0.0, 0.0, -1.0]}));
+    let cam = camera_node(&mut doc, "cam", 1.0 / 0.25f32.tan(), 0.5);
+    for n in [g, c, l, cam] {
+        doc.root(n);
+    }
+    let path = dir.join("materials.glb");
+    doc.write_glb(&path);
+    let desc = load(&path);
+    assert!(
+        !desc.warnings.iter().any(|w| w.contains("extension")),
+        "{:?}",
+        desc.warnings
+    );
+    let m = &desc.materials;
+    assert!(
+        matches!(m["glass"].kind, MaterialKind::Pbr { transmission, ior: Some(ior), base_color, .. }
+            if transmission == 1.0 && (ior - 1.33).abs() < 1e-6 && base_color == [0.9, 1.0, 0.9]),
+        "{:?}",
+        m["glass"].kind
+    );
+    assert!(
+        matches!(m["coated"].kind, MaterialKind::Pbr { metallic, clearcoat, clearcoat_roughness, .. }
+            if metallic == 0.25 && clearcoat == 0.7 && clearcoat_roughness == 0.2),
+        "{:?}",
+        m["coated"].kind
+    );
+    assert!((m["coated"].roughness - 0.4).abs() < 1e-6);
+    let t = &m["coated"].textures;
+    assert!(t.metallic_roughness.is_some() && t.base_color.is_none());
+    assert_eq!(t.normal.as_ref().map(|(_, s)| *s), Some(0.5));
+    // The emissive card is a mesh light of radiance factor × strength, named after it.
+    let light = desc
+        .lights
+        .iter()
+        .find(|l| l.name.as_deref() == Some("lampcard"))
+        .expect("a mesh light");
+    assert!(matches!(light.kind, LightKind::Mesh { .. }));
+    assert_eq!(light.color, [4.0, 2.0, 1.0]);
+    assert_eq!(light.groups, ["lampcard".to_string()]);
+    // The pane fills the view: the lamp is seen through it, by specular transmission,
+    // and no camera path starts with a diffuse bounce (glass has none).
+    let (scene, film) = render_desc(
+        &desc,
+        8,
+        4,
+        vec![
+            AovSpec::new("through", "C<TS>.*[<L.>O]"),
+            AovSpec::new("diffuseFirst", "C<RD>.*[<L.>O]"),
+        ],
+    );
+    assert!(aov_sum(&scene, &film, "through") > 0.0);
+    assert_eq!(aov_sum(&scene, &film, "diffuseFirst"), 0.0);
+    let _ = std::fs::remove_dir_all(&dir);
+}

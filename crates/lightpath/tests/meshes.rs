@@ -532,6 +532,54 @@ fn ply_ascii_and_binary_load_the_same_mesh_and_errors_name_the_element() {
 }
 
 #[test]
+fn ply_vertex_colours_multiply_the_albedo() {
+    // The quad of the PLY tests, red (255, 128, 0) on its left edge and blue (0, 128, 255)
+    // on its right, under the PLY's grey 0.8. Byte colours are sRGB (128 → 0.2158 linear),
+    // interpolated as linear values: red + blue is 0.8 everywhere on the quad, green
+    // 0.8 × 0.2158, and red falls from left to right.
+    let dir = temp_dir("plycolor");
+    let mut ascii = ply_header("ascii", "");
+    for (k, p) in QUAD.iter().enumerate() {
+        let rgb = if p[0] < 0.0 { "255 128 0" } else { "0 128 255" };
+        ascii += &format!(
+            "{} {} {} 0 0 1 {} {} {rgb}\n",
+            p[0],
+            p[1],
+            p[2],
+            k % 2,
+            k / 2
+        );
+    }
+    ascii += "4 0 1 2 3\n";
+    let desc = parse(&write(&dir, "colours.ply", ascii)).unwrap();
+    assert!(
+        !desc.warnings.iter().any(|w| w.contains("vertex colours")),
+        "{:?}",
+        desc.warnings
+    );
+    let res = 17;
+    let (scene, film) = render_desc(desc, res, 4, 0, vec![AovSpec::new("albedo", "lpe:albedo")]);
+    let k = index(&scene, "albedo");
+    let green = 0.8 * 0.2158605;
+    // The default camera stands 4.135 away with a 40° field: the quad's ±1 spans
+    // (1/4.135)/tan 20° = 0.665 of the half-width, pixels 2.85 to 14.15 of 17, so pixels
+    // 3 to 13 of the middle row see only the quad.
+    let mut last_red = f32::INFINITY;
+    for x in 3..=13 {
+        let a = film.pixel(k, x, res / 2);
+        assert!((a.x + a.z - 0.8).abs() < 1e-4, "pixel {x}: {a}");
+        assert!((a.y - green).abs() < 1e-4, "pixel {x}: {a}");
+        assert!(a.x < last_red, "pixel {x}: red {} after {last_red}", a.x);
+        last_red = a.x;
+    }
+    // The centre pixel is the middle of the gradient (a pixel's samples straddle it
+    // symmetrically; they are 1/17 of the image apart from the next pixel's).
+    let c = film.pixel(k, res / 2, res / 2);
+    assert!((c.x - 0.4).abs() < 0.05 && (c.z - 0.4).abs() < 0.05, "{c}");
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
 fn a_toml_scene_includes_files_and_overrides_their_objects_by_name() {
     let dir = temp_dir("include");
     cornell_files(&dir);

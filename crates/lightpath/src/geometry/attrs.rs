@@ -1,23 +1,36 @@
-//! Texture coordinates and tangents of triangles, read only where a textured material
-//! needs them: the hit itself carries none, so untextured scenes pay nothing.
+//! Texture coordinates, tangents and vertex colours of triangles, read only where a
+//! textured material needs them (a material on a mesh with vertex colours is one): the
+//! hit itself carries none, so untextured scenes pay nothing.
 //!
 //! A triangle with per-vertex attributes has an entry in the scene's attribute tables
 //! (`Prim::Triangle::normals` indexes them): its shading normals (kept by the
-//! acceleration structure), its UVs and tangents here, each table either empty (no mesh
-//! of the scene has that attribute) or as long as the normals table.
+//! acceleration structure), its UVs, tangents and colours here, each table either empty
+//! (no mesh of the scene has that attribute) or as long as the normals table.
 
+use super::shapes::VertexAttrs;
 use super::{Accel, Hit, Prim};
-use glam::{Affine3A, Vec2, Vec3A, Vec4};
+use glam::{Affine3A, Vec2, Vec3, Vec3A, Vec4};
 
-/// Per-vertex UVs and tangents, indexed like the shading normals.
+/// Per-vertex UVs, tangents and colours, indexed like the shading normals.
 #[derive(Clone, Debug, Default)]
 pub struct SurfaceAttrs {
     uvs: Vec<[Vec2; 3]>,
     /// World-space tangent (xyz) and bitangent sign (w); w = 0: none given. (In a shared
     /// mesh's table: in the mesh's own space.)
     tangents: Vec<[Vec4; 3]>,
+    /// Linear RGB vertex colours (they multiply the base colour); a triangle without
+    /// them has white.
+    colors: Vec<[Vec3; 3]>,
     /// Each shared mesh's own table, by mesh (`Instance::mesh`).
     pub meshes: Vec<SurfaceAttrs>,
+}
+
+/// The attributes at a hit: what a texture lookup needs, if the triangle has UVs, and the
+/// interpolated vertex colour (white without one).
+#[derive(Clone, Copy, Debug)]
+pub struct SurfacePoint {
+    pub uv: Option<SurfaceUv>,
+    pub color: Vec3A,
 }
 
 /// What a texture lookup needs at a hit.
@@ -36,9 +49,14 @@ pub struct SurfaceUv {
 }
 
 impl SurfaceAttrs {
-    /// Appends one attributed triangle's UVs and tangents; `count` is the number of
-    /// entries (normals) before it, so tables that were empty are filled up to it.
-    pub fn push(&mut self, count: usize, uvs: Option<[Vec2; 3]>, tangents: Option<[Vec4; 3]>) {
+    /// Appends one attributed triangle's UVs, tangents and colours; `count` is the number
+    /// of entries (normals) before it, so tables that were empty are filled up to it.
+    pub fn push(&mut self, count: usize, attrs: VertexAttrs) {
+        let VertexAttrs {
+            uvs,
+            tangents,
+            colors,
+        } = attrs;
         fn put<T: Copy>(table: &mut Vec<T>, count: usize, value: Option<T>, zero: T) {
             if value.is_none() && table.is_empty() {
                 return;
@@ -48,18 +66,21 @@ impl SurfaceAttrs {
         }
         put(&mut self.uvs, count, uvs, [Vec2::ZERO; 3]);
         put(&mut self.tangents, count, tangents, [Vec4::ZERO; 3]);
+        put(&mut self.colors, count, colors, [Vec3::ONE; 3]);
     }
 
     /// Bytes held, for the memory figures.
     pub fn bytes(&self) -> usize {
         self.uvs.len() * 24
             + self.tangents.len() * 48
+            + self.colors.len() * 36
             + self.meshes.iter().map(SurfaceAttrs::bytes).sum::<usize>()
     }
 
-    /// UVs and derivatives at `hit`, for a triangle that has UVs (on an instance: the
-    /// shared mesh's triangle, placed).
-    pub fn at(&self, accel: &Accel, hit: &Hit) -> Option<SurfaceUv> {
+    /// UVs and derivatives at `hit` if the triangle has UVs, and its colour (on an
+    /// instance: the shared mesh's triangle, placed); `None` for a hit on a primitive
+    /// without attributes.
+    pub fn at(&self, accel: &Accel, hit: &Hit) -> Option<SurfacePoint> {
         match accel.prims()[hit.prim as usize] {
             Prim::Instance { index, .. } => {
                 let inst = &accel.instances()[index as usize];
@@ -75,7 +96,12 @@ impl SurfaceAttrs {
     /// [`SurfaceAttrs::at`] on triangle `tri` of this table, placed by `to_world` (an
     /// instance's) or already in world space. Barycentrics are kept by an affine map, so
     /// the placed triangle's edges give the world derivatives directly.
-    fn at_triangle(&self, tri: Prim, p: Vec3A, to_world: Option<&Affine3A>) -> Option<SurfaceUv> {
+    fn at_triangle(
+        &self,
+        tri: Prim,
+        p: Vec3A,
+        to_world: Option<&Affine3A>,
+    ) -> Option<SurfacePoint> {
         let Prim::Triangle {
             p0,
             e1,
@@ -85,7 +111,11 @@ impl SurfaceAttrs {
         else {
             return None;
         };
-        let [t0, t1, t2] = *self.uvs.get(normals as usize)?;
+        let uvs = self.uvs.get(normals as usize);
+        let colors = self.colors.get(normals as usize);
+        if uvs.is_none() && colors.is_none() {
+            return None;
+        }
         let (p0, e1, e2) = match to_world {
             Some(m) => (
                 m.transform_point3a(p0),
@@ -108,6 +138,13 @@ impl SurfaceAttrs {
             (0.0, 0.0)
         };
         let b0 = 1.0 - b1 - b2;
+        let color = match colors {
+            Some([c0, c1, c2]) => Vec3A::from(*c0 * b0 + *c1 * b1 + *c2 * b2).max(Vec3A::ZERO),
+            None => Vec3A::ONE,
+        };
+        let Some(&[t0, t1, t2]) = uvs else {
+            return Some(SurfacePoint { uv: None, color });
+        };
         let uv = t0 * b0 + t1 * b1 + t2 * b2;
         // pbrt-v4's ∂p/∂u, ∂p/∂v from the two edges and their UV differences.
         let (duv1, duv2) = (t1 - t0, t2 - t0);
@@ -136,12 +173,15 @@ impl SurfaceAttrs {
             }
             _ => Vec4::ZERO,
         };
-        Some(SurfaceUv {
-            uv,
-            dpdu,
-            dpdv,
-            tangent,
-            uv_per_world,
+        Some(SurfacePoint {
+            uv: Some(SurfaceUv {
+                uv,
+                dpdu,
+                dpdv,
+                tangent,
+                uv_per_world,
+            }),
+            color,
         })
     }
 }
@@ -192,12 +232,14 @@ mod tests {
         // (0,0) → uv (0,1), (2,0) → (1,1), (0,2) → (0,0): v grows towards −y.
         attrs.push(
             0,
-            Some([
-                Vec2::new(0.0, 1.0),
-                Vec2::new(1.0, 1.0),
-                Vec2::new(0.0, 0.0),
-            ]),
-            None,
+            VertexAttrs {
+                uvs: Some([
+                    Vec2::new(0.0, 1.0),
+                    Vec2::new(1.0, 1.0),
+                    Vec2::new(0.0, 0.0),
+                ]),
+                ..VertexAttrs::default()
+            },
         );
         (accel, attrs)
     }
@@ -213,7 +255,9 @@ mod tests {
         let hit = accel
             .intersect(&ray, 0.0, Visibility::CAMERA)
             .expect("the ray hits the triangle");
-        let s = attrs.at(&accel, &hit).expect("the triangle has UVs");
+        let point = attrs.at(&accel, &hit).expect("the triangle has attributes");
+        assert_eq!(point.color, Vec3A::ONE, "no colours: white");
+        let s = point.uv.expect("the triangle has UVs");
         assert!((s.uv - Vec2::new(0.25, 0.75)).length() < 1e-6, "{}", s.uv);
         assert!((s.dpdu - Vec3A::new(2.0, 0.0, 0.0)).length() < 1e-6);
         assert!((s.dpdv - Vec3A::new(0.0, -2.0, 0.0)).length() < 1e-6);
@@ -226,12 +270,102 @@ mod tests {
     #[test]
     fn tables_stay_empty_without_attributes_and_fill_up_when_one_comes() {
         let mut attrs = SurfaceAttrs::default();
-        attrs.push(0, None, None);
-        attrs.push(1, None, None);
+        attrs.push(0, VertexAttrs::default());
+        attrs.push(1, VertexAttrs::default());
         assert_eq!(attrs.bytes(), 0);
-        attrs.push(2, Some([Vec2::ONE; 3]), None);
+        attrs.push(
+            2,
+            VertexAttrs {
+                uvs: Some([Vec2::ONE; 3]),
+                ..VertexAttrs::default()
+            },
+        );
         assert_eq!(attrs.uvs.len(), 3);
-        assert!(attrs.tangents.is_empty());
+        assert!(attrs.tangents.is_empty() && attrs.colors.is_empty());
         assert_eq!(attrs.uvs[0], [Vec2::ZERO; 3]);
+        attrs.push(
+            3,
+            VertexAttrs {
+                colors: Some([Vec3::X; 3]),
+                ..VertexAttrs::default()
+            },
+        );
+        // Triangles before the first coloured one are white; UVs fill up with zeros.
+        assert_eq!(attrs.colors.len(), 4);
+        assert_eq!(attrs.colors[2], [Vec3::ONE; 3]);
+        assert_eq!(attrs.uvs.len(), 4);
+    }
+
+    #[test]
+    fn colours_interpolate_without_uvs_and_on_instances() {
+        // Red, green and blue corners; no UVs.
+        let mut attrs = SurfaceAttrs::default();
+        attrs.push(
+            0,
+            VertexAttrs {
+                colors: Some([Vec3::X, Vec3::Y, Vec3::Z]),
+                ..VertexAttrs::default()
+            },
+        );
+        let p = [
+            Vec3A::ZERO,
+            Vec3A::new(2.0, 0.0, 0.0),
+            Vec3A::new(0.0, 2.0, 0.0),
+        ];
+        let prim = Prim::Triangle {
+            p0: p[0],
+            e1: p[1] - p[0],
+            e2: p[2] - p[0],
+            normals: 0,
+        };
+        let ray = |x: f32, y: f32| Ray {
+            origin: Vec3A::new(x, y, 1.0),
+            dir: -Vec3A::Z,
+            tmax: f32::INFINITY,
+        };
+        // Barycentrics (0.5, 0.25, 0.25) at (0.5, 0.5).
+        let want = Vec3A::new(0.5, 0.25, 0.25);
+        let accel = Accel::build(
+            vec![prim],
+            vec![0],
+            vec![[Vec3A::Z; 3]],
+            vec![Visibility::ALL],
+        );
+        let hit = accel
+            .intersect(&ray(0.5, 0.5), 0.0, Visibility::CAMERA)
+            .unwrap();
+        let s = attrs.at(&accel, &hit).expect("a coloured triangle");
+        assert!(s.uv.is_none());
+        assert!((s.color - want).length() < 1e-5, "{}", s.color);
+
+        // The same triangle as a shared mesh, placed 10 units along x.
+        let mesh = Accel::build(
+            vec![prim],
+            vec![0],
+            vec![[Vec3A::Z; 3]],
+            vec![Visibility::ALL],
+        );
+        let inst =
+            crate::geometry::Instance::new(0, Affine3A::from_translation(glam::Vec3::X * 10.0))
+                .unwrap();
+        let (lo, hi) = inst.world_bounds(Vec3A::ZERO, Vec3A::new(2.0, 2.0, 0.0));
+        let scene = Accel::build(
+            vec![Prim::Instance { lo, hi, index: 0 }],
+            vec![0],
+            vec![],
+            vec![Visibility::ALL],
+        )
+        .with_instances(vec![mesh], vec![inst]);
+        let placed = SurfaceAttrs {
+            meshes: vec![attrs],
+            ..SurfaceAttrs::default()
+        };
+        let hit = scene
+            .intersect(&ray(10.5, 0.5), 0.0, Visibility::CAMERA)
+            .unwrap();
+        let s = placed
+            .at(&scene, &hit)
+            .expect("the instance's triangle is coloured");
+        assert!((s.color - want).length() < 1e-5, "{}", s.color);
     }
 }

@@ -2,7 +2,7 @@
 //! space, as Mitsuba defines them), spheres stay analytic, meshes come inline or from OBJ.
 
 use super::Prim;
-use glam::{Affine3A, Vec2, Vec3A, Vec4};
+use glam::{Affine3A, Vec2, Vec3, Vec3A, Vec4};
 use std::f32::consts::PI;
 
 /// Primitives of one shape, plus per-vertex normals for smooth meshes.
@@ -11,12 +11,19 @@ pub struct ShapePrims {
     pub prims: Vec<Prim>,
     /// For each triangle with shading normals: its index in `prims` and the normals.
     pub normals: Vec<(usize, [Vec3A; 3])>,
-    /// UVs and world tangents of the triangles in `normals`: empty, or one entry each.
+    /// UVs, world tangents and colours of the triangles in `normals`: empty, or one
+    /// entry each.
     pub attrs: Vec<VertexAttrs>,
 }
 
-/// A triangle's per-vertex UVs and world-space tangents (w: bitangent sign), if given.
-pub type VertexAttrs = (Option<[Vec2; 3]>, Option<[Vec4; 3]>);
+/// A triangle's per-vertex UVs, world-space tangents (w: bitangent sign) and linear RGB
+/// colours, if given.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct VertexAttrs {
+    pub uvs: Option<[Vec2; 3]>,
+    pub tangents: Option<[Vec4; 3]>,
+    pub colors: Option<[Vec3; 3]>,
+}
 
 /// Per-vertex attributes of a mesh beyond positions, one entry per position each.
 #[derive(Clone, Copy, Default)]
@@ -24,6 +31,7 @@ pub struct MeshAttrs<'a> {
     pub normals: Option<&'a [Vec3A]>,
     pub uvs: Option<&'a [Vec2]>,
     pub tangents: Option<&'a [Vec4]>,
+    pub colors: Option<&'a [Vec3]>,
 }
 
 fn tri(xf: &Affine3A, a: Vec3A, b: Vec3A, c: Vec3A) -> Prim {
@@ -121,8 +129,8 @@ pub fn sphere(center: Vec3A, radius: f32) -> ShapePrims {
 }
 
 /// A triangle mesh; normals (one per vertex), if given, are interpolated for shading,
-/// and UVs and tangents are kept for textures (a mesh with UVs but no normals gets its
-/// face normals, so every textured triangle has an attribute entry).
+/// and UVs, tangents and colours are kept for textured shading (a mesh with those but no
+/// normals gets its face normals, so every such triangle has an attribute entry).
 pub fn mesh(
     xf: &Affine3A,
     positions: &[Vec3A],
@@ -131,7 +139,7 @@ pub fn mesh(
 ) -> ShapePrims {
     let mut out = ShapePrims::default();
     let normal_xf = xf.matrix3.inverse().transpose();
-    let extra = attrs.uvs.is_some() || attrs.tangents.is_some();
+    let extra = attrs.uvs.is_some() || attrs.tangents.is_some() || attrs.colors.is_some();
     // A mirroring placement flips the bitangent with the winding.
     let handedness = xf.matrix3.determinant().signum();
     for idx in indices {
@@ -153,7 +161,12 @@ pub fn mesh(
                         w.normalize_or(Vec3A::X).extend(t.w * handedness)
                     })
                 });
-                out.attrs.push((uvs, tangents));
+                let colors = attrs.colors.map(|cs| idx.map(|i| cs[i as usize]));
+                out.attrs.push(VertexAttrs {
+                    uvs,
+                    tangents,
+                    colors,
+                });
             }
         }
         out.prims.push(t);

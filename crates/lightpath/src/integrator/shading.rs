@@ -35,8 +35,10 @@ impl Tracer<'_> {
         cone_width: f32,
     ) -> (Bsdf, Vec3A) {
         let scene = self.scene;
-        let Some(s) = scene.surface.at(&scene.accel, hit) else {
-            return (t.bsdf(Vec2::ZERO, NO_UV_WIDTH), hit.ns);
+        let point = scene.surface.at(&scene.accel, hit);
+        let color = point.map_or(Vec3A::ONE, |p| p.color);
+        let Some(s) = point.and_then(|p| p.uv) else {
+            return (t.bsdf(Vec2::ZERO, NO_UV_WIDTH, color), hit.ns);
         };
         let width = uv_width(cone_width, s.uv_per_world, dir, hit.ng);
         let mut ns = t.shading_normal(hit.ns, &s, width);
@@ -44,7 +46,7 @@ impl Tracer<'_> {
         if ns.dot(hit.ng) <= 0.0 {
             ns = hit.ns;
         }
-        (t.bsdf(s.uv, width), ns)
+        (t.bsdf(s.uv, width, color), ns)
     }
 
     /// The factor an emissive texture puts on a glowing object's emission at `hit`.
@@ -62,7 +64,7 @@ impl Tracer<'_> {
         else {
             return Vec3A::ONE;
         };
-        match scene.surface.at(&scene.accel, hit) {
+        match scene.surface.at(&scene.accel, hit).and_then(|p| p.uv) {
             Some(s) => t.emission(s.uv, uv_width(cone_width, s.uv_per_world, dir, hit.ng)),
             None => t.emission(Vec2::ZERO, NO_UV_WIDTH),
         }

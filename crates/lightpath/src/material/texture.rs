@@ -457,6 +457,45 @@ mod tests {
     }
 
     #[test]
+    fn jpeg_and_exr_textures_decode() {
+        let w = [Wrap::Clamp; 2];
+        // A flat 8×8 JPEG of sRGB 128: lossy, but a flat block decodes within a level.
+        let mut jpeg = Vec::new();
+        image::RgbImage::from_pixel(8, 8, image::Rgb([128, 128, 128]))
+            .write_to(
+                &mut std::io::Cursor::new(&mut jpeg),
+                image::ImageFormat::Jpeg,
+            )
+            .unwrap();
+        let c = MipMap::decode(&jpeg, ColorSpace::Srgb)
+            .unwrap()
+            .bilinear(0, Vec2::splat(0.5), w);
+        let (lo, hi) = (srgb_to_linear(127.0 / 255.0), srgb_to_linear(129.0 / 255.0));
+        assert!((lo..=hi).contains(&c.x) && (lo..=hi).contains(&c.z), "{c}");
+        // An EXR keeps its linear values, above 1 too, whatever the colour space.
+        let path = std::env::temp_dir().join(format!("lightpath-tex-{}.exr", std::process::id()));
+        exr::prelude::write_rgba_file(&path, 2, 1, |x, _| {
+            if x == 0 {
+                (4.0f32, 0.5f32, 0.25f32, 1.0f32)
+            } else {
+                (0.0, 0.0, 1.0, 1.0)
+            }
+        })
+        .unwrap();
+        let bytes = std::fs::read(&path).unwrap();
+        std::fs::remove_file(&path).unwrap();
+        let m = MipMap::decode(&bytes, ColorSpace::Srgb).unwrap();
+        assert_eq!(
+            m.bilinear(0, Vec2::new(0.25, 0.5), w),
+            Vec4::new(4.0, 0.5, 0.25, 1.0)
+        );
+        assert_eq!(
+            m.bilinear(0, Vec2::new(0.75, 0.5), w),
+            Vec4::new(0.0, 0.0, 1.0, 1.0)
+        );
+    }
+
+    #[test]
     fn texture_transform_matches_the_extension() {
         // The extension's example: offset (0.5, 0), rotation π/2, scale (2, 2).
         let t = UvTransform::new([0.5, 0.0], std::f32::consts::FRAC_PI_2, [2.0, 2.0]);

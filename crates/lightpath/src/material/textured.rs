@@ -70,12 +70,14 @@ fn alpha(roughness: f32, textured: bool) -> f32 {
 }
 
 impl Textured {
-    /// The BSDF at texture coordinate `uv`, for a footprint `width` wide in UV units.
-    pub fn bsdf(&self, uv: Vec2, width: f32) -> Bsdf {
+    /// The BSDF at texture coordinate `uv`, for a footprint `width` wide in UV units,
+    /// with `vertex` (the interpolated vertex colour; white without one) on the base
+    /// colour as the texture is.
+    pub fn bsdf(&self, uv: Vec2, width: f32, vertex: Vec3A) -> Bsdf {
         let t = &self.textures;
         let color = |c: Vec3A| match &t.base_color {
-            Some(tex) => c * Vec3A::from(tex.eval(uv, width).xyz()),
-            None => c,
+            Some(tex) => c * vertex * Vec3A::from(tex.eval(uv, width).xyz()),
+            None => c * vertex,
         };
         // (roughness, metallic) factors from the green and blue channels.
         let (r_scale, m_scale) = match &t.metallic_roughness {

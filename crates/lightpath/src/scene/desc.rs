@@ -312,6 +312,9 @@ pub struct MeshData {
     /// Tangents (xyz) and the bitangent's sign (w), for normal maps; without them the
     /// tangent follows the UVs.
     pub tangents: Option<Vec<[f32; 4]>>,
+    /// Linear RGB vertex colours (glTF `COLOR_0`, PLY `red green blue`): they multiply
+    /// the material's base colour.
+    pub colors: Option<Vec<[f32; 3]>>,
 }
 
 /// A shape in its local space; the object's `transform` places it.

@@ -1,11 +1,11 @@
 //! Geometry: object shapes become primitives, collected (with shading normals and trace
 //! sets) into the acceleration structure.
 
-use crate::geometry::shapes::{self, MeshAttrs, ShapePrims};
+use crate::geometry::shapes::{self, MeshAttrs, ShapePrims, VertexAttrs};
 use crate::geometry::{Accel, Instance, Prim, SurfaceAttrs, Visibility, RAY_EPSILON};
 use crate::scene::desc::{MeshData, ObjectDesc, Origin, ShapeDesc};
 use crate::scene::SceneError;
-use glam::{Affine3A, Vec2, Vec3A, Vec4};
+use glam::{Affine3A, Vec2, Vec3, Vec3A, Vec4};
 use rayon::prelude::*;
 use std::collections::HashMap;
 use std::ops::Range;
@@ -120,8 +120,10 @@ fn mesh_parts(
             if part.attrs.len() == part.normals.len() {
                 out.attrs.extend(part.attrs);
             } else {
-                out.attrs
-                    .extend(std::iter::repeat_n((None, None), part.normals.len()));
+                out.attrs.extend(std::iter::repeat_n(
+                    VertexAttrs::default(),
+                    part.normals.len(),
+                ));
             }
         }
         out.normals
@@ -189,10 +191,33 @@ fn mesh(m: &MeshData, xf: &Affine3A, origin: &Origin) -> Result<ShapePrims, Scen
             )));
         }
     }
+    let colors: Option<Vec<Vec3>> = match &m.colors {
+        Some(cs) if cs.len() != pos.len() => {
+            return Err(origin.error(format!(
+                "mesh has {} vertex colours for {} positions",
+                cs.len(),
+                pos.len()
+            )))
+        }
+        Some(cs) => {
+            if let Some(k) = cs
+                .iter()
+                .position(|c| !c.iter().all(|v| v.is_finite() && *v >= 0.0))
+            {
+                return Err(origin.error(format!(
+                    "vertex colour {k} is {:?}: expected finite, non-negative numbers",
+                    cs[k]
+                )));
+            }
+            Some(cs.iter().map(|c| Vec3::from(*c)).collect())
+        }
+        None => None,
+    };
     let attrs = MeshAttrs {
         normals: normals.as_deref(),
         uvs: uvs.as_deref(),
         tangents: tangents.as_deref(),
+        colors: colors.as_deref(),
     };
     Ok(shapes::mesh(xf, &pos, &m.indices, attrs))
 }
@@ -235,8 +260,8 @@ impl GeometryBuilder {
         for (k, (i, n)) in shape.normals.drain(..).enumerate() {
             if let Prim::Triangle { normals, .. } = &mut shape.prims[i] {
                 *normals = self.normals.len() as u32;
-                let (uvs, tangents) = shape.attrs.get(k).copied().unwrap_or((None, None));
-                self.surface.push(self.normals.len(), uvs, tangents);
+                let attrs = shape.attrs.get(k).copied().unwrap_or_default();
+                self.surface.push(self.normals.len(), attrs);
                 self.normals.push(n);
             }
         }

@@ -5,12 +5,12 @@ use crate::material::texture::{ColorSpace, MipMap, Texture, UvTransform, Wrap};
 use crate::material::textured::{MaterialTextures, ShadeModel, Textured};
 use crate::material::{roughness_to_alpha, Bsdf};
 use crate::scene::desc::{
-    ImageSource, MaterialDesc, MaterialKind, NameRef, SceneDesc, TextureDesc, TextureRef,
-    TexturesDesc,
+    ImageSource, MaterialDesc, MaterialKind, NameRef, SceneDesc, ShapeDesc, TextureDesc,
+    TextureRef, TexturesDesc,
 };
 use crate::scene::{Material, SceneError};
 use glam::Vec3A;
-use std::collections::HashMap;
+use std::collections::{HashMap, HashSet};
 use std::sync::Arc;
 
 /// Decoded images, each read once however many materials use it.
@@ -48,9 +48,10 @@ pub fn build(desc: &SceneDesc) -> Result<(Vec<Material>, HashMap<String, u32>), 
     let mut materials = Vec::new();
     let mut ids = HashMap::new();
     let mut images = Images::default();
+    let colored = colored_materials(desc);
     for (name, m) in &desc.materials {
         ids.insert(name.clone(), materials.len() as u32);
-        let mut built = material(name, m, &mut images)?;
+        let mut built = material(name, m, &mut images, colored.contains(name.as_str()))?;
         let roughness = desc.render.regularize;
         // A textured material makes its BSDF at each hit, unregularised.
         if built.textured.is_none()
@@ -61,7 +62,7 @@ pub fn build(desc: &SceneDesc) -> Result<(Vec<Material>, HashMap<String, u32>), 
                 roughness,
                 ..m.clone()
             };
-            let bsdf = material(name, &rough, &mut images)?.bsdf;
+            let bsdf = material(name, &rough, &mut images, false)?.bsdf;
             // Regularising changes how lobes scatter, never which events they emit.
             let same_events = bsdf.lobes().len() == built.bsdf.lobes().len()
                 && bsdf
@@ -74,6 +75,20 @@ pub fn build(desc: &SceneDesc) -> Result<(Vec<Material>, HashMap<String, u32>), 
         materials.push(built);
     }
     Ok((materials, ids))
+}
+
+/// The materials of objects whose meshes have vertex colours: those shade through the
+/// textured path (the colours multiply the base colour), the others pay nothing.
+fn colored_materials(desc: &SceneDesc) -> HashSet<&str> {
+    desc.objects
+        .iter()
+        .filter(|o| match &o.shape {
+            ShapeDesc::Mesh { parts } => parts.iter().any(|p| p.colors.is_some()),
+            ShapeDesc::SharedMesh { parts } => parts.iter().any(|p| p.colors.is_some()),
+            _ => false,
+        })
+        .filter_map(|o| o.material.as_ref().map(|m| m.name.as_str()))
+        .collect()
 }
 
 /// A colour must be finite and not negative: a NaN albedo reached the `albedo` AOV and
@@ -106,7 +121,14 @@ pub fn find(
     }
 }
 
-fn material(name: &str, m: &MaterialDesc, images: &mut Images) -> Result<Material, SceneError> {
+/// Material `name`; `colored`: some object using it has vertex colours, so it is made
+/// textured (evaluated at each hit) even without a texture.
+fn material(
+    name: &str,
+    m: &MaterialDesc,
+    images: &mut Images,
+    colored: bool,
+) -> Result<Material, SceneError> {
     let v3 = Vec3A::from;
     let mut colors = match &m.kind {
         MaterialKind::Diffuse { albedo } | MaterialKind::Plastic { albedo, .. } => {
@@ -151,7 +173,8 @@ fn material(name: &str, m: &MaterialDesc, images: &mut Images) -> Result<Materia
         )));
     }
     let t = &textures_of(m);
-    let textured = t.base_color.is_some()
+    let textured = colored
+        || t.base_color.is_some()
         || t.metallic_roughness.is_some()
         || t.normal.is_some()
         || t.emissive.is_some();

@@ -477,12 +477,29 @@ impl Loader {
             .read_tangents()
             .map(|it| it.collect::<Vec<_>>())
             .filter(|v| same(v.len()));
+        // COLOR_0 is linear (RGB or RGBA; alpha is ignored, as the material's is).
+        let colors: Option<Vec<[f32; 3]>> = reader
+            .read_colors(0)
+            .map(|c| c.into_rgb_f32().collect::<Vec<_>>())
+            .filter(|v| same(v.len()));
+        if let Some((i, c)) = colors
+            .iter()
+            .flatten()
+            .enumerate()
+            .find(|(_, c)| !c.iter().all(|v| v.is_finite() && *v >= 0.0))
+        {
+            return Err(self.error(
+                &format!("{pointer}/attributes/COLOR_0"),
+                format!("colour {i} is {c:?}: expected finite, non-negative numbers"),
+            ));
+        }
         Ok(MeshData {
             positions,
             indices,
             normals,
             uvs,
             tangents,
+            colors,
         })
     }
 

@@ -6,6 +6,7 @@
 //! in an ASCII file, the line).
 
 use super::text;
+use crate::material::texture;
 use crate::scene::desc::{
     MaterialDesc, MaterialKind, MeshData, NameRef, ObjectDesc, Origin, SceneDesc, ShapeDesc,
 };
@@ -89,7 +90,11 @@ pub fn load(path: &Path, at: &Origin) -> Result<(MeshData, Vec<String>), SceneEr
     let mut warnings = Vec::new();
     let mut normals: Vec<[f32; 3]> = Vec::new();
     let mut uvs: Vec<[f32; 2]> = Vec::new();
+    let mut colors: Vec<[f32; 3]> = Vec::new();
     let mut has = (false, false, false);
+    // Integer colours are sRGB-encoded fractions of their range (as Blender's PLY
+    // importer reads them by default); float colours are linear.
+    let mut srgb = false;
     let mut line = header_lines;
     for (name, def) in &header.elements {
         let props = |names: &[&str]| names.iter().all(|n| def.properties.contains_key(*n));
@@ -99,6 +104,14 @@ pub fn load(path: &Path, at: &Origin) -> Result<(MeshData, Vec<String>), SceneEr
                 UV_NAMES.iter().any(|[u, v]| props(&[u, v])),
                 props(&["red", "green", "blue"]),
             );
+            srgb = ["red", "green", "blue"].iter().all(|n| {
+                def.properties.get(*n).is_some_and(|p| {
+                    !matches!(
+                        p.data_type,
+                        PropertyType::Scalar(ScalarType::Float | ScalarType::Double)
+                    )
+                })
+            });
             if !props(&["x", "y", "z"]) {
                 return Err(
                     Origin::file(&file).error("PLY element 'vertex' needs properties x, y and z")
@@ -148,6 +161,19 @@ pub fn load(path: &Path, at: &Origin) -> Result<(MeshData, Vec<String>), SceneEr
                         // v runs up in PLY as in OBJ; ours from the image's top.
                         uvs.push([row.v[U] as f32, 1.0 - row.v[V] as f32]);
                     }
+                    if has.2 {
+                        let c = [row.v[R], row.v[R + 1], row.v[R + 2]].map(|c| c as f32);
+                        if !c.iter().all(|v| v.is_finite() && *v >= 0.0) {
+                            return Err(where_().error(&format!(
+                                "vertex colour {c:?}: expected finite, non-negative numbers"
+                            )));
+                        }
+                        colors.push(if srgb {
+                            c.map(texture::srgb_to_linear)
+                        } else {
+                            c
+                        });
+                    }
                 }
                 "face" => {
                     let n = mesh.positions.len();
@@ -177,13 +203,9 @@ pub fn load(path: &Path, at: &Origin) -> Result<(MeshData, Vec<String>), SceneEr
     if mesh.indices.is_empty() {
         return Err(Origin::file(&file).error("the PLY file has no faces (a point cloud?)"));
     }
-    if has.2 {
-        warnings.push(format!(
-            "{file}: the vertex colours (red, green, blue) are not rendered: the object is grey unless a material is set"
-        ));
-    }
     mesh.normals = has.0.then_some(normals);
     mesh.uvs = has.1.then_some(uvs);
+    mesh.colors = has.2.then_some(colors);
     Ok((mesh, warnings))
 }
 

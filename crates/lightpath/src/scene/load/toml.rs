@@ -710,7 +710,7 @@ fn object(
         "mesh" => {
             let positions = o.positions.clone().ok_or_else(|| missing("positions"))?;
             let indices = o.indices.clone().ok_or_else(|| missing("indices"))?;
-            let mesh = d::MeshData { positions, indices, normals: o.normals.clone(), uvs: None, tangents: None };
+            let mesh = d::MeshData { positions, indices, normals: o.normals.clone(), uvs: None, tangents: None, colors: None };
             d::ShapeDesc::Mesh { parts: vec![mesh] }
         }
         "obj" => {
