@@ -13,6 +13,7 @@
 #   LIGHTPATH_BASELINE=/path/to/older/lightpath  also times an older build on both
 #   scenes with its defaults (how "today's efficiency" was measured).
 #   EFFICIENCY_SKIP_PEERS=1  Lightpath only.
+#   LIGHTPATH=/path/to/lightpath  times that binary instead of building this tree's.
 set -euo pipefail
 here="$(cd "$(dirname "$0")" && pwd)"
 root="$(cd "$here/../.." && pwd)"
@@ -20,8 +21,12 @@ out="$here/out"
 mkdir -p "$out"
 spp="${1:-64}"
 repeats="${2:-3}"
-cargo build --release --manifest-path "$root/Cargo.toml" >/dev/null
-lightpath="${CARGO_TARGET_DIR:-$root/target}/release/lightpath"
+if [ -n "${LIGHTPATH:-}" ]; then
+  lightpath="$LIGHTPATH"
+else
+  cargo build --release --manifest-path "$root/Cargo.toml" >/dev/null
+  lightpath="${CARGO_TARGET_DIR:-$root/target}/release/lightpath"
+fi
 many="$root/scenes/many-lights.toml"
 many_ref="$out/many_lights_ref.exr"
 

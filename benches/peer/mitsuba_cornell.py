@@ -59,6 +59,9 @@ def parse():
     ap.add_argument("--out", default=None, help="output prefix (default out/cornell_<variant>_<spp>spp); "
                                                 "writes PREFIX.exr and PREFIX.png")
     ap.add_argument("--no-write", action="store_true")
+    ap.add_argument("--extra-obj", default=None, help="add this OBJ (white diffuse, flat shading) to the json scene")
+    ap.add_argument("--obj-to-world", type=float, nargs=4, default=[6.0, 0.1, -1.198, 0.0], metavar=("S", "TX", "TY", "TZ"),
+                    help="uniform scale then translation of --extra-obj")
     ap.add_argument("--aov", action="store_true", help="also render the 'aov' integrator (albedo, normal, depth, position) "
                                                       "next to the path image into PREFIX_aov.exr")
     ap.add_argument("--lpe-split", action="store_true",
@@ -166,6 +169,11 @@ def main():
         d, (W, H) = load_json_scene(mi, args.json, args.spp, args.max_depth, args.rr_depth, args.res)
     else:
         d, (W, H) = load_builtin_scene(mi, args.spp, args.max_depth, args.rr_depth, args.res)
+    if args.extra_obj:
+        sc, tx, ty, tz = args.obj_to_world
+        d["shape_extra_obj"] = {"type": "obj", "filename": os.path.abspath(args.extra_obj), "face_normals": True,
+                                "to_world": mi.ScalarTransform4f().translate([tx, ty, tz]).scale(sc),
+                                "bsdf": {"type": "diffuse", "reflectance": {"type": "rgb", "value": [0.8, 0.8, 0.8]}}}
     scene = mi.load_dict(d)
     t_load = time.perf_counter() - t0
 

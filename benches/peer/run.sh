@@ -22,7 +22,7 @@ fi
 spp="${1:-64}"
 repeats="${2:-3}"
 cargo build --release --manifest-path "$root/Cargo.toml" >/dev/null
-lightpath="$root/target/release/lightpath"
+lightpath="${CARGO_TARGET_DIR:-$root/target}/release/lightpath"
 
 for i in $(seq 1 "$repeats"); do
   for variant in llvm_ad_rgb scalar_rgb; do

@@ -11,7 +11,7 @@ out="$here/out"
 mkdir -p "$out"
 repeats="${1:-3}"
 cargo build --release --manifest-path "$root/Cargo.toml" >/dev/null
-lightpath="$root/target/release/lightpath"
+lightpath="${CARGO_TARGET_DIR:-$root/target}/release/lightpath"
 aovs=(--light-groups --bounces 3 --light-group-aovs
   emission,diffuse,specular,directDiffuse,indirectDiffuse,directSpecular,indirectSpecular,subsurface,transmissive,albedo)
 

@@ -115,6 +115,10 @@ pub struct FarmJob {
     pub output: PathBuf,
     /// Extra `sbatch` options for both jobs (partition, time limit, …).
     pub sbatch_args: Vec<String>,
+    /// `lightpath denoise` options when the merged frame is to be denoised (the render
+    /// options' `--denoise`, `--keep-noisy`, `--denoise-quality`): the parts are rendered
+    /// noisy, merged into `<parts>/merged.exr`, and that is denoised into the output.
+    pub denoise: Option<Vec<String>>,
 }
 
 /// Quotes a word for POSIX shells.
@@ -170,12 +174,40 @@ impl FarmJob {
         cmd
     }
 
-    /// The command merging every part into the output.
+    /// The command merging every part into the output (into `<parts>/merged.exr` when
+    /// the frame is then denoised).
     pub fn merge_command(&self) -> Vec<String> {
         let mut cmd = vec![self.lightpath.display().to_string(), "merge".into()];
         cmd.extend((0..self.parts.len()).map(|i| self.part_path(i).display().to_string()));
-        cmd.extend(["-o".into(), self.output.display().to_string()]);
+        let merged = match self.denoise {
+            Some(_) => self.parts_dir().join("merged.exr"),
+            None => self.output.clone(),
+        };
+        cmd.extend(["-o".into(), merged.display().to_string()]);
         cmd
+    }
+
+    /// The command denoising the merged frame into the output, if asked for.
+    pub fn denoise_command(&self) -> Option<Vec<String>> {
+        let options = self.denoise.as_ref()?;
+        let mut cmd = vec![
+            self.lightpath.display().to_string(),
+            "denoise".into(),
+            self.parts_dir().join("merged.exr").display().to_string(),
+        ];
+        cmd.extend(options.iter().cloned());
+        cmd.extend(["-o".into(), self.output.display().to_string()]);
+        Some(cmd)
+    }
+
+    /// The shell lines that finish the frame: the merge, then the denoise if asked for.
+    fn finish_lines(&self) -> String {
+        let mut s = quote_all(&self.merge_command());
+        if let Some(d) = self.denoise_command() {
+            s.push('\n');
+            s.push_str(&quote_all(&d));
+        }
+        s
     }
 
     fn preamble(&self, what: &str) -> String {
@@ -215,8 +247,8 @@ impl FarmJob {
             "  *) echo \"no part $SLURM_ARRAY_TASK_ID\" >&2; exit 2 ;;\nesac\nLIGHTPATH_PARTS\n)\n",
         );
         s.push_str(&format!(
-            "merge=$(sbatch --parsable{sbatch} --job-name=lightpath-merge --dependency=afterok:\"${{array%%;*}}\" --output=\"$parts/merge.log\" <<'LIGHTPATH_MERGE'\n#!/usr/bin/env bash\nset -euo pipefail\nexec {}\nLIGHTPATH_MERGE\n)\n",
-            quote_all(&self.merge_command())
+            "merge=$(sbatch --parsable{sbatch} --job-name=lightpath-merge --dependency=afterok:\"${{array%%;*}}\" --output=\"$parts/merge.log\" <<'LIGHTPATH_MERGE'\n#!/usr/bin/env bash\nset -euo pipefail\n{}\nLIGHTPATH_MERGE\n)\n",
+            self.finish_lines()
         ));
         s.push_str("echo \"parts: job array $array; merge: job $merge\"\n");
         s
@@ -240,7 +272,7 @@ impl FarmJob {
                 shell_quote(&quote_all(&self.render_command(i)))
             ));
         }
-        s.push_str(&format!("{}\n", quote_all(&self.merge_command())));
+        s.push_str(&format!("{}\n", self.finish_lines()));
         s
     }
 }
@@ -259,6 +291,35 @@ pub fn without_option(args: &[String], name: &str) -> Vec<String> {
         }
     }
     out
+}
+
+/// `args` without the flag `name` (an option that takes no value), however often given.
+pub fn without_flag(args: &[String], name: &str) -> Vec<String> {
+    args.iter().filter(|a| *a != name).cloned().collect()
+}
+
+/// Takes the render options' denoising out of a farm's shared render options: the
+/// parts render noisy and only the merged frame is denoised. Returns the remaining
+/// render options and, when `--denoise` was given, the `lightpath denoise` options
+/// (`--keep-noisy`, `--quality Q`).
+pub fn split_denoise(
+    args: &[String],
+    denoise: bool,
+    keep_noisy: bool,
+    quality: &str,
+) -> (Vec<String>, Option<Vec<String>>) {
+    let mut rest = without_flag(args, "--denoise");
+    rest = without_flag(&rest, "--keep-noisy");
+    rest = without_option(&rest, "--denoise-quality");
+    let options = denoise.then(|| {
+        let mut o = Vec::new();
+        if keep_noisy {
+            o.push("--keep-noisy".to_string());
+        }
+        o.extend(["--quality".to_string(), quality.to_string()]);
+        o
+    });
+    (rest, options)
 }
 
 /// An absolute path (without resolving links), so that jobs run from any directory.
@@ -307,6 +368,47 @@ mod tests {
             without_option(&args, "--spp"),
             ["--aov", "a=C<RD>L", "--half"]
         );
+    }
+
+    #[test]
+    fn denoising_moves_from_the_parts_to_the_merged_frame() {
+        let args: Vec<String> = [
+            "--denoise",
+            "--spp",
+            "64",
+            "--keep-noisy",
+            "--denoise-quality=fast",
+        ]
+        .iter()
+        .map(|s| s.to_string())
+        .collect();
+        let (rest, denoise) = split_denoise(&args, true, true, "fast");
+        assert_eq!(rest, ["--spp", "64"]);
+        let denoise = denoise.unwrap();
+        assert_eq!(denoise, ["--keep-noisy", "--quality", "fast"]);
+        let job = FarmJob {
+            lightpath: "/bin/lightpath".into(),
+            scene: "cornell".into(),
+            render_args: rest,
+            parts: split(SplitBy::Samples, 2, 64, [32, 32]).unwrap(),
+            output: "/out/shot.exr".into(),
+            sbatch_args: Vec::new(),
+            denoise: Some(denoise),
+        };
+        for script in [job.slurm_script(), job.parallel_script(2)] {
+            // No part denoises; the merge writes merged.exr, which is denoised into the
+            // output.
+            assert_eq!(script.matches("--denoise").count(), 0, "{script}");
+            assert!(script.contains("merge /out/shot.parts/part-0000.exr /out/shot.parts/part-0001.exr -o /out/shot.parts/merged.exr\n/bin/lightpath denoise /out/shot.parts/merged.exr --keep-noisy --quality fast -o /out/shot.exr\n"), "{script}");
+        }
+        // Without --denoise nothing changes.
+        let (rest, none) = split_denoise(&job.render_args, false, false, "high");
+        assert_eq!((rest, none), (job.render_args.clone(), None));
+        let plain = FarmJob {
+            denoise: None,
+            ..job
+        };
+        assert!(plain.parallel_script(2).ends_with("-o /out/shot.exr\n"));
     }
 
     #[test]

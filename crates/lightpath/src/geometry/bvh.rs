@@ -1,13 +1,18 @@
 //! The acceleration structure. `obvhs` builds a binary BVH (PLOC, reinsertion, SAH leaf
-//! collapse to at most four primitives per leaf); we flatten it into a 4-wide BVH whose
-//! nodes store their children's boxes as four SIMD lanes and whose leaves store up to four
-//! triangles laid out for a four-at-once ray test.
+//! collapse to a few primitives per leaf); we flatten it into a wide BVH whose nodes store
+//! their children's boxes as SIMD lanes and whose leaves store triangles laid out for an
+//! all-lanes-at-once ray test. The width is chosen at run time ([`Width`]): eight lanes
+//! (AVX) on CPUs with AVX2, four (SSE2, or glam's portable code) elsewhere; the traversal
+//! is one generic function compiled for each (`lanes.rs`).
 //!
 //! Why not obvhs's own CWBVH traversal: its nodes are quantised and decoded byte by byte,
 //! about 250 instructions a node, and its leaves are tested one primitive at a time. On
 //! `cornell-classic` a shadow ray took ~560 instructions; here ~350, with a box test of
 //! ~45 (docs/performance.md).
 
+#[cfg(target_arch = "x86_64")]
+use super::lanes::F8;
+use super::lanes::{Lanes, Mask};
 use super::{Hit, Instance, Prim, Ray};
 use glam::{Vec3A, Vec4};
 use obvhs::aabb::Aabb;
@@ -60,8 +65,53 @@ const PLOC_ALWAYS_BELOW: usize = 4096;
 const SAH_ABOVE: usize = 50_000;
 const SAH_OVERLAP: f32 = 0.02;
 
+/// The lane width of a tree: its nodes' children and its leaves' triangles tested at once.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Width {
+    /// SSE2 on x86-64, glam's portable code elsewhere.
+    Four,
+    /// AVX, on x86-64 CPUs with AVX2 only.
+    Eight,
+}
+
+impl Width {
+    /// The widest this CPU runs: eight lanes where AVX2 is detected, else four.
+    /// `LIGHTPATH_BVH_WIDTH=4` forces four (to compare the two; renders are the same).
+    pub fn detect() -> Width {
+        static WIDTH: std::sync::OnceLock<Width> = std::sync::OnceLock::new();
+        *WIDTH.get_or_init(|| {
+            let forced_four = std::env::var("LIGHTPATH_BVH_WIDTH").is_ok_and(|v| v.trim() == "4");
+            if !forced_four && Width::eight_available() {
+                Width::Eight
+            } else {
+                Width::Four
+            }
+        })
+    }
+
+    /// Whether this CPU can run eight-lane trees.
+    pub fn eight_available() -> bool {
+        #[cfg(target_arch = "x86_64")]
+        {
+            is_x86_feature_detected!("avx2")
+        }
+        #[cfg(not(target_arch = "x86_64"))]
+        {
+            false
+        }
+    }
+
+    /// Most primitives obvhs's SAH collapse puts in a leaf: one leaf packet's lanes.
+    fn leaf_prims(self) -> u32 {
+        match self {
+            Width::Four => 4,
+            Width::Eight => 8,
+        }
+    }
+}
+
 /// A binary tree over `boxes` (obvhs's layout): nodes and primitive order.
-fn build_tree(boxes: &[Bounded]) -> (Vec<Bvh2Node>, Vec<u32>) {
+fn build_tree(boxes: &[Bounded], leaf_prims: u32) -> (Vec<Bvh2Node>, Vec<u32>) {
     let n = boxes.len();
     let use_sah = n > SAH_ABOVE
         || (n >= PLOC_ALWAYS_BELOW && {
@@ -74,30 +124,38 @@ fn build_tree(boxes: &[Bounded]) -> (Vec<Bvh2Node>, Vec<u32>) {
         return super::sah::build(&aabbs);
     }
     let params = BvhBuildParams {
-        max_prims_per_leaf: 4,
+        max_prims_per_leaf: leaf_prims,
         ..BvhBuildParams::slow_build()
     };
     let bvh = build_bvh2(boxes, params, &mut Default::default());
     (bvh.nodes, bvh.primitive_indices)
 }
 
-/// An inner node: up to four children, their boxes one lane each.
+/// An inner node: up to `L::WIDTH` children, their boxes one lane each.
 #[derive(Clone, Copy)]
-struct Node {
+struct Node<L: Lanes> {
     /// min x, min y, min z, max x, max y, max z of each child, lane per child.
-    bounds: [Vec4; 6],
-    child: [u32; 4],
+    bounds: [L; 6],
+    child: L::Refs,
     /// Bit per lane that holds a child.
     lanes: u32,
 }
 
-/// Up to four primitives: triangles as SIMD lanes (vertex and edges), spheres tested one
-/// at a time. A leaf may run over several consecutive packets (`last` ends it).
+impl<L: Lanes> Node<L> {
+    const EMPTY: Self = Node {
+        bounds: [L::ZERO; 6],
+        child: L::ZERO_REFS,
+        lanes: 0,
+    };
+}
+
+/// Up to `L::WIDTH` primitives: triangles as SIMD lanes (vertex and edges), spheres tested
+/// one at a time. A leaf may run over several consecutive packets (`last` ends it).
 #[derive(Clone, Copy)]
-struct Leaf {
-    p0: [Vec4; 3],
-    e1: [Vec4; 3],
-    e2: [Vec4; 3],
+struct Leaf<L: Lanes> {
+    p0: [L; 3],
+    e1: [L; 3],
+    e2: [L; 3],
     /// Slot of lane 0 in the primitive arrays; lane `l` is slot `first + l`.
     first: u32,
     /// For each ray-kind mask (0..8), the lanes holding a triangle that kind of ray sees.
@@ -107,11 +165,24 @@ struct Leaf {
     last: bool,
 }
 
-pub struct Accel {
-    nodes: Vec<Node>,
-    leaves: Vec<Leaf>,
+/// The wide tree of one lane width.
+struct Tree<L: Lanes> {
+    nodes: Vec<Node<L>>,
+    leaves: Vec<Leaf<L>>,
     /// Stack entries the deepest path can need.
     stack_need: usize,
+}
+
+/// An accelerator's tree, at the width chosen when it was built.
+enum Trees {
+    Four(Tree<Vec4>),
+    /// Only made where AVX2 was detected: its traversal runs AVX instructions.
+    #[cfg(target_arch = "x86_64")]
+    Eight(Tree<F8>),
+}
+
+pub struct Accel {
+    tree: Trees,
     prims: Vec<Prim>,
     /// Object id of each primitive, in the same order.
     objects: Vec<u32>,
@@ -127,26 +198,26 @@ pub struct Accel {
 }
 
 /// Per-ray constants of the box and triangle tests.
-struct RayLanes {
-    o: [Vec4; 3],
-    d: [Vec4; 3],
-    inv: [Vec4; 3],
+struct RayLanes<L: Lanes> {
+    o: [L; 3],
+    d: [L; 3],
+    inv: [L; 3],
     /// origin × inverse direction, so a slab distance is `bound * inv - oinv`.
-    oinv: [Vec4; 3],
+    oinv: [L; 3],
     /// Index into `Node::bounds` of the near plane per axis (the far one is 3 away).
     near: [usize; 3],
     tmin: f32,
 }
 
-impl RayLanes {
+impl<L: Lanes> RayLanes<L> {
     #[inline(always)]
-    fn new(ray: &Ray, tmin: f32) -> RayLanes {
+    fn new(ray: &Ray, tmin: f32) -> RayLanes<L> {
         // A zero direction component would make 0 × ∞ = NaN in the slab test.
         let tiny = Vec3A::splat(1e-30);
         let safe = Vec3A::select(ray.dir.abs().cmplt(tiny), tiny.copysign(ray.dir), ray.dir);
         let inv = Vec3A::ONE / safe;
         let oinv = ray.origin * inv;
-        let splat = |v: Vec3A| [Vec4::splat(v.x), Vec4::splat(v.y), Vec4::splat(v.z)];
+        let splat = |v: Vec3A| [L::splat(v.x), L::splat(v.y), L::splat(v.z)];
         let negative = inv.cmplt(Vec3A::ZERO).bitmask() as usize;
         RayLanes {
             o: splat(ray.origin),
@@ -164,7 +235,7 @@ impl RayLanes {
 
     /// Which children's boxes the ray enters before `tmax`, and where.
     #[inline(always)]
-    fn hit_children(&self, node: &Node, tmax: f32) -> (u32, Vec4) {
+    fn hit_children(&self, node: &Node<L>, tmax: f32) -> (u32, L) {
         let b = &node.bounds;
         let [nx, ny, nz] = self.near;
         let tn_x = b[nx] * self.inv[0] - self.oinv[0];
@@ -173,15 +244,15 @@ impl RayLanes {
         let tf_x = b[3 - nx] * self.inv[0] - self.oinv[0];
         let tf_y = b[5 - ny] * self.inv[1] - self.oinv[1];
         let tf_z = b[7 - nz] * self.inv[2] - self.oinv[2];
-        let tnear = tn_x.max(tn_y).max(tn_z.max(Vec4::splat(self.tmin)));
+        let tnear = tn_x.max(tn_y).max(tn_z.max(L::splat(self.tmin)));
         // Widened by a few ulps so rounding never loses a box the ray grazes.
-        let tfar = tf_x.min(tf_y).min(tf_z.min(Vec4::splat(tmax))) * 1.000_000_4;
-        (tnear.cmple(tfar).bitmask() & node.lanes, tnear)
+        let tfar = tf_x.min(tf_y).min(tf_z.min(L::splat(tmax))) * L::splat(1.000_000_4);
+        (tnear.le(tfar).bits() & node.lanes, tnear)
     }
 
-    /// Möller–Trumbore on four triangles: distances and the lanes hit in (tmin, tmax).
+    /// Möller–Trumbore on a packet of triangles: distances and the lanes hit in (tmin, tmax).
     #[inline(always)]
-    fn hit_triangles(&self, leaf: &Leaf, tmax: f32) -> (u32, Vec4) {
+    fn hit_triangles(&self, leaf: &Leaf<L>, tmax: f32) -> (u32, L) {
         let [dx, dy, dz] = self.d;
         let [e1x, e1y, e1z] = leaf.e1;
         let [e2x, e2y, e2z] = leaf.e2;
@@ -189,7 +260,9 @@ impl RayLanes {
         let pvy = dz * e2x - dx * e2z;
         let pvz = dx * e2y - dy * e2x;
         let det = e1x * pvx + e1y * pvy + e1z * pvz;
-        let inv = Vec4::ONE / det;
+        let one = L::splat(1.0);
+        let zero = L::splat(0.0);
+        let inv = one / det;
         let tvx = self.o[0] - leaf.p0[0];
         let tvy = self.o[1] - leaf.p0[1];
         let tvz = self.o[2] - leaf.p0[2];
@@ -199,13 +272,13 @@ impl RayLanes {
         let qvz = tvx * e1y - tvy * e1x;
         let v = (dx * qvx + dy * qvy + dz * qvz) * inv;
         let t = (e2x * qvx + e2y * qvy + e2z * qvz) * inv;
-        let ok = det.abs().cmpge(Vec4::splat(1e-12))
-            & u.cmpge(Vec4::ZERO)
-            & v.cmpge(Vec4::ZERO)
-            & (u + v).cmple(Vec4::ONE)
-            & t.cmpgt(Vec4::splat(self.tmin))
-            & t.cmplt(Vec4::splat(tmax));
-        (ok.bitmask(), t)
+        let ok = det.abs().ge(L::splat(1e-12))
+            & u.ge(zero)
+            & v.ge(zero)
+            & (u + v).le(one)
+            & t.gt(L::splat(self.tmin))
+            & t.lt(L::splat(tmax));
+        (ok.bits(), t)
     }
 }
 
@@ -218,10 +291,29 @@ impl Accel {
         normals: Vec<[Vec3A; 3]>,
         visibility: Vec<u8>,
     ) -> Accel {
+        Accel::build_with(prims, objects, normals, visibility, Width::detect())
+    }
+
+    /// [`build`](Self::build) at a given lane width (eight falls back to four on CPUs
+    /// without AVX2).
+    pub fn build_with(
+        prims: Vec<Prim>,
+        objects: Vec<u32>,
+        normals: Vec<[Vec3A; 3]>,
+        visibility: Vec<u8>,
+        width: Width,
+    ) -> Accel {
+        let width = if Width::eight_available() {
+            width
+        } else {
+            Width::Four
+        };
         let mut accel = Accel {
-            nodes: Vec::new(),
-            leaves: Vec::new(),
-            stack_need: 0,
+            tree: Trees::Four(Tree {
+                nodes: Vec::new(),
+                leaves: Vec::new(),
+                stack_need: 0,
+            }),
             prims: Vec::new(),
             objects: Vec::new(),
             normals,
@@ -293,7 +385,7 @@ impl Accel {
             by_group[fill[g as usize] as usize] = i as u32;
             fill[g as usize] += 1;
         }
-        let (tree, tree_indices) = build_tree(&boxes);
+        let (tree, tree_indices) = build_tree(&boxes, width.leaf_prims());
         // Lay the primitives out in leaf order so leaves address them by range:
         // `slot_start[k]` is the first slot of the k-th box in obvhs's order.
         let mut order = Vec::with_capacity(prims.len());
@@ -314,123 +406,15 @@ impl Accel {
         let visibility: Vec<u8> = order.iter().map(|&i| visibility[i as usize]).collect();
         accel.face_normals = accel.prims.iter().map(Prim::face_normal).collect();
 
-        let root = &tree[0];
-        let depth = if root.is_leaf() {
-            // A lone leaf still goes under a node, so traversal always starts at node 0.
-            accel.nodes.push(Node {
-                bounds: [Vec4::ZERO; 6],
-                child: [0; 4],
-                lanes: 0,
-            });
-            let leaf = accel.add_leaf(&slot_start, root.first_index, root.prim_count, &visibility);
-            accel.nodes[0] = node_of(&[(root.aabb, leaf)]);
-            1
-        } else {
-            accel.add_nodes(&tree, &slot_start, &visibility)
+        accel.tree = match width {
+            #[cfg(target_arch = "x86_64")]
+            Width::Eight => {
+                Trees::Eight(Tree::build(&tree, &slot_start, &accel.prims, &visibility))
+            }
+            _ => Trees::Four(Tree::build(&tree, &slot_start, &accel.prims, &visibility)),
         };
-        accel.stack_need = 3 * depth + 1;
         accel
     }
-
-    /// Flattens the binary tree (its root an inner node) into 4-wide nodes, node 0 its
-    /// root; returns its depth in 4-wide nodes. Iterative: a degenerate input (many
-    /// identical primitives) can make a binary tree thousands of levels deep.
-    fn add_nodes(&mut self, tree: &[Bvh2Node], slot_start: &[u32], visibility: &[u8]) -> usize {
-        let empty = Node {
-            bounds: [Vec4::ZERO; 6],
-            child: [0; 4],
-            lanes: 0,
-        };
-        self.nodes.push(empty);
-        // (binary node, its 4-wide slot, depth of that slot)
-        let mut work = vec![(0usize, 0usize, 1usize)];
-        let mut deepest = 1;
-        while let Some((index, slot, depth)) = work.pop() {
-            deepest = deepest.max(depth);
-            // Open the largest inner grandchildren until there are four children.
-            let first = tree[index].first_index as usize;
-            let mut kids = vec![first, first + 1];
-            while kids.len() < 4 {
-                let widest = kids
-                    .iter()
-                    .enumerate()
-                    .filter(|(_, &k)| !tree[k].is_leaf())
-                    .max_by(|a, b| {
-                        let area = |k: usize| tree[k].aabb.half_area();
-                        area(*a.1).total_cmp(&area(*b.1))
-                    })
-                    .map(|(at, _)| at);
-                let Some(at) = widest else { break };
-                let k = tree[kids[at]].first_index as usize;
-                kids[at] = k;
-                kids.push(k + 1);
-            }
-            let mut children = Vec::with_capacity(4);
-            for &k in &kids {
-                let n = &tree[k];
-                let reference = if n.is_leaf() {
-                    self.add_leaf(slot_start, n.first_index, n.prim_count, visibility)
-                } else {
-                    let at = self.nodes.len();
-                    self.nodes.push(empty);
-                    work.push((k, at, depth + 1));
-                    at as u32
-                };
-                children.push((n.aabb, reference));
-            }
-            self.nodes[slot] = node_of(&children);
-        }
-        deepest
-    }
-
-    /// Packs the primitives of obvhs's boxes `first .. first + count` (with their
-    /// duplicates: slots `slot_start[first] .. slot_start[first + count]`) into leaf
-    /// packets; returns the child reference of the first.
-    fn add_leaf(&mut self, slot_start: &[u32], first: u32, count: u32, visibility: &[u8]) -> u32 {
-        let reference = LEAF | self.leaves.len() as u32;
-        let end = slot_start[(first + count) as usize];
-        let mut start = slot_start[first as usize];
-        while start < end {
-            let mut leaf = Leaf {
-                p0: [Vec4::ZERO; 3],
-                e1: [Vec4::ZERO; 3],
-                e2: [Vec4::ZERO; 3],
-                first: start,
-                triangles: [0; 8],
-                spheres: [0; 8],
-                last: start + 4 >= end,
-            };
-            for lane in 0..(end - start).min(4) as usize {
-                let slot = start as usize + lane;
-                let seen_by = |mask: usize| visibility[slot] as usize & mask != 0;
-                match self.prims[slot] {
-                    Prim::Triangle { p0, e1, e2, .. } => {
-                        for axis in 0..3 {
-                            leaf.p0[axis][lane] = p0[axis];
-                            leaf.e1[axis][lane] = e1[axis];
-                            leaf.e2[axis][lane] = e2[axis];
-                        }
-                        for mask in 0..8 {
-                            if seen_by(mask) {
-                                leaf.triangles[mask] |= 1 << lane;
-                            }
-                        }
-                    }
-                    Prim::Sphere { .. } | Prim::Instance { .. } => {
-                        for mask in 0..8 {
-                            if seen_by(mask) {
-                                leaf.spheres[mask] |= 1 << lane;
-                            }
-                        }
-                    }
-                }
-            }
-            self.leaves.push(leaf);
-            start += 4;
-        }
-        reference
-    }
-
     pub fn prims(&self) -> &[Prim] {
         &self.prims
     }
@@ -476,14 +460,24 @@ impl Accel {
     /// The nearest hit along the ray among primitives visible to rays of kind `mask`.
     #[inline]
     pub fn intersect(&self, ray: &Ray, tmin: f32, mask: u8) -> Option<Hit> {
-        if self.nodes.is_empty() {
+        if self.prims.is_empty() {
             return None;
         }
         let (prim, t, inner) = self.nearest(ray, tmin, mask, &DEEP_CLOSEST);
         (prim != u32::MAX).then(|| self.surface(ray, prim, t, inner))
     }
 
-    /// `closest` on the machine stack, or on `deep` for very deep trees.
+    /// The lane width this accelerator was built with.
+    pub fn width(&self) -> Width {
+        match self.tree {
+            Trees::Four(_) => Width::Four,
+            #[cfg(target_arch = "x86_64")]
+            Trees::Eight(_) => Width::Eight,
+        }
+    }
+
+    /// `closest` in the tree of whatever width, on the machine stack or on `deep` for very
+    /// deep trees.
     #[inline]
     fn nearest(
         &self,
@@ -492,15 +486,54 @@ impl Accel {
         mask: u8,
         deep: &'static DeepStack<(u32, f32)>,
     ) -> (u32, f32, u32) {
-        if self.stack_need <= STACK {
-            self.closest(ray, tmin, mask, &mut Stack::<(u32, f32), STACK>::new())
+        match &self.tree {
+            Trees::Four(tree) => self.nearest_in(tree, ray, tmin, mask, deep),
+            // SAFETY: `Eight` trees are only built where AVX2 was detected.
+            #[cfg(target_arch = "x86_64")]
+            Trees::Eight(tree) => unsafe { self.nearest_avx2(tree, ray, tmin, mask, deep) },
+        }
+    }
+
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2")]
+    fn nearest_avx2(
+        &self,
+        tree: &Tree<F8>,
+        ray: &Ray,
+        tmin: f32,
+        mask: u8,
+        deep: &'static DeepStack<(u32, f32)>,
+    ) -> (u32, f32, u32) {
+        self.nearest_in(tree, ray, tmin, mask, deep)
+    }
+
+    #[inline(always)]
+    fn nearest_in<L: Lanes>(
+        &self,
+        tree: &Tree<L>,
+        ray: &Ray,
+        tmin: f32,
+        mask: u8,
+        deep: &'static DeepStack<(u32, f32)>,
+    ) -> (u32, f32, u32) {
+        if tree.stack_need <= STACK {
+            self.closest(
+                tree,
+                ray,
+                tmin,
+                mask,
+                &mut Stack::<(u32, f32), STACK>::new(),
+            )
         } else {
-            deep.with_borrow_mut(|stack| {
-                if stack.len() < self.stack_need {
-                    stack.resize(self.stack_need, (0, 0.0));
-                }
-                self.closest(ray, tmin, mask, stack)
-            })
+            // Taken out and put back rather than borrowed in a closure: the closure would
+            // be compiled without the AVX2 of the caller.
+            let mut stack = deep.take();
+            if stack.len() < tree.stack_need {
+                stack.resize(tree.stack_need, (0, 0.0));
+            }
+            let found = self.closest(tree, ray, tmin, mask, &mut stack);
+            deep.set(stack);
+            found
         }
     }
 
@@ -522,7 +555,7 @@ impl Accel {
     fn instance_nearest(&self, index: u32, ray: &Ray, tmin: f32, tmax: f32) -> (u32, f32) {
         let (inst, local) = self.local_ray(index, ray, tmax);
         let mesh = &self.meshes[inst.mesh as usize];
-        if mesh.nodes.is_empty() {
+        if mesh.prims.is_empty() {
             return (u32::MAX, f32::INFINITY);
         }
         let (slot, t, _) = mesh.nearest(&local, tmin, Visibility::ALL, &DEEP_CLOSEST_MESH);
@@ -538,20 +571,21 @@ impl Accel {
     fn instance_occluded(&self, index: u32, ray: &Ray, tmin: f32) -> bool {
         let (inst, local) = self.local_ray(index, ray, ray.tmax);
         let mesh = &self.meshes[inst.mesh as usize];
-        !mesh.nodes.is_empty() && mesh.occluded_with(&local, tmin, u32::MAX, &DEEP_ANY_MESH)
+        !mesh.prims.is_empty() && mesh.occluded_with(&local, tmin, u32::MAX, &DEEP_ANY_MESH)
     }
 
     /// Closest-hit traversal, nearest child first; returns (slot, t, the instanced mesh's
     /// slot when the slot is an instance) or (`u32::MAX`, _, _).
     #[inline(always)]
-    fn closest(
+    fn closest<L: Lanes>(
         &self,
+        tree: &Tree<L>,
         ray: &Ray,
         tmin: f32,
         mask: u8,
         stack: &mut impl TraversalStack<(u32, f32)>,
     ) -> (u32, f32, u32) {
-        let r = RayLanes::new(ray, tmin);
+        let r = RayLanes::<L>::new(ray, tmin);
         let mask = (mask & 7) as usize;
         let mut tmax = ray.tmax;
         let mut best = u32::MAX;
@@ -560,16 +594,18 @@ impl Accel {
         let mut current = 0u32;
         loop {
             if current & LEAF == 0 {
-                let node = &self.nodes[current as usize];
+                let node = &tree.nodes[current as usize];
+                let child = node.child.as_ref();
                 let (hits, tnear) = r.hit_children(node, tmax);
                 if hits != 0 {
                     let first = hits.trailing_zeros() as usize;
                     let rest = hits & (hits - 1);
                     if rest == 0 {
-                        current = node.child[first];
+                        current = child[first];
                         continue;
                     }
-                    let tnear = tnear.to_array();
+                    let tnear = tnear.store();
+                    let tnear = tnear.as_ref();
                     if rest & (rest - 1) == 0 {
                         // Two children, the commonest case: visit the nearer first.
                         let second = rest.trailing_zeros() as usize;
@@ -578,19 +614,19 @@ impl Accel {
                         } else {
                             (first, second)
                         };
-                        stack.put(sp, (node.child[far], tnear[far]));
+                        stack.put(sp, (child[far], tnear[far]));
                         sp += 1;
-                        current = node.child[near];
+                        current = child[near];
                         continue;
                     }
-                    // Three or four: visit the nearest, stack the rest far to near.
-                    let mut order = [(0.0f32, 0u32); 4];
+                    // Three or more: visit the nearest, stack the rest far to near.
+                    let mut order = [(0.0f32, 0u32); 8];
                     let mut n = 0;
                     let mut bits = hits;
                     while bits != 0 {
                         let lane = bits.trailing_zeros() as usize;
                         bits &= bits - 1;
-                        let entry = (tnear[lane], node.child[lane]);
+                        let entry = (tnear[lane], child[lane]);
                         // Insertion into descending order.
                         let mut j = n;
                         while j > 0 && order[j - 1].0 < entry.0 {
@@ -610,13 +646,14 @@ impl Accel {
             } else {
                 let mut index = (current & !LEAF) as usize;
                 loop {
-                    let leaf = &self.leaves[index];
+                    let leaf = &tree.leaves[index];
                     let lanes = leaf.triangles[mask] as u32;
                     if lanes != 0 {
                         let (mut hits, t) = r.hit_triangles(leaf, tmax);
                         hits &= lanes;
                         if hits != 0 {
-                            let t = t.to_array();
+                            let t = t.store();
+                            let t = t.as_ref();
                             while hits != 0 {
                                 let lane = hits.trailing_zeros() as usize;
                                 hits &= hits - 1;
@@ -671,13 +708,14 @@ impl Accel {
     /// `ignore` (the light the shadow ray aims at)?
     #[inline]
     pub fn occluded(&self, ray: &Ray, tmin: f32, ignore: u32) -> bool {
-        if self.nodes.is_empty() {
+        if self.prims.is_empty() {
             return false;
         }
         self.occluded_with(ray, tmin, ignore, &DEEP_ANY)
     }
 
-    /// `any_hit` on the machine stack, or on `deep` for very deep trees.
+    /// `any_hit` in the tree of whatever width, on the machine stack or on `deep` for very
+    /// deep trees.
     #[inline]
     fn occluded_with(
         &self,
@@ -686,41 +724,75 @@ impl Accel {
         ignore: u32,
         deep: &'static DeepStack<u32>,
     ) -> bool {
-        if self.stack_need <= STACK {
-            self.any_hit(ray, tmin, ignore, &mut Stack::<u32, STACK>::new())
+        match &self.tree {
+            Trees::Four(tree) => self.occluded_in(tree, ray, tmin, ignore, deep),
+            // SAFETY: `Eight` trees are only built where AVX2 was detected.
+            #[cfg(target_arch = "x86_64")]
+            Trees::Eight(tree) => unsafe { self.occluded_avx2(tree, ray, tmin, ignore, deep) },
+        }
+    }
+
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2")]
+    fn occluded_avx2(
+        &self,
+        tree: &Tree<F8>,
+        ray: &Ray,
+        tmin: f32,
+        ignore: u32,
+        deep: &'static DeepStack<u32>,
+    ) -> bool {
+        self.occluded_in(tree, ray, tmin, ignore, deep)
+    }
+
+    #[inline(always)]
+    fn occluded_in<L: Lanes>(
+        &self,
+        tree: &Tree<L>,
+        ray: &Ray,
+        tmin: f32,
+        ignore: u32,
+        deep: &'static DeepStack<u32>,
+    ) -> bool {
+        if tree.stack_need <= STACK {
+            self.any_hit(tree, ray, tmin, ignore, &mut Stack::<u32, STACK>::new())
         } else {
-            deep.with_borrow_mut(|stack| {
-                if stack.len() < self.stack_need {
-                    stack.resize(self.stack_need, 0);
-                }
-                self.any_hit(ray, tmin, ignore, stack)
-            })
+            // As in `nearest_in`.
+            let mut stack = deep.take();
+            if stack.len() < tree.stack_need {
+                stack.resize(tree.stack_need, 0);
+            }
+            let blocked = self.any_hit(tree, ray, tmin, ignore, &mut stack);
+            deep.set(stack);
+            blocked
         }
     }
 
     /// Any-hit traversal in whatever order is cheapest.
     #[inline(always)]
-    fn any_hit(
+    fn any_hit<L: Lanes>(
         &self,
+        tree: &Tree<L>,
         ray: &Ray,
         tmin: f32,
         ignore: u32,
         stack: &mut impl TraversalStack<u32>,
     ) -> bool {
         const SHADOW: usize = super::Visibility::SHADOW as usize;
-        let r = RayLanes::new(ray, tmin);
+        let r = RayLanes::<L>::new(ray, tmin);
         let tmax = ray.tmax;
         let mut sp = 0;
         let mut current = 0u32;
         loop {
             if current & LEAF == 0 {
-                let node = &self.nodes[current as usize];
+                let node = &tree.nodes[current as usize];
+                let child = node.child.as_ref();
                 let (mut hits, _) = r.hit_children(node, tmax);
                 if hits != 0 {
-                    current = node.child[hits.trailing_zeros() as usize];
+                    current = child[hits.trailing_zeros() as usize];
                     hits &= hits - 1;
                     while hits != 0 {
-                        stack.put(sp, node.child[hits.trailing_zeros() as usize]);
+                        stack.put(sp, child[hits.trailing_zeros() as usize]);
                         sp += 1;
                         hits &= hits - 1;
                     }
@@ -729,7 +801,7 @@ impl Accel {
             } else {
                 let mut index = (current & !LEAF) as usize;
                 loop {
-                    let leaf = &self.leaves[index];
+                    let leaf = &tree.leaves[index];
                     let lanes = leaf.triangles[SHADOW] as u32;
                     if lanes != 0 {
                         let (mut hits, _) = r.hit_triangles(leaf, tmax);
@@ -843,6 +915,154 @@ impl Accel {
     }
 }
 
+impl<L: Lanes> Tree<L> {
+    /// The wide tree over obvhs's binary `tree`, whose boxes' primitives (already laid out
+    /// in leaf order in `prims`) start at `slot_start`.
+    fn build(tree: &[Bvh2Node], slot_start: &[u32], prims: &[Prim], visibility: &[u8]) -> Self {
+        let mut wide = Tree {
+            nodes: Vec::new(),
+            leaves: Vec::new(),
+            stack_need: 0,
+        };
+        let root = &tree[0];
+        let depth = if root.is_leaf() {
+            // A lone leaf still goes under a node, so traversal always starts at node 0.
+            wide.nodes.push(Node::EMPTY);
+            let leaf = wide.add_leaf(
+                slot_start,
+                root.first_index,
+                root.prim_count,
+                prims,
+                visibility,
+            );
+            wide.nodes[0] = node_of(&[(root.aabb, leaf)]);
+            1
+        } else {
+            wide.add_nodes(tree, slot_start, prims, visibility)
+        };
+        // Each node visited stacks all but one of its children.
+        wide.stack_need = (L::WIDTH - 1) * depth + 1;
+        wide
+    }
+
+    /// Flattens the binary tree (its root an inner node) into wide nodes, node 0 its
+    /// root; returns its depth in wide nodes. Iterative: a degenerate input (many
+    /// identical primitives) can make a binary tree thousands of levels deep.
+    fn add_nodes(
+        &mut self,
+        tree: &[Bvh2Node],
+        slot_start: &[u32],
+        prims: &[Prim],
+        visibility: &[u8],
+    ) -> usize {
+        self.nodes.push(Node::EMPTY);
+        // (binary node, its wide slot, depth of that slot)
+        let mut work = vec![(0usize, 0usize, 1usize)];
+        let mut deepest = 1;
+        while let Some((index, slot, depth)) = work.pop() {
+            deepest = deepest.max(depth);
+            // Open the largest inner grandchildren until there are `WIDTH` children.
+            let first = tree[index].first_index as usize;
+            let mut kids = vec![first, first + 1];
+            while kids.len() < L::WIDTH {
+                let widest = kids
+                    .iter()
+                    .enumerate()
+                    .filter(|(_, &k)| !tree[k].is_leaf())
+                    .max_by(|a, b| {
+                        let area = |k: usize| tree[k].aabb.half_area();
+                        area(*a.1).total_cmp(&area(*b.1))
+                    })
+                    .map(|(at, _)| at);
+                let Some(at) = widest else { break };
+                let k = tree[kids[at]].first_index as usize;
+                kids[at] = k;
+                kids.push(k + 1);
+            }
+            let mut children = Vec::with_capacity(L::WIDTH);
+            for &k in &kids {
+                let n = &tree[k];
+                let reference = if n.is_leaf() {
+                    self.add_leaf(slot_start, n.first_index, n.prim_count, prims, visibility)
+                } else {
+                    let at = self.nodes.len();
+                    self.nodes.push(Node::EMPTY);
+                    work.push((k, at, depth + 1));
+                    at as u32
+                };
+                children.push((n.aabb, reference));
+            }
+            self.nodes[slot] = node_of(&children);
+        }
+        deepest
+    }
+
+    /// Packs the primitives of obvhs's boxes `first .. first + count` (with their
+    /// duplicates: slots `slot_start[first] .. slot_start[first + count]`) into leaf
+    /// packets; returns the child reference of the first.
+    fn add_leaf(
+        &mut self,
+        slot_start: &[u32],
+        first: u32,
+        count: u32,
+        prims: &[Prim],
+        visibility: &[u8],
+    ) -> u32 {
+        let width = L::WIDTH as u32;
+        let reference = LEAF | self.leaves.len() as u32;
+        let end = slot_start[(first + count) as usize];
+        let mut start = slot_start[first as usize];
+        while start < end {
+            let mut p0 = [L::ZERO_FLOATS; 3];
+            let mut e1 = [L::ZERO_FLOATS; 3];
+            let mut e2 = [L::ZERO_FLOATS; 3];
+            let mut triangles = [0u8; 8];
+            let mut spheres = [0u8; 8];
+            for lane in 0..(end - start).min(width) as usize {
+                let slot = start as usize + lane;
+                let seen_by = |mask: usize| visibility[slot] as usize & mask != 0;
+                match prims[slot] {
+                    Prim::Triangle {
+                        p0: q0,
+                        e1: f1,
+                        e2: f2,
+                        ..
+                    } => {
+                        for axis in 0..3 {
+                            p0[axis].as_mut()[lane] = q0[axis];
+                            e1[axis].as_mut()[lane] = f1[axis];
+                            e2[axis].as_mut()[lane] = f2[axis];
+                        }
+                        for (mask, lanes) in triangles.iter_mut().enumerate() {
+                            if seen_by(mask) {
+                                *lanes |= 1 << lane;
+                            }
+                        }
+                    }
+                    Prim::Sphere { .. } | Prim::Instance { .. } => {
+                        for (mask, lanes) in spheres.iter_mut().enumerate() {
+                            if seen_by(mask) {
+                                *lanes |= 1 << lane;
+                            }
+                        }
+                    }
+                }
+            }
+            self.leaves.push(Leaf {
+                p0: p0.map(|a| L::load(&a)),
+                e1: e1.map(|a| L::load(&a)),
+                e2: e2.map(|a| L::load(&a)),
+                first: start,
+                triangles,
+                spheres,
+                last: start + width >= end,
+            });
+            start += width;
+        }
+        reference
+    }
+}
+
 /// Storage for a traversal stack: entries are written with `put` before `take` reads them.
 trait TraversalStack<T: Copy> {
     fn put(&mut self, at: usize, value: T);
@@ -893,28 +1113,63 @@ impl<T: Copy, const N: usize> TraversalStack<T> for Stack<T, N> {
     }
 }
 
-/// A 4-wide node over `children` (one to four boxes with their references).
-fn node_of(children: &[(Aabb, u32)]) -> Node {
-    let mut node = Node {
-        bounds: [Vec4::ZERO; 6],
-        child: [0; 4],
-        lanes: 0,
-    };
+/// A wide node over `children` (one to `L::WIDTH` boxes with their references).
+fn node_of<L: Lanes>(children: &[(Aabb, u32)]) -> Node<L> {
+    let mut bounds = [L::ZERO_FLOATS; 6];
+    let mut child = L::ZERO_REFS;
+    let mut lanes = 0;
     for (lane, (aabb, reference)) in children.iter().enumerate() {
         for axis in 0..3 {
-            node.bounds[axis][lane] = aabb.min[axis];
-            node.bounds[axis + 3][lane] = aabb.max[axis];
+            bounds[axis].as_mut()[lane] = aabb.min[axis];
+            bounds[axis + 3].as_mut()[lane] = aabb.max[axis];
         }
-        node.child[lane] = *reference;
-        node.lanes |= 1 << lane;
+        child.as_mut()[lane] = *reference;
+        lanes |= 1 << lane;
     }
-    node
+    Node {
+        bounds: bounds.map(|a| L::load(&a)),
+        child,
+        lanes,
+    }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
     use crate::sampling::{uniform_sphere, Rng};
+
+    /// Both widths: where AVX2 is missing `Eight` builds the four-lane tree, so the
+    /// portable code is what both runs test there.
+    const WIDTHS: [Width; 2] = [Width::Four, Width::Eight];
+
+    impl Accel {
+        /// Wide nodes and leaf packets.
+        fn counts(&self) -> (usize, usize) {
+            match &self.tree {
+                Trees::Four(t) => (t.nodes.len(), t.leaves.len()),
+                #[cfg(target_arch = "x86_64")]
+                Trees::Eight(t) => (t.nodes.len(), t.leaves.len()),
+            }
+        }
+    }
+
+    #[test]
+    fn eight_lanes_where_the_cpu_has_avx2() {
+        let tri = Prim::Triangle {
+            p0: Vec3A::ZERO,
+            e1: Vec3A::X,
+            e2: Vec3A::Y,
+            normals: u32::MAX,
+        };
+        let build = |w| Accel::build_with(vec![tri], vec![0], Vec::new(), vec![7], w).width();
+        assert_eq!(build(Width::Four), Width::Four);
+        let eight = if Width::eight_available() {
+            Width::Eight
+        } else {
+            Width::Four
+        };
+        assert_eq!(build(Width::Eight), eight);
+    }
 
     /// A ray from a random point of the cube of side `side` around the origin, in a
     /// uniform direction, half of them infinite and half `finite` long.
@@ -971,13 +1226,17 @@ mod tests {
     #[test]
     fn traversal_matches_brute_force() {
         let mut rng = Rng::for_sample(7, 8, 9);
-        for n in [1, 3, 4, 5, 17, 300, 2000] {
+        for (n, width) in [1, 3, 4, 5, 9, 17, 300, 2000]
+            .into_iter()
+            .flat_map(|n| WIDTHS.map(|w| (n, w)))
+        {
             let (prims, objects, visibility) = soup(n, &mut rng);
-            let accel = Accel::build(
+            let accel = Accel::build_with(
                 prims.clone(),
                 objects.clone(),
                 Vec::new(),
                 visibility.clone(),
+                width,
             );
             for _ in 0..400 {
                 let ray = random_ray(&mut rng, 3.0, 1.0);
@@ -1024,9 +1283,21 @@ mod tests {
             radius: 1.0,
         });
         let objects: Vec<u32> = (0..=n as u32).collect();
-        let accel = Accel::build(prims, objects, Vec::new(), vec![7; n + 1]);
-        assert_eq!(accel.nodes.len(), 1);
-        assert_eq!(accel.leaves.len(), n / 4 + 1);
+        for width in WIDTHS {
+            let accel = Accel::build_with(
+                prims.clone(),
+                objects.clone(),
+                Vec::new(),
+                vec![7; n + 1],
+                width,
+            );
+            let lanes = if accel.width() == Width::Eight { 8 } else { 4 };
+            assert_eq!(accel.counts(), (1, n / lanes + 1));
+            identical_primitives_answer(&accel, n);
+        }
+    }
+
+    fn identical_primitives_answer(accel: &Accel, n: usize) {
         let ray = Ray {
             origin: Vec3A::new(0.2, 0.2, 1.0),
             dir: -Vec3A::Z,
@@ -1046,7 +1317,31 @@ mod tests {
     fn heap_stack_traverses_like_the_fixed_one() {
         let mut rng = Rng::for_sample(4, 5, 6);
         let (prims, objects, visibility) = soup(3000, &mut rng);
-        let accel = Accel::build(prims, objects, Vec::new(), visibility);
+        for width in WIDTHS {
+            let accel = Accel::build_with(
+                prims.clone(),
+                objects.clone(),
+                Vec::new(),
+                visibility.clone(),
+                width,
+            );
+            match &accel.tree {
+                Trees::Four(tree) => heap_stack_answers(&accel, tree, &mut rng),
+                // SAFETY: built only where AVX2 was detected.
+                #[cfg(target_arch = "x86_64")]
+                Trees::Eight(tree) => unsafe { heap_stack_answers_avx2(&accel, tree, &mut rng) },
+            }
+        }
+    }
+
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2")]
+    fn heap_stack_answers_avx2(accel: &Accel, tree: &Tree<F8>, rng: &mut Rng) {
+        heap_stack_answers(accel, tree, rng)
+    }
+
+    #[inline(always)]
+    fn heap_stack_answers<L: Lanes>(accel: &Accel, tree: &Tree<L>, rng: &mut Rng) {
         for _ in 0..500 {
             let ray = Ray {
                 origin: Vec3A::new(rng.next_f32(), rng.next_f32(), rng.next_f32())
@@ -1054,11 +1349,12 @@ mod tests {
                 dir: uniform_sphere(rng.next_2d()),
                 tmax: f32::INFINITY,
             };
-            let fixed = accel.closest(&ray, 0.0, 7, &mut Stack::<(u32, f32), STACK>::new());
-            let heap = accel.closest(&ray, 0.0, 7, &mut vec![(0, 0.0); accel.stack_need]);
+            let need = tree.stack_need;
+            let fixed = accel.closest(tree, &ray, 0.0, 7, &mut Stack::<(u32, f32), STACK>::new());
+            let heap = accel.closest(tree, &ray, 0.0, 7, &mut vec![(0, 0.0); need]);
             assert_eq!(fixed, heap);
-            let fixed = accel.any_hit(&ray, 0.0, 2, &mut Stack::<u32, STACK>::new());
-            let heap = accel.any_hit(&ray, 0.0, 2, &mut vec![0; accel.stack_need]);
+            let fixed = accel.any_hit(tree, &ray, 0.0, 2, &mut Stack::<u32, STACK>::new());
+            let heap = accel.any_hit(tree, &ray, 0.0, 2, &mut vec![0; need]);
             assert_eq!(fixed, heap);
         }
     }
@@ -1070,10 +1366,19 @@ mod tests {
         let mut rng = Rng::for_sample(9, 8, 7);
         let fan = crate::geometry::shapes::disk(&glam::Affine3A::IDENTITY, 6000).prims;
         let (soup, _, _) = soup(SAH_ABOVE + 1, &mut rng);
-        for prims in [fan, soup] {
+        for (prims, width) in [fan, soup]
+            .into_iter()
+            .flat_map(|p| WIDTHS.map(|w| (p.clone(), w)))
+        {
             let n = prims.len();
             let objects: Vec<u32> = (0..n as u32).map(|i| i % 3).collect();
-            let accel = Accel::build(prims.clone(), objects.clone(), Vec::new(), vec![7; n]);
+            let accel = Accel::build_with(
+                prims.clone(),
+                objects.clone(),
+                Vec::new(),
+                vec![7; n],
+                width,
+            );
             for _ in 0..300 {
                 let origin = Vec3A::new(rng.next_f32(), rng.next_f32(), rng.next_f32()) * 3.0
                     - Vec3A::splat(1.5);

@@ -1,9 +1,11 @@
 //! Primitives (triangles and spheres) and the acceleration structure behind a small
-//! `intersect` / `occluded` seam; `obvhs` builds the BVH, `bvh` lays it out 4 wide.
+//! `intersect` / `occluded` seam; `obvhs` builds the BVH, `bvh` lays it out 4 or 8 wide
+//! (`lanes`: SSE2 or, where the CPU has AVX2, AVX).
 
 pub mod attrs;
 mod bvh;
 mod instance;
+mod lanes;
 mod sah;
 pub mod shapes;
 

@@ -170,8 +170,11 @@ impl Builder {
             nodes.push(b[0]);
             let base_a = nodes.len();
             let base_b = base_a + a.len() - 1;
-            for (sub, base) in [(&a, base_a), (&b, base_b)] {
-                nodes[first + (base != base_a) as usize] = relocated(&sub[0], base);
+            // By position, not by comparing bases: they are equal when the first half is
+            // a lone leaf (a.len() == 1), and the second root then overwrote the first
+            // and stayed unrelocated (a cycle back to the top of the tree).
+            for (k, (sub, base)) in [(&a, base_a), (&b, base_b)].into_iter().enumerate() {
+                nodes[first + k] = relocated(&sub[0], base);
                 nodes.extend(sub[1..].iter().map(|node| relocated(node, base)));
             }
         } else {
@@ -304,5 +307,28 @@ mod tests {
                 .collect();
             check(&boxes);
         }
+    }
+
+    /// A split of a range large enough to build its halves in parallel whose first half
+    /// is a single leaf: a few boxes far from many (a big mesh in a room of large walls).
+    #[test]
+    fn a_lone_leaf_beside_a_parallel_half() {
+        let mut rng = Rng::for_sample(8, 9, 10);
+        let mut boxes: Vec<Aabb> = (0..3)
+            .map(|i| {
+                let p = Vec3A::new(-100.0, i as f32, 0.0);
+                Aabb::new(p, p + Vec3A::ONE)
+            })
+            .collect();
+        boxes.extend((0..2 * PARALLEL_SPLIT).map(|_| {
+            let p = Vec3A::new(rng.next_f32(), rng.next_f32(), rng.next_f32());
+            Aabb::new(p, p + Vec3A::splat(0.01))
+        }));
+        // Two workers even on a one-core machine, so the halves are built in parallel.
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(2)
+            .build()
+            .unwrap();
+        pool.install(|| check(&boxes));
     }
 }

@@ -1,6 +1,6 @@
 //! Direct light with multiple importance sampling: light samples at each scattering
-//! vertex (every non-delta lobe through its own event, then `L`), lights found by BSDF
-//! rays with the complementary weight, and the lights-only test that `unoccluded` and
+//! vertex (every non-delta lobe through its own event, then `L`, or a glow's `O`), lights
+//! and sampled glows found by BSDF rays with the complementary weight, and the lights-only test that `unoccluded` and
 //! `shadows` AOVs see. The one power heuristic of the renderer lives here (DESIGN.md).
 
 use super::path::{PathState, Vertex};
@@ -134,6 +134,7 @@ impl Tracer<'_> {
         let wi = v.sh.frame.to_local(ls.wi);
         let l_class = scene.light_classes[li].0;
         let part = scene.light_parts[li];
+        let glow = li as u32 >= scene.first_glow_light;
         let light_pdf = select_pmf * ls.pdf;
         // The shadow ray is traced once, and only if some lobe's contribution counts.
         let mut visible: Option<bool> = None;
@@ -172,8 +173,14 @@ impl Tracer<'_> {
                         light.shadow_exempt(),
                     )
             });
+            let via = match (glow, vis) {
+                // A glow is no light: what cannot reach it is no shadow.
+                (true, false) => continue,
+                (true, true) => Via::Glow,
+                (false, visible) => Via::LightSample { visible },
+            };
             let origin = Origin {
-                via: Via::LightSample { visible: vis },
+                via,
                 scatters: path.depth + 1,
                 part,
             };
@@ -191,7 +198,8 @@ impl Tracer<'_> {
             .mesh_lights
             .intersect(ray, 0.0, Visibility::ALL)
             .map(|h| (h.object as usize, h.t, h.ng));
-        for (li, light) in self.scene.lights.iter().enumerate() {
+        let declared = &self.scene.lights[..self.scene.first_glow_light as usize];
+        for (li, light) in declared.iter().enumerate() {
             match &light.shape {
                 LightShape::Triangles { mesh: true, .. } => {}
                 LightShape::Triangles { prims, normals, .. } => {

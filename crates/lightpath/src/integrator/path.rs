@@ -155,7 +155,7 @@ impl Tracer<'_> {
     }
 
     /// Emission arriving along the ray at `hit`: a light's surface, or a glowing object
-    /// that is not a light (`O`, no MIS: nothing samples it).
+    /// that is not a light (`O`, weighted against light sampling when that samples it).
     fn emission_at_hit(
         &self,
         out: &mut Sink,
@@ -176,16 +176,17 @@ impl Tracer<'_> {
         } else if let Some(glow) = obj.glow_class {
             let s = scene.automaton.step(path.state, glow);
             let emission = obj.emission * self.glow_texture(obj, hit, ray.dir, path.cone_width);
-            let via = Via::Hit {
-                light_sampled: false,
-                light_after_scatter: false,
-            };
+            let weight = obj.glow_light.map_or(1.0, |li| {
+                self.bsdf_weight(path, li, |light| {
+                    light.pdf_hit(path.prev_p, ray.dir, hit.t, hit.ng)
+                })
+            });
             let origin = Origin {
-                via,
+                via: Via::Glow,
                 scatters: path.depth,
                 part: self.default_part,
             };
-            self.contribute(out, s, path.throughput, emission, 1.0, origin);
+            self.contribute(out, s, path.throughput, emission, weight, origin);
         }
     }
 

@@ -25,6 +25,10 @@ pub(super) enum Via {
     LightsOnly { occluded: bool },
     /// A user (data) lobe.
     Data,
+    /// A glowing surface's emission (`O`, not a light: no shadows to speak of), found by
+    /// a ray or by a light sample that reached it, with its MIS weight: plain and
+    /// `unoccluded` AOVs take it, `shadows` AOVs do not.
+    Glow,
 }
 
 impl Via {
@@ -51,8 +55,9 @@ impl Via {
         Via::LightsOnly { occluded: false },
         Via::LightsOnly { occluded: true },
         Via::Data,
+        Via::Glow,
     ];
-    const COUNT: usize = 9;
+    const COUNT: usize = 10;
 
     #[inline(always)]
     fn index(self) -> usize {
@@ -64,6 +69,7 @@ impl Via {
             Via::LightSample { visible } => 4 + visible as usize,
             Via::LightsOnly { occluded } => 6 + occluded as usize,
             Via::Data => 8,
+            Via::Glow => 9,
         }
     }
 }
@@ -114,6 +120,15 @@ pub(super) fn take(unoccluded: bool, shadows: bool, via: Via) -> Take {
             }
         }
         Via::Data => Take::Whole,
+        // As a glow seen by a ray was before glows were light-sampled (always `Whole`
+        // then, now split between the two strategies by their weights).
+        Via::Glow => {
+            if shadows {
+                Take::Skip
+            } else {
+                Take::Weighted
+            }
+        }
     }
 }
 
@@ -203,7 +218,7 @@ impl Tracer<'_> {
         // Data (`overwrite`) AOVs take emission as its colour, no channel above 1: an
         // emitter's albedo is its base colour, not its radiance.
         let data_scale = match origin.via {
-            Via::Hit { .. } => 1.0 / local.max_element().max(1.0),
+            Via::Hit { .. } | Via::Glow => 1.0 / local.max_element().max(1.0),
             _ => 1.0,
         };
         for rule in rules {
@@ -288,5 +303,8 @@ mod tests {
         assert_eq!(take(false, true, lights_only(true)), Take::Weighted);
         assert_eq!(take(false, true, lights_only(false)), Take::Skip);
         assert_eq!(take(false, false, Via::Data), Take::Whole);
+        assert_eq!(take(false, false, Via::Glow), Take::Weighted);
+        assert_eq!(take(true, false, Via::Glow), Take::Weighted);
+        assert_eq!(take(false, true, Via::Glow), Take::Skip);
     }
 }

@@ -240,77 +240,8 @@ pub fn merge(inputs: &[PathBuf], output: &Path) -> Result<Merged, String> {
     for p in &parts[1..] {
         same_frame(&parts[0], p)?;
     }
-    // Group by window: each group holds sample ranges of one tile.
-    let mut groups: Vec<(PixelWindow, Vec<&Part>)> = Vec::new();
-    for p in &parts {
-        match groups.iter_mut().find(|g| g.0 == p.window) {
-            Some(g) => g.1.push(p),
-            None => groups.push((p.window, vec![p])),
-        }
-    }
-    let mut tile_ranges = Vec::new();
-    for (_, members) in &groups {
-        let mut held: Vec<((u64, u64), &Part)> = Vec::new();
-        for p in members {
-            for &r in &p.ranges {
-                if let Some((o, q)) = held.iter().find(|(o, _)| r.0 < o.1 && o.0 < r.1) {
-                    return Err(format!(
-                        "{} holds samples {}-{} and {} holds {}-{}: they overlap, so those samples would count twice",
-                        q.name(),
-                        o.0,
-                        o.1,
-                        p.name(),
-                        r.0,
-                        r.1
-                    ));
-                }
-                held.push((r, p));
-            }
-        }
-        let mut ranges: Vec<(u64, u64)> = held.iter().map(|h| h.0).collect();
-        ranges.sort();
-        tile_ranges.push(ranges);
-    }
-    for (i, a) in groups.iter().enumerate() {
-        for (j, b) in groups.iter().enumerate().skip(i + 1) {
-            if overlaps(&a.0, &b.0) {
-                return Err(format!(
-                    "{} covers pixels {} and {} covers {}: tiles may not overlap",
-                    a.1[0].name(),
-                    a.0,
-                    b.1[0].name(),
-                    b.0
-                ));
-            }
-            if tile_ranges[i] != tile_ranges[j] {
-                return Err(format!(
-                    "tile {} holds samples {} but tile {} holds {}: tiles of one frame need the same samples",
-                    a.0,
-                    format_ranges(&tile_ranges[i]),
-                    b.0,
-                    format_ranges(&tile_ranges[j])
-                ));
-            }
-        }
-    }
-    let window = groups.iter().skip(1).fold(groups[0].0, |u, g| PixelWindow {
-        x0: u.x0.min(g.0.x0),
-        y0: u.y0.min(g.0.y0),
-        x1: u.x1.max(g.0.x1),
-        y1: u.y1.max(g.0.y1),
-    });
-    let covered: u64 = groups
-        .iter()
-        .map(|g| g.0.width() as u64 * g.0.height() as u64)
-        .sum();
-    let area = window.width() as u64 * window.height() as u64;
-    if covered != area {
-        return Err(format!(
-            "the tiles leave {} of the {} pixels of window {window} uncovered",
-            area - covered,
-            area
-        ));
-    }
+    let (groups, tile_ranges) = group_tiles(&parts)?;
+    let window = check_tiles(&groups, &tile_ranges)?;
 
     let first = &parts[0];
     let layers = cryptomatte::layers_in(
@@ -363,6 +294,97 @@ pub fn merge(inputs: &[PathBuf], output: &Path) -> Result<Merged, String> {
         window,
         tiles: groups.len(),
     })
+}
+
+/// Parts by the window they cover: each entry holds the sample ranges of one tile.
+type Tiles<'a> = Vec<(PixelWindow, Vec<&'a Part>)>;
+
+/// Sample ranges, sorted: `(first, end)` each, end exclusive.
+type Ranges = Vec<(u64, u64)>;
+
+/// The parts grouped by window (each group: the sample ranges of one tile), with each
+/// tile's ranges sorted; overlapping ranges within a tile are an error.
+fn group_tiles(parts: &[Part]) -> Result<(Tiles<'_>, Vec<Ranges>), String> {
+    let mut groups: Tiles = Vec::new();
+    for p in parts {
+        match groups.iter_mut().find(|g| g.0 == p.window) {
+            Some(g) => g.1.push(p),
+            None => groups.push((p.window, vec![p])),
+        }
+    }
+    let mut tile_ranges = Vec::new();
+    for (_, members) in &groups {
+        let mut held: Vec<((u64, u64), &Part)> = Vec::new();
+        for p in members {
+            for &r in &p.ranges {
+                if let Some((o, q)) = held.iter().find(|(o, _)| r.0 < o.1 && o.0 < r.1) {
+                    return Err(format!(
+                        "{} holds samples {}-{} and {} holds {}-{}: they overlap, so those samples would count twice",
+                        q.name(),
+                        o.0,
+                        o.1,
+                        p.name(),
+                        r.0,
+                        r.1
+                    ));
+                }
+                held.push((r, p));
+            }
+        }
+        let mut ranges: Vec<(u64, u64)> = held.iter().map(|h| h.0).collect();
+        ranges.sort();
+        tile_ranges.push(ranges);
+    }
+    Ok((groups, tile_ranges))
+}
+
+/// The window the tiles make up together: an error if two overlap, hold different
+/// samples, or leave a pixel of it uncovered.
+fn check_tiles(
+    groups: &[(PixelWindow, Vec<&'_ Part>)],
+    tile_ranges: &[Ranges],
+) -> Result<PixelWindow, String> {
+    for (i, a) in groups.iter().enumerate() {
+        for (j, b) in groups.iter().enumerate().skip(i + 1) {
+            if overlaps(&a.0, &b.0) {
+                return Err(format!(
+                    "{} covers pixels {} and {} covers {}: tiles may not overlap",
+                    a.1[0].name(),
+                    a.0,
+                    b.1[0].name(),
+                    b.0
+                ));
+            }
+            if tile_ranges[i] != tile_ranges[j] {
+                return Err(format!(
+                    "tile {} holds samples {} but tile {} holds {}: tiles of one frame need the same samples",
+                    a.0,
+                    format_ranges(&tile_ranges[i]),
+                    b.0,
+                    format_ranges(&tile_ranges[j])
+                ));
+            }
+        }
+    }
+    let window = groups.iter().skip(1).fold(groups[0].0, |u, g| PixelWindow {
+        x0: u.x0.min(g.0.x0),
+        y0: u.y0.min(g.0.y0),
+        x1: u.x1.max(g.0.x1),
+        y1: u.y1.max(g.0.y1),
+    });
+    let covered: u64 = groups
+        .iter()
+        .map(|g| g.0.width() as u64 * g.0.height() as u64)
+        .sum();
+    let area = window.width() as u64 * window.height() as u64;
+    if covered != area {
+        return Err(format!(
+            "the tiles leave {} of the {} pixels of window {window} uncovered",
+            area - covered,
+            area
+        ));
+    }
+    Ok(window)
 }
 
 /// Merges the sample ranges of one tile, reading one part at a time; the first tile's
@@ -444,25 +466,55 @@ fn merge_tile(
                 }
             }
         }
-        for (names, acc) in matte_channels.iter().zip(&mut mattes) {
-            let planes: Vec<&[f32]> = names
-                .iter()
-                .map(|c| exr.channel(c).unwrap_or(&[]))
-                .collect();
-            let stride = names.len();
-            let mut pairs = vec![0.0f32; stride];
-            let mut merged = vec![0.0f32; stride];
-            for px in 0..n {
-                for (k, p) in planes.iter().enumerate() {
-                    pairs[k] = p.get(px).copied().unwrap_or(0.0);
-                }
-                let here = &mut acc[px * stride..(px + 1) * stride];
-                // Coverage scaled by the part's weight; normalised once all are in.
-                cryptomatte::merge_ranked(&[(&*here, 1.0), (&pairs, weights[px])], &mut merged);
-                here.copy_from_slice(&merged);
+        add_mattes(&exr, &matte_channels, &weights, &mut mattes);
+    }
+    Ok(finish_tile(
+        sums,
+        &squares,
+        &weight_sum,
+        &matte_channels,
+        &mattes,
+    ))
+}
+
+/// Adds one part's Cryptomatte pairs to the tile's ranked pairs, each pixel's coverage
+/// weighted by its samples (normalised by [`finish_tile`]).
+fn add_mattes(
+    exr: &crate::output::ExrContents,
+    matte_channels: &[Vec<String>],
+    weights: &[f64],
+    mattes: &mut [Vec<f32>],
+) {
+    let n = exr.width * exr.height;
+    for (names, acc) in matte_channels.iter().zip(mattes.iter_mut()) {
+        let planes: Vec<&[f32]> = names
+            .iter()
+            .map(|c| exr.channel(c).unwrap_or(&[]))
+            .collect();
+        let stride = names.len();
+        let mut pairs = vec![0.0f32; stride];
+        let mut merged = vec![0.0f32; stride];
+        for px in 0..n {
+            for (k, p) in planes.iter().enumerate() {
+                pairs[k] = p.get(px).copied().unwrap_or(0.0);
             }
+            let here = &mut acc[px * stride..(px + 1) * stride];
+            // Coverage scaled by the part's weight; normalised once all are in.
+            cryptomatte::merge_ranked(&[(&*here, 1.0), (&pairs, weights[px])], &mut merged);
+            here.copy_from_slice(&merged);
         }
     }
+}
+
+/// The tile's channels from the weighted sums: means, the sample counts as they are,
+/// variances of the merged means, and the Cryptomatte pairs normalised.
+fn finish_tile(
+    sums: BTreeMap<String, Vec<f64>>,
+    squares: &BTreeMap<(String, String), Vec<f64>>,
+    weight_sum: &[f64],
+    matte_channels: &[Vec<String>],
+    mattes: &[Vec<f32>],
+) -> BTreeMap<String, Vec<f32>> {
     // Variances are not averages: the variance of the merged mean, from every sample's
     // sum of squares and the merged sum.
     let variances: Vec<((String, String), Vec<f32>)> = squares
@@ -472,7 +524,7 @@ fn merge_tile(
             let values = sq
                 .iter()
                 .zip(sum)
-                .zip(&weight_sum)
+                .zip(weight_sum)
                 .map(|((q, s), n)| {
                     if *n < 2.0 {
                         0.0
@@ -491,7 +543,7 @@ fn merge_tile(
                 s.into_iter().map(|v| v as f32).collect()
             } else {
                 s.iter()
-                    .zip(&weight_sum)
+                    .zip(weight_sum)
                     .map(|(v, w)| if *w > 0.0 { (v / w) as f32 } else { 0.0 })
                     .collect()
             };
@@ -501,7 +553,7 @@ fn merge_tile(
     for ((var, _), values) in variances {
         out.insert(var, values);
     }
-    for (names, acc) in matte_channels.iter().zip(&mattes) {
+    for (names, acc) in matte_channels.iter().zip(mattes) {
         let stride = names.len();
         let mut planes = vec![vec![0.0f32; weight_sum.len()]; stride];
         for (px, w) in weight_sum.iter().enumerate() {
@@ -513,7 +565,7 @@ fn merge_tile(
         }
         out.extend(names.iter().cloned().zip(planes));
     }
-    Ok(out)
+    out
 }
 
 /// Adds one part's sums of squared samples to `squares`, for each of its variance

@@ -49,6 +49,8 @@ pub struct Object {
     pub data_lobes: Vec<(DataLobe, ClassId)>,
     /// Class of this object's `O` event, if it glows.
     pub glow_class: Option<ClassId>,
+    /// The light that samples this glowing object (`build/glows.rs`), if any.
+    pub glow_light: Option<u32>,
 }
 
 #[derive(Clone, Debug)]
@@ -94,8 +96,11 @@ pub struct Scene {
     pub mesh_lights: Accel,
     pub objects: Vec<Object>,
     pub materials: Vec<Material>,
+    /// Declared lights, then from `first_glow_light` on the glowing objects that light
+    /// sampling also picks (`build/glows.rs`).
     pub lights: Vec<Light>,
-    /// Class of each light's `L` and `O` events.
+    pub first_glow_light: u32,
+    /// Class of each light's `L` and `O` events (a glow's: its object's `O`, twice).
     pub light_classes: Vec<(ClassId, ClassId)>,
     pub light_select: crate::light::select::LightSelector,
     /// Lights reached by rays that escape the scene.

@@ -3,6 +3,7 @@
 
 pub mod camera;
 pub mod geometry;
+pub mod glows;
 pub mod lights;
 pub mod materials;
 
@@ -31,6 +32,15 @@ impl Scene {
         lights::locate_prims(&mut lights, &light_prims, &accel);
         let mesh_lights = lights::mesh_surfaces(&mut lights, &desc.lights, &object_prims, &accel)?;
         lights::link(&desc.lights, &mut objects);
+        let first_glow_light = lights.len();
+        glows::add(
+            &mut lights,
+            &mut objects,
+            &materials,
+            &desc.objects,
+            &object_prims,
+            &accel,
+        );
         let (scene_radius, epsilon) = geometry::scene_size(&accel);
         let light_select = LightSelector::build(
             desc.render.light_selection,
@@ -39,9 +49,16 @@ impl Scene {
             scene_radius,
         );
 
-        let vocabulary = Vocabulary::of_scene(&objects, &materials, &lights);
+        // Glows' events are their objects' (`O`), not a light's.
+        let declared = &lights[..first_glow_light];
+        let vocabulary = Vocabulary::of_scene(&objects, &materials, declared);
         let automaton = compile_aovs(desc, aovs, &vocabulary)?;
-        let classes = vocabulary.classify(&automaton, &mut objects, lights.len());
+        let mut classes = vocabulary.classify(&automaton, &mut objects, first_glow_light);
+        for l in &lights[first_glow_light..] {
+            let object = &objects[l.object.expect("a glow has its object") as usize];
+            let glow = object.glow_class.expect("a glowing object has its O class");
+            classes.lights.push((glow, glow));
+        }
 
         let camera = camera::camera(desc)?;
         let (light_groups, light_parts) = lights::groups(&lights);
@@ -58,6 +75,7 @@ impl Scene {
             materials,
             light_classes: classes.lights,
             light_select,
+            first_glow_light: first_glow_light as u32,
             escape_lights: lights::escape_lights(&lights),
             lights,
             camera,
@@ -90,6 +108,7 @@ fn new_object(name: String, groups: Vec<String>) -> Object {
         lobe_classes: Vec::new(),
         data_lobes: Vec::new(),
         glow_class: None,
+        glow_light: None,
     }
 }
 
