@@ -54,10 +54,23 @@ const FILM_SIZE: f32 = 512.0;
 /// file was named, for an error opening it.
 pub fn load_scene(path: &Path, at: &Origin) -> Result<SceneDesc, SceneError> {
     let file = path.display().to_string();
-    let bytes =
-        std::fs::read(path).map_err(|e| at.error(format!("cannot read glTF file {file}: {e}")))?;
+    // Within the input-size limit, and never a device or pipe (limits.rs).
+    let bytes = crate::limits::read_input(path)
+        .map_err(|e| at.error(format!("cannot read glTF file {file}: {e}")))?;
     let dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
-    Loader::new(&file, dir, &bytes)?.scene()
+    // The checks above the `gltf` crate cover the panics its readers were found to have
+    // (tests/mutation.rs); a panic still left in it becomes an error naming the file.
+    let load = std::panic::catch_unwind(|| Loader::new(&file, dir, &bytes)?.scene());
+    load.unwrap_or_else(|panic| {
+        let why = panic
+            .downcast_ref::<&str>()
+            .map(|s| s.to_string())
+            .or_else(|| panic.downcast_ref::<String>().cloned())
+            .unwrap_or_default();
+        Err(at.error(format!(
+            "{file}: the glTF reader failed on malformed data ({why})"
+        )))
+    })
 }
 
 /// Decoded file and what the walk collects.

@@ -1,0 +1,15 @@
+//! A PLY file (ASCII or binary) through the loader and the scene build: any input may
+//! fail, none may panic.
+#![no_main]
+use libfuzzer_sys::fuzz_target;
+
+fuzz_target!(|data: &[u8]| {
+    let path = std::env::temp_dir().join(format!("lightpath-fuzz-{}.ply", std::process::id()));
+    if std::fs::write(&path, data).is_err() {
+        return;
+    }
+    if let Ok(desc) = lightpath::load_scene(&path.display().to_string()) {
+        let specs = vec![lightpath::aov::AovSpec::new("beauty", "lpe:beauty")];
+        let _ = lightpath::Scene::build(&desc, &specs);
+    }
+});
