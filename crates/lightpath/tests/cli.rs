@@ -4,6 +4,9 @@ use serde_json::Value;
 use std::io::Write;
 use std::process::{Command, Stdio};
 
+mod common;
+use common::Scratch;
+
 fn lightpath() -> Command {
     Command::new(env!("CARGO_BIN_EXE_lightpath"))
 }
@@ -24,26 +27,6 @@ fn refuse(cmd: &mut Command) -> String {
     let out = cmd.output().unwrap();
     assert!(!out.status.success());
     String::from_utf8(out.stderr).unwrap()
-}
-
-/// A scratch folder for one test, removed when the test ends, passing or not.
-struct Scratch(std::path::PathBuf);
-
-impl Scratch {
-    fn new(tag: &str) -> Scratch {
-        let dir = std::env::temp_dir().join(format!("lightpath-{tag}-{}", std::process::id()));
-        std::fs::create_dir_all(&dir).unwrap();
-        Scratch(dir)
-    }
-    fn join(&self, name: &str) -> std::path::PathBuf {
-        self.0.join(name)
-    }
-}
-
-impl Drop for Scratch {
-    fn drop(&mut self) {
-        let _ = std::fs::remove_dir_all(&self.0);
-    }
 }
 
 #[test]

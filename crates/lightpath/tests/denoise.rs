@@ -6,25 +6,8 @@ use lightpath::job::RenderJob;
 use lightpath::output::read_exr;
 use lightpath::progress::Silent;
 
-/// A scratch folder for one test, removed when the test ends, passing or not.
-struct Scratch(std::path::PathBuf);
-
-impl Scratch {
-    fn new(tag: &str) -> Scratch {
-        let dir = std::env::temp_dir().join(format!("lightpath-dn-{tag}-{}", std::process::id()));
-        std::fs::create_dir_all(&dir).unwrap();
-        Scratch(dir)
-    }
-    fn join(&self, name: &str) -> std::path::PathBuf {
-        self.0.join(name)
-    }
-}
-
-impl Drop for Scratch {
-    fn drop(&mut self) {
-        let _ = std::fs::remove_dir_all(&self.0);
-    }
-}
+mod common;
+use common::Scratch;
 
 /// Renders `cornell-classic` at `res`² and `spp` with the standard AOVs, light groups
 /// and the given variances.
@@ -114,7 +97,7 @@ fn variance_channels_estimate_the_spread_of_pixel_means() {
     // beauty: its light-edge pixels are 0 or 18 per sample, and at 4 spp the estimate of
     // such a binomial spread is itself too noisy to compare.)
     use lightpath::sampler::SamplerKind;
-    let dir = Scratch::new("var");
+    let dir = Scratch::new("dn-var");
     let aovs = ["directDiffuse", "indirectDiffuse"];
     let independent = estimated_and_observed(&dir, SamplerKind::Independent, &aovs);
     for (aov, (estimated, observed)) in aovs.iter().zip(independent) {
@@ -140,7 +123,7 @@ fn variance_channels_estimate_the_spread_of_pixel_means() {
 
 #[test]
 fn normal_depth_and_albedo_are_denoiser_ready() {
-    let dir = Scratch::new("aux");
+    let dir = Scratch::new("dn-aux");
     let path = dir.join("aux.exr");
     render(&path, 32, 4, 1, &[]);
     let exr = read_exr(&path).unwrap();
@@ -181,7 +164,7 @@ fn normal_depth_and_albedo_are_denoiser_ready() {
 
 #[test]
 fn merged_sample_ranges_carry_the_variance_of_the_whole() {
-    let dir = Scratch::new("varmerge");
+    let dir = Scratch::new("dn-varmerge");
     let part = |first: u32, path: &std::path::Path| {
         let mut job = RenderJob::new("cornell-classic");
         job.output = Some(path.to_path_buf());
@@ -252,7 +235,7 @@ mod filtered {
     /// denoiser that did nothing would give 1×, and 16× the samples 0.25×).
     #[test]
     fn denoised_16_spp_cornell_classic_is_closer_to_the_reference() {
-        let dir = Scratch::new("classic");
+        let dir = Scratch::new("dn-classic");
         let (noisy, out) = (dir.join("n.exr"), dir.join("d.exr"));
         let mut job = RenderJob::new("cornell-classic");
         job.output = Some(noisy.clone());
@@ -303,7 +286,7 @@ mod filtered {
 
     #[test]
     fn denoising_cuts_the_error_and_keeps_every_partition() {
-        let dir = Scratch::new("oidn");
+        let dir = Scratch::new("dn-oidn");
         let (noisy, clean, out) = (dir.join("n.exr"), dir.join("c.exr"), dir.join("d.exr"));
         render(&noisy, 48, 16, 7, &[]);
         // The reference: 32× the samples, so its own error is under a fifth of the

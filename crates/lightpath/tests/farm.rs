@@ -5,6 +5,9 @@ use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
+mod common;
+use common::Scratch;
+
 fn lightpath() -> Command {
     Command::new(env!("CARGO_BIN_EXE_lightpath"))
 }
@@ -23,25 +26,6 @@ fn refuse(cmd: &mut Command) -> String {
     let out = cmd.output().unwrap();
     assert!(!out.status.success(), "should have failed");
     String::from_utf8(out.stderr).unwrap()
-}
-
-struct Scratch(PathBuf);
-
-impl Scratch {
-    fn new(tag: &str) -> Scratch {
-        let dir = std::env::temp_dir().join(format!("lightpath-farm-{tag}-{}", std::process::id()));
-        std::fs::create_dir_all(&dir).unwrap();
-        Scratch(dir)
-    }
-    fn join(&self, name: &str) -> PathBuf {
-        self.0.join(name)
-    }
-}
-
-impl Drop for Scratch {
-    fn drop(&mut self) {
-        let _ = std::fs::remove_dir_all(&self.0);
-    }
 }
 
 fn render(scene: &str, out: &Path, args: &[&str]) {
@@ -106,7 +90,7 @@ impl Raw {
 
 #[test]
 fn identical_renders_are_identical_files_and_the_header_explains_them() {
-    let dir = Scratch::new("meta");
+    let dir = Scratch::new("farm-meta");
     let args = ["--spp", "2", "--resolution", "8x6", "--cryptomatte"];
     render("cornell", &dir.join("a.exr"), &args);
     render("cornell", &dir.join("b.exr"), &args);
@@ -364,7 +348,7 @@ fn render_matte_scene(dir: &Scratch, out: &str, extra: &[&str]) -> Raw {
 
 #[test]
 fn cryptomatte_decoded_independently_matches_per_object_lpe_masks() {
-    let dir = Scratch::new("crypto");
+    let dir = Scratch::new("farm-crypto");
     let raw = render_matte_scene(&dir, "m.exr", &[]);
     let alpha = raw.channel("A");
     let tol = 1e-6;
@@ -417,7 +401,7 @@ fn cryptomatte_decoded_independently_matches_per_object_lpe_masks() {
 
 #[test]
 fn tiles_and_sample_ranges_merge_into_the_whole_frame() {
-    let dir = Scratch::new("tiles");
+    let dir = Scratch::new("farm-tiles");
     let whole = render_matte_scene(&dir, "whole.exr", &[]);
     // Tiles of different shapes: exactly the whole frame, mattes included.
     let tiles = ["0,0,7,5", "7,0,20,5", "0,5,20,14"];
@@ -505,7 +489,7 @@ fn tiles_and_sample_ranges_merge_into_the_whole_frame() {
 
 #[test]
 fn merges_that_should_fail_fail_naming_the_reason() {
-    let dir = Scratch::new("refuse");
+    let dir = Scratch::new("farm-refuse");
     let base = ["--spp", "2", "--resolution", "8x8", "--aovs", "none"];
     let part = |name: &str, extra: &[&str]| {
         render("cornell", &dir.join(name), &[&base[..], extra].concat());
@@ -591,7 +575,7 @@ fn the_slurm_script_runs_the_parts_and_the_merge_through_sbatch() {
     // A stand-in `sbatch` that runs each submitted script at once, as every array task,
     // checking the merge's dependency names the array: the script's own logic is tested,
     // the real Slurm run is benches/farm/slurm-local.sh.
-    let dir = Scratch::new("slurm");
+    let dir = Scratch::new("farm-slurm");
     let bin = dir.join("bin");
     std::fs::create_dir_all(&bin).unwrap();
     let fake = r#"#!/usr/bin/env bash

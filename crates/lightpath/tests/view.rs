@@ -9,27 +9,10 @@ use lightpath::view::{self, Viewer};
 use serde_json::Value;
 use std::io::{Read, Write};
 use std::net::{SocketAddr, TcpStream};
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
-/// A scratch folder for one test, removed when the test ends, passing or not.
-struct Scratch(PathBuf);
-
-impl Scratch {
-    fn new(tag: &str) -> Scratch {
-        let dir = std::env::temp_dir().join(format!("lightpath-view-{tag}-{}", std::process::id()));
-        std::fs::create_dir_all(&dir).unwrap();
-        Scratch(dir)
-    }
-    fn join(&self, name: &str) -> PathBuf {
-        self.0.join(name)
-    }
-}
-
-impl Drop for Scratch {
-    fn drop(&mut self) {
-        let _ = std::fs::remove_dir_all(&self.0);
-    }
-}
+mod common;
+use common::Scratch;
 
 const W: usize = 6;
 const H: usize = 4;
@@ -183,7 +166,7 @@ fn serve(path: &Path) -> Viewer {
 
 #[test]
 fn info_lists_every_aov_with_partitions_mixers_cryptomatte_and_noisy_twins() {
-    let dir = Scratch::new("info");
+    let dir = Scratch::new("view-info");
     let exr = dir.join("synthetic.exr");
     synthetic(&exr);
     let viewer = serve(&exr);
@@ -234,7 +217,7 @@ fn info_lists_every_aov_with_partitions_mixers_cryptomatte_and_noisy_twins() {
 
 #[test]
 fn images_are_the_aovs_as_half_floats_and_thumbnails_their_box_averages() {
-    let dir = Scratch::new("images");
+    let dir = Scratch::new("view-images");
     let exr = dir.join("synthetic.exr");
     synthetic(&exr);
     let viewer = serve(&exr);
@@ -268,7 +251,7 @@ fn images_are_the_aovs_as_half_floats_and_thumbnails_their_box_averages() {
 
 #[test]
 fn a_pixel_shows_every_aov_and_the_object_under_it_and_its_matte() {
-    let dir = Scratch::new("pixel");
+    let dir = Scratch::new("view-pixel");
     let exr = dir.join("synthetic.exr");
     synthetic(&exr);
     let viewer = serve(&exr);
@@ -314,7 +297,7 @@ fn a_pixel_shows_every_aov_and_the_object_under_it_and_its_matte() {
 
 #[test]
 fn save_comp_writes_what_its_command_line_writes() {
-    let dir = Scratch::new("comp");
+    let dir = Scratch::new("view-comp");
     let exr = dir.join("synthetic.exr");
     synthetic(&exr);
     let viewer = serve(&exr);
@@ -360,7 +343,7 @@ fn save_comp_writes_what_its_command_line_writes() {
 
 #[test]
 fn bad_requests_are_refused_with_a_reason_and_the_server_keeps_answering() {
-    let dir = Scratch::new("refuse");
+    let dir = Scratch::new("view-refuse");
     let exr = dir.join("synthetic.exr");
     synthetic(&exr);
     let viewer = serve(&exr);
@@ -422,7 +405,7 @@ fn bad_requests_are_refused_with_a_reason_and_the_server_keeps_answering() {
 
 #[test]
 fn a_live_preview_ends_with_exactly_the_written_render() {
-    let dir = Scratch::new("live");
+    let dir = Scratch::new("view-live");
     let mut job = lightpath::RenderJob::new("cornell");
     job.overrides.resolution = Some([20, 36]);
     job.overrides.spp = Some(2);
@@ -468,7 +451,7 @@ fn a_live_preview_ends_with_exactly_the_written_render() {
 
 #[test]
 fn the_view_command_prints_its_url_and_stops_cleanly_on_ctrl_c() {
-    let dir = Scratch::new("cmd");
+    let dir = Scratch::new("view-cmd");
     let exr = dir.join("synthetic.exr");
     synthetic(&exr);
     let mut child = std::process::Command::new(env!("CARGO_BIN_EXE_lightpath"))
@@ -505,7 +488,7 @@ fn the_view_command_prints_its_url_and_stops_cleanly_on_ctrl_c() {
 
 #[test]
 fn view_refuses_a_file_that_is_not_an_exr() {
-    let dir = Scratch::new("bad");
+    let dir = Scratch::new("view-bad");
     let bad = dir.join("bad.exr");
     std::fs::write(&bad, b"not an exr").unwrap();
     let out = std::process::Command::new(env!("CARGO_BIN_EXE_lightpath"))
