@@ -183,6 +183,19 @@ fn check_primitive_types(json: &gltf::json::Root) -> Result<(), String> {
                 }
             }
             for (semantic, a) in &prim.attributes {
+                // gltf-json 1.4's validator indexes a POSITION accessor before it checks
+                // the index: an index out of range is reported here first.
+                if a.value() >= json.accessors.len() {
+                    let name = match semantic {
+                        Checked::Valid(s) => s.to_string(),
+                        Checked::Invalid => "?".into(),
+                    };
+                    return Err(format!(
+                        "{at}/attributes/{name}: accessor {} does not exist (the file has {})",
+                        a.value(),
+                        json.accessors.len()
+                    ));
+                }
                 let Checked::Valid(semantic) = semantic else {
                     continue;
                 };
@@ -258,27 +271,7 @@ impl Loader {
                 ));
             }
         }
-        // gltf-json 1.4's validator indexes a primitive's POSITION accessor before it
-        // checks the index (it panics on an index out of range): checked here first.
         let json = document.as_json();
-        for (m, mesh) in json.meshes.iter().enumerate() {
-            for (p, prim) in mesh.primitives.iter().enumerate() {
-                for (semantic, accessor) in &prim.attributes {
-                    if accessor.value() >= json.accessors.len() {
-                        let name = match semantic {
-                            gltf::json::validation::Checked::Valid(s) => s.to_string(),
-                            gltf::json::validation::Checked::Invalid => "?".into(),
-                        };
-                        return Err(at.error(format!(
-                            "/meshes/{m}/primitives/{p}/attributes/{name}: accessor {} does \
-                             not exist (the file has {})",
-                            accessor.value(),
-                            json.accessors.len()
-                        )));
-                    }
-                }
-            }
-        }
         check_accessor_bounds(json).map_err(|e| at.error(e))?;
         // The crate's validation (index ranges, accessor types) with its JSON paths.
         if let Err(gltf::Error::Validation(errors)) = gltf::Gltf::from_slice(bytes) {
