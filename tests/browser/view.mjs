@@ -166,7 +166,33 @@ async function mixerArithmetic(page, label) {
   changed = after.filter((a, i) => a.slice(0, 3).some((v, c) => Math.abs(v - before[i][c]) > 2)).length;
   check(worst <= 1, `${label}: ${n} pixels equal base + (gain − 1)·part within half-float and 8-bit rounding (worst ${worst.toFixed(2)} of the tolerance)`);
   check(changed > 0, `${label}: moving the sliders changed the picture`);
+  const screen = await onScreen(page);
+  check(screen.worst <= 2, `${label}: the screen shows the drawn picture (${screen.n} pixels of a screenshot, worst difference ${screen.worst} of 255)`);
   return settings;
+}
+
+// Compares what the browser puts on screen over the large view (a screenshot through
+// the DevTools protocol, decoded by the page) with the pixels the renderer drew: an
+// element painted over the view, or a view the compositor never shows, fails it.
+async function onScreen(page) {
+  const [x, y, w, h] = await evaluate(page, `(() => { const r = document.getElementById('view').getBoundingClientRect(); return [r.left + scrollX, r.top + scrollY, r.width, r.height]; })()`);
+  const { data } = await page('Page.captureScreenshot', { format: 'png', clip: { x, y, width: w, height: h, scale: 1 } });
+  return evaluate(page, `(async () => {
+    const view = document.getElementById('view');
+    const shot = await createImageBitmap(await (await fetch('data:image/png;base64,${data}')).blob());
+    const c = document.createElement('canvas'); c.width = shot.width; c.height = shot.height;
+    const ctx = c.getContext('2d'); ctx.drawImage(shot, 0, 0);
+    const px = ctx.getImageData(0, 0, c.width, c.height).data;
+    let worst = shot.width === view.width && shot.height === view.height ? 0 : 255, n = 0;
+    for (let y = 1; y < Math.min(c.height, view.height); y += 4) {
+      for (let x = 1; x < Math.min(c.width, view.width); x += 4) {
+        const drawn = lpv.readPixel(x, y), i = 4 * (y * c.width + x);
+        for (let k = 0; k < 3; k++) worst = Math.max(worst, Math.abs(px[i + k] - drawn[k]));
+        n++;
+      }
+    }
+    return { worst, n };
+  })()`);
 }
 
 async function main() {
