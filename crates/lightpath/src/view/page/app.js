@@ -51,17 +51,18 @@ function image(name, width) {
 
 // ---------- the display transform (the shader below does the same) ----------
 const srgb = (v) => (v <= 0.0031308 ? 12.92 * v : 1.055 * Math.pow(v, 1 / 2.4) - 0.055);
+// Allocates nothing: it runs for every pixel of every thumbnail (and of the CPU view).
+const encode = (v) => {
+  const x = Math.min(Math.max(v, 0), 1);
+  return Math.round((lpv.view.srgb ? srgb(x) : x) * 255);
+};
 function display(r, g, b, out, o) {
   const k = 2 ** lpv.view.exposure;
   r *= k; g *= k; b *= k;
   const c = lpv.view.channel;
   if (c === 'r') g = b = r; else if (c === 'g') r = b = g; else if (c === 'b') r = g = b;
   else if (c === 'lum') r = g = b = 0.2126 * r + 0.7152 * g + 0.0722 * b;
-  for (const [i, v] of [[0, r], [1, g], [2, b]]) {
-    let x = Math.min(Math.max(v, 0), 1);
-    if (lpv.view.srgb) x = srgb(x);
-    out[o + i] = Math.round(x * 255);
-  }
+  out[o] = encode(r); out[o + 1] = encode(g); out[o + 2] = encode(b);
   out[o + 3] = 255;
 }
 
@@ -70,7 +71,8 @@ function display(r, g, b, out, o) {
 // (never enlarged), with as many pixels as it is shown with (`reduce`, on the GPU) or
 // the image's own. Returns the canvas's pixel size; `.size` keeps the image's.
 function fit(canvas, w, h, reduce) {
-  const room = $('viewer').clientWidth - 24, tall = 0.62 * window.innerHeight;
+  // The viewer's width less its padding and room for a scroll bar that may appear.
+  const room = $('viewer').clientWidth - 40, tall = 0.62 * window.innerHeight;
   const s = Math.min(1, room / w, tall / h);
   canvas.style.width = `${w * s}px`; canvas.style.height = `${h * s}px`;
   const k = reduce ? Math.min(1, s * (window.devicePixelRatio || 1)) : 1;
@@ -336,6 +338,7 @@ function buildMixer() {
 }
 
 function mixChanged() {
+  $('command').textContent = ''; // the saved comp's command line no longer matches the view
   if (lpv.view.name !== lpv.mixer.base || lpv.view.noisy) { lpv.view.noisy = false; $('noisy').checked = false; select(lpv.mixer.base); return; }
   drawView();
 }
@@ -405,7 +408,9 @@ async function inspect(xy) {
 
 async function pick(xy) {
   if (!lpv.info.cryptomatte.length) return;
-  const layer = isCrypto(lpv.view.name) ? lpv.view.name : lpv.info.cryptomatte[0].name;
+  // The layer shown, else objects (CryptoObject) before materials and assets.
+  const layers = lpv.info.cryptomatte;
+  const layer = isCrypto(lpv.view.name) ? lpv.view.name : (layers.find((l) => /object/i.test(l.name)) || layers[0]).name;
   const p = await getJSON(`/api/pixel?x=${xy[0]}&y=${xy[1]}`);
   const o = p.cryptomatte.find((c) => c.layer === layer);
   const overlay = $('matte');
@@ -498,7 +503,7 @@ async function main() {
   $('noisy').addEventListener('change', () => { lpv.view.noisy = $('noisy').checked; drawView(); redrawThumbs(); });
   $('save-comp').addEventListener('click', saveComp);
   window.addEventListener('resize', () => drawView());
-  $('reset').addEventListener('click', () => { for (const g of lpv.mixer.groups) { g.gain = 1; g.tint = '#ffffff'; } buildMixer(); drawView(); });
+  $('reset').addEventListener('click', () => { for (const g of lpv.mixer.groups) { g.gain = 1; g.tint = '#ffffff'; } buildMixer(); mixChanged(); });
   canvas.addEventListener('mousemove', (ev) => { const xy = imageXY(ev); if (xy) inspect(xy); });
   canvas.addEventListener('click', (ev) => { const xy = imageXY(ev); if (xy) pick(xy).catch((e) => setStatus(e.message, true)); });
   lpv.readPixel = (x, y) => lpv.renderer.readPixel(x, y);
