@@ -10,6 +10,11 @@
 #
 # Needs: pip install numpy OpenEXR
 # Usage: benches/sampling/many_lights.sh NEW_LIGHTPATH OLD_LIGHTPATH [SEEDS]
+#   SPP=64  samples per pixel for both builds (default 16).
+#   NEW_ARGS="--spp 256 --min-spp 16 --noise-threshold 0.3"  renders the new build with
+#   these sampling flags instead of --spp $SPP (adaptive sampling).
+# Efficiency is only spp-independent for independent samples (MSE ~ 1/n): Sobol points'
+# MSE falls faster, so the new build's efficiency grows with SPP; compare at equal SPP.
 set -euo pipefail
 here="$(cd "$(dirname "$0")" && pwd)"
 root="$(cd "$here/../.." && pwd)"
@@ -21,7 +26,9 @@ seeds="${3:-3}"
 scene="$root/scenes/many-lights.toml"
 hidden="$out/many-lights-hidden-lamps.toml"
 sed 's/^groups = \["lamps"\]$/groups = ["lamps"]\ncamera_visible = false/' "$scene" > "$hidden"
-common=(--spp 16 --resolution 128x128 --threads 1 --quiet)
+common=(--resolution 128x128 --threads 1 --quiet)
+spp_both="${SPP:-16}"
+read -r -a new_args <<< "${NEW_ARGS:---spp $spp_both}"
 # Builds from before issue 11 have no clamps (nor the flag); later ones are unclamped
 # unless a scene asks, and this one does not: the flag only makes sure.
 clamp_off() { if "$1" render --help | grep -q -- --clamp-indirect; then echo --clamp-indirect 0; fi; }
@@ -35,10 +42,11 @@ for variant in visible hidden; do
   for build in new old; do
     bin="$new"; [ "$build" = old ] && bin="$old"
     read -r -a clamp <<< "$(clamp_off "$bin")"
+    spp=(--spp "$spp_both"); [ "$build" = new ] && spp=("${new_args[@]}")
     for seed in $(seq 1 "$seeds"); do
       img="$out/many_${variant}_${build}_$seed.exr"
       user=$( { /usr/bin/time -f "%U" "$bin" render "$file" --aovs none --aov "seen=CO" \
-        "${common[@]}" ${clamp[@]+"${clamp[@]}"} --seed "$seed" -o "$img" >/dev/null; } 2>&1 | tail -1)
+        "${common[@]}" "${spp[@]}" ${clamp[@]+"${clamp[@]}"} --seed "$seed" -o "$img" >/dev/null; } 2>&1 | tail -1)
       echo "$variant $build $seed $user $img"
     done
   done

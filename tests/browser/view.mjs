@@ -9,7 +9,10 @@
 //   - the pixel inspector shows every AOV;
 //   - "Save comp" writes the same file as the `lightpath comp` command line it shows.
 // Usage: node tests/browser/view.mjs
-//        node tests/browser/view.mjs --perf FILE.exr [--screenshots DIR]   (timings, pictures)
+//        node tests/browser/view.mjs --perf FILE.exr                (timings on a file)
+//        node tests/browser/view.mjs --screenshots DIR [--exr FILE]  (docs/aovs.md's pictures:
+//          view-overview.png, view-mixer.png, view-inspector.png; without --exr it renders
+//          the built-in cornell with light groups and Cryptomatte, 640x480 at --spp N, 64)
 // Env: LIGHTPATH (the binary, default target/debug/lightpath), CHROMIUM (/usr/bin/chromium).
 import { spawn, execFileSync } from 'node:child_process';
 import fs from 'node:fs';
@@ -117,10 +120,16 @@ async function load(page, url) {
   if (error) throw new Error(`the page failed: ${error}`);
 }
 
-async function screenshot(page, name) {
-  if (!shots) return;
-  const { data } = await page('Page.captureScreenshot', { format: 'png' });
-  fs.writeFileSync(path.join(shots, name), Buffer.from(data, 'base64'));
+// Writes a picture of the page (or of `clip`, in page pixels) to DIR/name, reduced to
+// 256 dithered colours when Python's PIL is there (a quarter of the size; the docs' are).
+async function screenshot(page, name, clip) {
+  const { data } = await page('Page.captureScreenshot', { format: 'png', ...(clip ? { clip: { ...clip, scale: 1 } } : {}) });
+  const file = path.join(shots, name);
+  fs.writeFileSync(file, Buffer.from(data, 'base64'));
+  const quantize = 'import sys; from PIL import Image; Image.open(sys.argv[1]).convert("RGB").quantize(256, Image.Quantize.FASTOCTREE).save(sys.argv[1], optimize=True)';
+  let how = 'as chromium wrote it (no PIL)';
+  try { execFileSync('python3', ['-c', quantize, file], { stdio: 'ignore' }); how = '256 dithered colours'; } catch { /* kept as is */ }
+  console.log(`wrote ${file} (${how}, ${fs.statSync(file).size} bytes)`);
 }
 
 // Moves sliders and tints through the page's controls, then compares displayed pixels
@@ -166,11 +175,38 @@ async function mixerArithmetic(page, label) {
   changed = after.filter((a, i) => a.slice(0, 3).some((v, c) => Math.abs(v - before[i][c]) > 2)).length;
   check(worst <= 1, `${label}: ${n} pixels equal base + (gain − 1)·part within half-float and 8-bit rounding (worst ${worst.toFixed(2)} of the tolerance)`);
   check(changed > 0, `${label}: moving the sliders changed the picture`);
+  const screen = await onScreen(page);
+  check(screen.worst <= 2, `${label}: the screen shows the drawn picture (${screen.n} pixels of a screenshot, worst difference ${screen.worst} of 255)`);
   return settings;
+}
+
+// Compares what the browser puts on screen over the large view (a screenshot through
+// the DevTools protocol, decoded by the page) with the pixels the renderer drew: an
+// element painted over the view, or a view the compositor never shows, fails it.
+async function onScreen(page) {
+  const [x, y, w, h] = await evaluate(page, `(() => { const r = document.getElementById('view').getBoundingClientRect(); return [r.left + scrollX, r.top + scrollY, r.width, r.height]; })()`);
+  const { data } = await page('Page.captureScreenshot', { format: 'png', clip: { x, y, width: w, height: h, scale: 1 } });
+  return evaluate(page, `(async () => {
+    const view = document.getElementById('view');
+    const shot = await createImageBitmap(await (await fetch('data:image/png;base64,${data}')).blob());
+    const c = document.createElement('canvas'); c.width = shot.width; c.height = shot.height;
+    const ctx = c.getContext('2d'); ctx.drawImage(shot, 0, 0);
+    const px = ctx.getImageData(0, 0, c.width, c.height).data;
+    let worst = shot.width === view.width && shot.height === view.height ? 0 : 255, n = 0;
+    for (let y = 1; y < Math.min(c.height, view.height); y += 4) {
+      for (let x = 1; x < Math.min(c.width, view.width); x += 4) {
+        const drawn = lpv.readPixel(x, y), i = 4 * (y * c.width + x);
+        for (let k = 0; k < 3; k++) worst = Math.max(worst, Math.abs(px[i + k] - drawn[k]));
+        n++;
+      }
+    }
+    return { worst, n };
+  })()`);
 }
 
 async function main() {
   if (perf) return measure(perf);
+  if (shots) return pictures(shots);
   const shot = path.join(tmp, 'shot.exr');
   execFileSync(bin, ['render', 'cornell', '--resolution', '64x48', '--spp', '4', '--light-groups', '--bounces', '1', '--quiet', '-o', shot]);
   const listing = execFileSync(bin, ['aovs', shot]).toString().split('\n');
@@ -228,33 +264,65 @@ async function measure(file) {
   const wall = Date.now() - t0;
   const t = await evaluate(page, 'lpv.timings');
   const n = await evaluate(page, `document.querySelectorAll('.card').length`);
-  console.log(`page: info ${t.info.toFixed(0)} ms, beauty ${t.beauty.toFixed(0)} ms, all ${n} thumbnails ${t.thumbnails.toFixed(0)} ms (navigation to ready ${wall} ms)`);
+  console.log(`page, from the navigation: script ${t.script.toFixed(0)} ms, info ${t.info.toFixed(0)} ms, beauty ${t.beauty.toFixed(0)} ms (fetch ${t.view.fetch.toFixed(0)}, draw ${t.view.draw.toFixed(0)}), all ${n} thumbnails ${t.thumbnails.toFixed(0)} ms (${wall} ms seen from here)`);
   const names = await evaluate(page, `[...document.querySelectorAll('.card[data-aov]')].map((e) => e.dataset.aov).slice(1, 6)`);
   for (const name of names) {
-    const ms = await evaluate(page, `(async () => { const t = performance.now(); document.querySelector('.card[data-aov="${name}"]').click(); await lpv.idle(); return performance.now() - t; })()`);
-    console.log(`click ${name}: drawn at full size in ${ms.toFixed(0)} ms`);
+    // Reading a pixel back waits for the GPU to finish the draw.
+    const [ms, v] = await evaluate(page, `(async () => { const t = performance.now(); document.querySelector('.card[data-aov="${name}"]').click(); await lpv.idle(); lpv.readPixel(0, 0); return [performance.now() - t, lpv.timings.view]; })()`);
+    console.log(`click ${name}: drawn at full size in ${ms.toFixed(0)} ms (fetch ${v.fetch.toFixed(0)}, upload and draw ${(ms - v.fetch - v.parts).toFixed(0)})`);
   }
-  if (shots) {
-    // The documentation's pictures: the file as it opens, then relit.
-    await evaluate(page, `document.querySelector('.card[data-aov="' + lpv.info.beauty + '"]').click()`);
-    await evaluate(page, 'lpv.idle()');
-    await screenshot(page, 'view.png');
-    const groups = await evaluate(page, `lpv.mixer.groups.map((g) => g.arg)`);
-    const pickGroup = (name, i) => (groups.includes(name) ? name : groups[i]);
-    const moves = [[pickGroup('key', 0), 0.3, '#ffffff'], [pickGroup('fill', 1), 3, '#ffb060']];
-    for (const [arg, gain, tint] of moves) {
-      await evaluate(page, `(() => {
-        const row = document.querySelector('.group[data-group="${arg}"]');
-        const s = row.querySelector('input[type=range]'); s.value = ${gain}; s.dispatchEvent(new Event('input'));
-        const c = row.querySelector('input[type=color]'); c.value = '${tint}'; c.dispatchEvent(new Event('input'));
-      })()`);
-    }
-    await evaluate(page, 'lpv.idle()');
-    await page('Input.dispatchMouseEvent', { type: 'mouseMoved', x: 700, y: 300 });
-    await until(page, `document.querySelectorAll('#pixel tbody tr').length`);
-    await new Promise((r) => setTimeout(r, 300));
-    await screenshot(page, 'view-relit.png');
+}
+
+// The pictures of docs/aovs.md: the page as it opens, the mixer after moving two groups
+// (and saving the comp), the pixel inspector with a Cryptomatte pick.
+async function pictures(dir) {
+  fs.mkdirSync(dir, { recursive: true });
+  let file = opt('--exr') && path.resolve(opt('--exr'));
+  if (!file) {
+    file = path.join(tmp, 'cornell.exr');
+    const spp = opt('--spp') || '64';
+    execFileSync(bin, ['render', 'cornell', '--resolution', '640x480', '--spp', spp, '--light-groups', '--cryptomatte', '--quiet', '-o', file], { stdio: 'inherit' });
   }
+  const { url } = await startViewer(file);
+  const page = await openBrowser();
+  await page('Emulation.setDeviceMetricsOverride', { width: 1024, height: 880, deviceScaleFactor: 1, mobile: false });
+  await load(page, url);
+  await until(page, `document.querySelectorAll('.partition .check.ok, .partition .check.bad').length === lpv.info.partitions.length`, 60000);
+  await evaluate(page, 'lpv.idle()');
+  await screenshot(page, 'view-overview.png');
+
+  const groups = await evaluate(page, `lpv.mixer.groups.map((g) => g.arg)`);
+  const pickGroup = (name, i) => (groups.includes(name) ? name : groups[i]);
+  for (const [arg, gain, tint] of [[pickGroup('key', 0), 0.3, '#ffffff'], [pickGroup('fill', 1), 3, '#ffb060']]) {
+    await evaluate(page, `(() => {
+      const row = document.querySelector('.group[data-group="${arg}"]');
+      const s = row.querySelector('input[type=range]'); s.value = ${gain}; s.dispatchEvent(new Event('input'));
+      const c = row.querySelector('input[type=color]'); c.value = '${tint}'; c.dispatchEvent(new Event('input'));
+    })()`);
+  }
+  await evaluate(page, 'lpv.idle()');
+  await evaluate(page, `document.getElementById('save-comp').click()`);
+  await until(page, 'lpv.saved');
+  // The viewer column scrolled to the mixer.
+  await evaluate(page, `document.getElementById('mixer').scrollIntoView({ block: 'end' })`);
+  await screenshot(page, 'view-mixer.png');
+
+  // The inspector: the cursor over the glossy ball, which is picked (its matte, its name).
+  await evaluate(page, `document.getElementById('reset').click()`);
+  await evaluate(page, 'lpv.idle()');
+  await evaluate(page, `document.getElementById('viewer').scrollTop = 0`);
+  const box = await evaluate(page, `(() => { const r = document.getElementById('view').getBoundingClientRect(); return [r.left, r.top, r.width, r.height]; })()`);
+  const at = { x: box[0] + 0.5 * box[2], y: box[1] + 0.79 * box[3] };
+  await page('Input.dispatchMouseEvent', { type: 'mouseMoved', ...at });
+  await page('Input.dispatchMouseEvent', { type: 'mousePressed', ...at, button: 'left', clickCount: 1 });
+  await page('Input.dispatchMouseEvent', { type: 'mouseReleased', ...at, button: 'left', clickCount: 1 });
+  await until(page, `document.querySelectorAll('#pixel tbody tr').length && (!lpv.info.cryptomatte.length || lpv.picked)`);
+  // Tall enough for the whole table; the picture is the viewer column down to the table.
+  await page('Emulation.setDeviceMetricsOverride', { width: 1024, height: 1500, deviceScaleFactor: 1, mobile: false });
+  await new Promise((r) => setTimeout(r, 300));
+  await evaluate(page, 'drawView().then(() => lpv.idle())');
+  const v = await evaluate(page, `(() => { const r = document.getElementById('viewer').getBoundingClientRect(), t = document.getElementById('inspector').getBoundingClientRect(); return [r.left, r.top, r.width, Math.min(r.bottom, t.bottom + 10) - r.top]; })()`);
+  await screenshot(page, 'view-inspector.png', { x: v[0], y: v[1], width: v[2], height: v[3] });
 }
 
 main()
@@ -262,6 +330,6 @@ main()
   .finally(async () => {
     clearTimeout(timeout);
     await cleanup();
-    if (!perf) console.log(`${passed} passed, ${failed} failed`);
+    if (!perf && !shots) console.log(`${passed} passed, ${failed} failed`);
     process.exit(failed ? 1 : 0);
   });

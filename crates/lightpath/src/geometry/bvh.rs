@@ -641,6 +641,11 @@ impl Accel {
 
     /// Closest-hit traversal, nearest child first; returns (slot, t, the instanced mesh's
     /// slot when the slot is an instance) or (`u32::MAX`, _, _).
+    ///
+    /// The hot loop, one ~125-line body on purpose (the exception to the 120-line rule):
+    /// it is inlined into each lane width's `#[target_feature]` entry point, and the node
+    /// loop, leaf test and stack share their locals; an early traversal split into
+    /// functions was slower until it was inlined back (docs/performance.md).
     #[inline(always)]
     fn closest<L: Lanes>(
         &self,

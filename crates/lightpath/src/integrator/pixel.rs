@@ -12,7 +12,7 @@
 use super::{Sink, Tracer};
 use crate::film::Film;
 use crate::light::luminance;
-use crate::sampler::{dim, IndependentSampler, Sampler, SamplerKind, SobolSampler};
+use crate::sampler::{dim, IndependentPixel, PixelSampler, Sampler, SamplerKind, SobolPixel};
 use glam::Vec2;
 
 /// Adaptive sampling checks a pixel's noise after this many samples past `min_spp`.
@@ -64,27 +64,27 @@ impl Moments {
 impl Tracer<'_> {
     /// Takes the samples of one pixel with the scene's sampler; returns how many.
     pub(super) fn render_pixel(&self, job: PixelJob, out: &mut Sink) -> u32 {
-        match self.scene.settings.sampler {
-            SamplerKind::Sobol => self.pixel_samples(job, out, SobolSampler::new),
-            SamplerKind::Independent => self.pixel_samples(job, out, IndependentSampler::new),
+        let settings = &self.scene.settings;
+        let index = job.y as u64 * self.scene.camera.width as u64 + job.x as u64;
+        match settings.sampler {
+            SamplerKind::Sobol => {
+                self.pixel_samples(job, out, SobolPixel::new(settings.seed, index))
+            }
+            SamplerKind::Independent => {
+                self.pixel_samples(job, out, IndependentPixel::new(settings.seed, index))
+            }
         }
     }
 
-    fn pixel_samples<S: Sampler>(
-        &self,
-        job: PixelJob,
-        out: &mut Sink,
-        sampler_for: impl Fn(u64, u64, u64) -> S,
-    ) -> u32 {
+    fn pixel_samples(&self, job: PixelJob, out: &mut Sink, mut samplers: impl PixelSampler) -> u32 {
         let scene = self.scene;
         let cam = &scene.camera;
         let settings = &scene.settings;
         let alpha_slot = Film::alpha_slot(job.run.len());
-        let index = job.y as u64 * cam.width as u64 + job.x as u64;
         let adaptive = settings.noise_threshold > 0.0;
         let mut moments = Moments::default();
         for s in job.first_sample..job.first_sample + job.spp {
-            let mut sampler = sampler_for(settings.seed, index, s as u64);
+            let mut sampler = samplers.sample(s as u64);
             let offset = scene.filter.offset(sampler.get_2d(dim::FILTER));
             let film_pos = Vec2::new(job.x as f32 + 0.5, job.y as f32 + 0.5) + offset;
             let ray = cam.ray(film_pos, sampler.get_2d(dim::LENS));

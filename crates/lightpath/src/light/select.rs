@@ -95,6 +95,11 @@ impl LightSelector {
                     }
                 }
             }
+            // One light needs no tree: its probability is 1 wherever it can reach, and
+            // where the tree would find that it cannot (behind a one-sided emitter,
+            // outside a spot's cone), its light sample finds no light anyway. The tree
+            // walk was 5 % of a `cornell-classic` render's instructions.
+            LightSelection::Tree if lights.len() == 1 => LightSelector::Uniform { count: 1 },
             LightSelection::Tree => LightSelector::Tree(LightTree::build(lights, prims)),
         }
     }

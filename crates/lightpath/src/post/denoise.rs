@@ -398,15 +398,56 @@ pub fn denoise_contents(
     let plan = plan(exr);
     summary.albedo = aux.albedo.is_some();
     summary.normal = aux.normal.is_some();
-    let mut noisy: HashMap<String, Planes> = HashMap::new();
-    let mut denoised: HashMap<String, Planes> = HashMap::new();
+    let (noisy, mut denoised) = filter_aovs(exr, &plan, aux, filter, summary)?;
+    reconcile_partitions(exr, &noisy, &mut denoised, summary);
+    if plan
+        .iter()
+        .any(|(n, t)| n == naming::SHADOW && *t == Treatment::Recomputed)
+    {
+        let matte = shadow_matte_of(exr, &denoised);
+        denoised.insert(naming::SHADOW.into(), matte);
+    }
+    // Every input channel, the denoised AOVs' replaced.
+    let mut replaced: HashMap<String, Vec<f32>> = HashMap::new();
+    for (name, planes) in &denoised {
+        for (ch, v) in channel_names(name).into_iter().zip(planes) {
+            replaced.insert(ch, v.clone());
+        }
+    }
+    let mut channels: Vec<(String, Vec<f32>)> = exr
+        .channels
+        .iter()
+        .map(|(n, v)| (n.clone(), replaced.remove(n).unwrap_or_else(|| v.clone())))
+        .collect();
+    let mut attributes = exr.attributes.clone();
+    if keep_noisy {
+        keep_noisy_aovs(exr, &noisy, &mut channels, &mut attributes)?;
+    }
+    attributes.push((naming::DENOISED_ATTRIBUTE.into(), describe(summary)));
+    Ok((channels, attributes))
+}
+
+/// Each AOV the plan filters or keeps, by name: as read (`noisy`) and as it goes out.
+type AovPlanes = HashMap<String, Planes>;
+
+/// Filters the AOVs the plan says to; emission is kept as rendered (negative and
+/// non-finite values zeroed), AOVs constant everywhere are kept as they are.
+fn filter_aovs(
+    exr: &ExrContents,
+    plan: &[(String, Treatment)],
+    aux: &Aux,
+    filter: &mut dyn Filter,
+    summary: &mut DenoiseSummary,
+) -> Result<(AovPlanes, AovPlanes), String> {
+    let mut noisy = AovPlanes::new();
+    let mut denoised = AovPlanes::new();
     // Beauty is filtered without the emission seen directly, which is added back after.
     let emission = plan
         .iter()
         .any(|(n, t)| n == EMISSION && *t == Treatment::Emission)
         .then(|| planes_of(exr, EMISSION))
         .flatten();
-    for (name, t) in &plan {
+    for (name, t) in plan {
         if !matches!(
             t,
             Treatment::AsIs | Treatment::AlbedoDivided | Treatment::Emission
@@ -428,29 +469,49 @@ pub fn denoise_contents(
             p.clone()
         } else {
             summary.filtered += 1;
-            let unlit = match (&emission, name == naming::BEAUTY) {
-                (Some(e), true) => Some(minus(&p, e)),
-                _ => None,
-            };
-            let mut out = filter_aov(
-                unlit.as_ref().unwrap_or(&p),
-                *t,
-                aux.albedo.as_deref(),
-                filter,
-            )
-            .map_err(|e| format!("filtering AOV '{name}': {e}"))?;
-            if let (Some(e), Some(_)) = (&emission, &unlit) {
-                for c in 0..3 {
-                    for (o, e) in out[c].iter_mut().zip(&e[c]) {
-                        *o += e.max(0.0);
-                    }
-                }
-            }
-            out
+            let emission = emission.as_ref().filter(|_| name == naming::BEAUTY);
+            filter_lit(&p, *t, emission, aux, filter)
+                .map_err(|e| format!("filtering AOV '{name}': {e}"))?
         };
         denoised.insert(name.clone(), out);
         noisy.insert(name.clone(), p);
     }
+    Ok((noisy, denoised))
+}
+
+/// One AOV filtered; with `emission` (beauty's), that is taken out before and added
+/// back after, so the light seen directly is not smeared into its surroundings.
+fn filter_lit(
+    p: &Planes,
+    t: Treatment,
+    emission: Option<&Planes>,
+    aux: &Aux,
+    filter: &mut dyn Filter,
+) -> Result<Planes, String> {
+    let unlit = emission.map(|e| minus(p, e));
+    let mut out = filter_aov(
+        unlit.as_ref().unwrap_or(p),
+        t,
+        aux.albedo.as_deref(),
+        filter,
+    )?;
+    if let Some(e) = emission {
+        for c in 0..3 {
+            for (o, e) in out[c].iter_mut().zip(&e[c]) {
+                *o += e.max(0.0);
+            }
+        }
+    }
+    Ok(out)
+}
+
+/// Scales each declared partition's denoised parts to sum to its denoised whole.
+fn reconcile_partitions(
+    exr: &ExrContents,
+    noisy: &AovPlanes,
+    denoised: &mut AovPlanes,
+    summary: &mut DenoiseSummary,
+) {
     for part in partitions(exr) {
         let all = std::iter::once(&part.whole).chain(&part.parts);
         if !all.clone().all(|n| denoised.contains_key(n)) {
@@ -471,68 +532,59 @@ pub fn denoise_contents(
         }
         summary.partitions += 1;
     }
-    if plan
-        .iter()
-        .any(|(n, t)| n == naming::SHADOW && *t == Treatment::Recomputed)
-    {
-        let get = |n: &str| {
-            denoised
-                .get(n)
-                .cloned()
-                .or_else(|| planes_of(exr, n))
-                .unwrap_or_default()
-        };
-        let (occ, unocc) = (get(naming::OCCLUDED), get(naming::UNOCCLUDED));
-        let matte = crate::output::shadow_matte(
-            [&occ[0], &occ[1], &occ[2]],
-            [&unocc[0], &unocc[1], &unocc[2]],
-        );
-        denoised.insert(naming::SHADOW.into(), matte);
-    }
-    // Every input channel, the denoised AOVs' replaced.
-    let mut replaced: HashMap<String, Vec<f32>> = HashMap::new();
-    for (name, planes) in &denoised {
-        for (ch, v) in channel_names(name).into_iter().zip(planes) {
-            replaced.insert(ch, v.clone());
-        }
-    }
-    let mut channels: Vec<(String, Vec<f32>)> = exr
-        .channels
-        .iter()
-        .map(|(n, v)| (n.clone(), replaced.remove(n).unwrap_or_else(|| v.clone())))
-        .collect();
-    let mut attributes = exr.attributes.clone();
-    if keep_noisy {
-        let definitions: HashMap<String, String> = exr.aovs().into_iter().collect();
-        let mut names: Vec<&String> = noisy.keys().filter(|n| !is_emission(n)).collect();
-        names.sort();
-        for name in names {
-            let kept = naming::noisy_name(name);
-            if definitions.contains_key(&kept) {
-                return Err(format!(
-                    "--keep-noisy would name the noisy '{name}' '{kept}', which the file \
-                     already has"
-                ));
-            }
-            for (ch, v) in channel_names(&kept).into_iter().zip(&noisy[name]) {
-                channels.push((ch, v.clone()));
-            }
-            attributes.push((
-                naming::aov_attribute(&kept),
-                format!(
-                    "{} (the noisy input of '{name}')",
-                    definitions.get(name).map(String::as_str).unwrap_or("")
-                ),
-            ));
-            attributes.push((naming::noisy_attribute(&kept), name.clone()));
-            attributes.push((
-                naming::kind_attribute(&kept),
-                AovKind::Light.as_str().into(),
+}
+
+/// The shadow matte made again from the denoised `occluded` and `unoccluded`.
+fn shadow_matte_of(exr: &ExrContents, denoised: &AovPlanes) -> Planes {
+    let get = |n: &str| {
+        denoised
+            .get(n)
+            .cloned()
+            .or_else(|| planes_of(exr, n))
+            .unwrap_or_default()
+    };
+    let (occ, unocc) = (get(naming::OCCLUDED), get(naming::UNOCCLUDED));
+    crate::output::shadow_matte(
+        [&occ[0], &occ[1], &occ[2]],
+        [&unocc[0], &unocc[1], &unocc[2]],
+    )
+}
+
+/// `--keep-noisy`: each filtered AOV's input as `<aov>_noisy`, declared as such.
+fn keep_noisy_aovs(
+    exr: &ExrContents,
+    noisy: &AovPlanes,
+    channels: &mut Channels,
+    attributes: &mut Vec<(String, String)>,
+) -> Result<(), String> {
+    let definitions: HashMap<String, String> = exr.aovs().into_iter().collect();
+    let mut names: Vec<&String> = noisy.keys().filter(|n| !is_emission(n)).collect();
+    names.sort();
+    for name in names {
+        let kept = naming::noisy_name(name);
+        if definitions.contains_key(&kept) {
+            return Err(format!(
+                "--keep-noisy would name the noisy '{name}' '{kept}', which the file \
+                 already has"
             ));
         }
+        for (ch, v) in channel_names(&kept).into_iter().zip(&noisy[name]) {
+            channels.push((ch, v.clone()));
+        }
+        attributes.push((
+            naming::aov_attribute(&kept),
+            format!(
+                "{} (the noisy input of '{name}')",
+                definitions.get(name).map(String::as_str).unwrap_or("")
+            ),
+        ));
+        attributes.push((naming::noisy_attribute(&kept), name.clone()));
+        attributes.push((
+            naming::kind_attribute(&kept),
+            AovKind::Light.as_str().into(),
+        ));
     }
-    attributes.push((naming::DENOISED_ATTRIBUTE.into(), describe(summary)));
-    Ok((channels, attributes))
+    Ok(())
 }
 
 /// The `lightpath/denoised` attribute: how the file was filtered.

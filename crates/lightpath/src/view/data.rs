@@ -7,12 +7,26 @@ use super::crypto;
 use crate::aov::naming::{self, channel_names, PartitionKind};
 use crate::output::ExrContents;
 use crate::post::partitions::{check_partitions, PartitionCheck};
-use ::exr::prelude::f16;
+use half::f16;
+use half::slice::{HalfBitsSliceExt, HalfFloatSliceExt};
 use rayon::prelude::*;
 use serde_json::{json, Value};
+use std::collections::HashMap;
+use std::sync::{Arc, Mutex, OnceLock};
 
 /// The suffix of an AOV's pre-denoise twin (`beauty_noisy` beside a denoised `beauty`).
 pub const NOISY_SUFFIX: &str = "_noisy";
+
+/// How wide the page draws thumbnails (it reads this from `/api/info`).
+pub const THUMBNAIL_WIDTH: usize = 160;
+
+/// Reduced images (thumbnails) of one generation, by name and reduction factor: each is
+/// made once, by whichever thread asks first (another asking meanwhile waits for it).
+#[derive(Default)]
+struct Reduced {
+    generation: u64,
+    images: HashMap<(String, usize), Arc<OnceLock<Option<HalfImage>>>>,
+}
 
 /// An EXR as the viewer holds it: the file's channels and header, or a live render's.
 pub struct ViewData {
@@ -25,9 +39,11 @@ pub struct ViewData {
     pub title: String,
     /// Partition checks of the current generation (measured once, not per request).
     checks: Option<(u64, Vec<PartitionCheck>)>,
+    reduced: Mutex<Reduced>,
 }
 
 /// An image to send: `channels` half floats per pixel, rows top to bottom.
+#[derive(Clone)]
 pub struct HalfImage {
     pub width: usize,
     pub height: usize,
@@ -44,6 +60,7 @@ impl ViewData {
             live: false,
             title: title.into(),
             checks: None,
+            reduced: Mutex::default(),
         }
     }
 
@@ -182,6 +199,7 @@ impl ViewData {
             "aovs": aovs,
             "partitions": partitions,
             "tolerance": crate::post::partitions::DEFAULT_TOLERANCE,
+            "thumbnail_width": THUMBNAIL_WIDTH,
             "mixers": mixers,
             "noisy": noisy,
             "cryptomatte": crypto,
@@ -189,8 +207,46 @@ impl ViewData {
     }
 
     /// AOV `name` (or a Cryptomatte layer's false colours) as half floats, box-filtered
-    /// down by a whole factor to at most `max_width` pixels across.
+    /// down by a whole factor to at most `max_width` pixels across. Reduced images are
+    /// kept until the pixels change (a thumbnail is made once, see [`Self::thumbnails`]);
+    /// full-size ones are made per request.
     pub fn image(&self, name: &str, max_width: usize) -> Option<HalfImage> {
+        let factor = self.exr.width.div_ceil(max_width.max(1)).max(1);
+        if factor == 1 {
+            return self.make_image(name, max_width);
+        }
+        let cell = {
+            let mut reduced = self.reduced.lock().unwrap_or_else(|e| e.into_inner());
+            if reduced.generation != self.generation {
+                *reduced = Reduced {
+                    generation: self.generation,
+                    images: HashMap::new(),
+                };
+            }
+            let key = (name.to_string(), factor);
+            Arc::clone(reduced.images.entry(key).or_default())
+        };
+        cell.get_or_init(|| self.make_image(name, max_width))
+            .clone()
+    }
+
+    /// Makes every thumbnail the page will ask for (AOVs and Cryptomatte layers, several
+    /// at once): the server does this as soon as a file is shown, while the browser
+    /// starts.
+    pub fn thumbnails(&self) {
+        let mut names: Vec<String> = self
+            .aovs()
+            .into_iter()
+            .map(|(n, _)| n)
+            .filter(|n| self.has_aov(n))
+            .collect();
+        names.extend(crypto::layers(&self.exr).into_iter().map(|l| l.name));
+        names.par_iter().for_each(|n| {
+            self.image(n, THUMBNAIL_WIDTH);
+        });
+    }
+
+    fn make_image(&self, name: &str, max_width: usize) -> Option<HalfImage> {
         let planes: Vec<std::borrow::Cow<[f32]>> = if self.has_aov(name) {
             channel_names(name)
                 .iter()
@@ -272,34 +328,59 @@ impl ViewData {
 
 /// Box-filters planes by the whole factor that brings the width to at most `max_width`
 /// (partial boxes at the right and bottom edges average what they cover) and packs them
-/// interleaved as little-endian half floats.
+/// interleaved as little-endian half floats. Output rows are made in parallel, each
+/// summing its input rows in one sequential pass per plane and converted to half floats
+/// a row at a time.
 pub fn downsample(planes: &[&[f32]], width: usize, height: usize, max_width: usize) -> HalfImage {
     let f = width.div_ceil(max_width.max(1)).max(1);
     let (w, h) = (width.div_ceil(f), height.div_ceil(f));
     let channels = planes.len();
     let mut bytes = vec![0u8; w * h * channels * 2];
     let row_bytes = (w * channels * 2).max(1);
-    bytes
-        .par_chunks_mut(row_bytes)
-        .enumerate()
-        .for_each(|(oy, row)| {
+    bytes.par_chunks_mut(row_bytes).enumerate().for_each_init(
+        // Per worker: the row's floats (interleaved), one plane's box sums, the halves.
+        || {
+            (
+                vec![0f32; w * channels],
+                vec![0f32; w],
+                vec![0u16; w * channels],
+            )
+        },
+        |(values, sums, halves), (oy, row)| {
             let ys = oy * f..((oy + 1) * f).min(height);
-            for ox in 0..w {
-                let xs = ox * f..((ox + 1) * f).min(width);
-                let n = (ys.len() * xs.len()) as f32;
-                for (c, plane) in planes.iter().enumerate() {
-                    let mut sum = 0.0f32;
-                    for y in ys.clone() {
-                        sum += plane[y * width + xs.start..y * width + xs.end]
-                            .iter()
-                            .sum::<f32>();
+            for (c, plane) in planes.iter().enumerate() {
+                if f == 1 {
+                    let src = &plane[oy * width..(oy + 1) * width];
+                    for (v, s) in values.iter_mut().skip(c).step_by(channels).zip(src) {
+                        *v = *s;
                     }
-                    let v = f16::from_f32(sum / n).to_bits().to_le_bytes();
-                    let at = (ox * channels + c) * 2;
-                    row[at..at + 2].copy_from_slice(&v);
+                    continue;
+                }
+                sums.fill(0.0);
+                for y in ys.clone() {
+                    let src = &plane[y * width..(y + 1) * width];
+                    for (sum, chunk) in sums.iter_mut().zip(src.chunks(f)) {
+                        *sum += chunk.iter().sum::<f32>();
+                    }
+                }
+                for (ox, (v, sum)) in values
+                    .iter_mut()
+                    .skip(c)
+                    .step_by(channels)
+                    .zip(sums.iter())
+                    .enumerate()
+                {
+                    *v = sum / (ys.len() * f.min(width - ox * f)) as f32;
                 }
             }
-        });
+            halves
+                .reinterpret_cast_mut::<f16>()
+                .convert_from_f32_slice(values);
+            for (out, half) in row.chunks_exact_mut(2).zip(halves.iter()) {
+                out.copy_from_slice(&half.to_le_bytes());
+            }
+        },
+    );
     HalfImage {
         width: w,
         height: h,
@@ -314,6 +395,37 @@ mod tests {
 
     fn half(bytes: &[u8], i: usize) -> f32 {
         f16::from_bits(u16::from_le_bytes([bytes[2 * i], bytes[2 * i + 1]])).to_f32()
+    }
+
+    #[test]
+    fn thumbnails_are_kept_until_the_pixels_change() {
+        let (w, h) = (8, 4);
+        let channels = channel_names("glow")
+            .into_iter()
+            .map(|c| (c, vec![1.0f32; w * h]))
+            .collect();
+        let exr = ExrContents {
+            width: w,
+            height: h,
+            channels,
+            attributes: vec![(naming::aov_attribute("glow"), "CO".into())],
+            frame: [w as u32, h as u32],
+            origin: [0, 0],
+            world_to_camera: None,
+            world_to_ndc: None,
+            capture_date: None,
+        };
+        let mut data = ViewData::new(exr, "t");
+        data.thumbnails();
+        let small = |d: &ViewData| d.image("glow", 4).map(|i| (i.width, half(&i.bytes, 0)));
+        assert_eq!(small(&data), Some((4, 1.0)));
+        // A live render's band: new pixels, a new generation, a new thumbnail.
+        data.exr.channels[0].1.fill(3.0);
+        assert_eq!(small(&data), Some((4, 1.0)), "kept within a generation");
+        data.generation += 1;
+        assert_eq!(small(&data), Some((4, 3.0)));
+        assert_eq!(data.image("glow", 8).map(|i| half(&i.bytes, 0)), Some(3.0));
+        assert!(data.image("nothing", 4).is_none());
     }
 
     #[test]

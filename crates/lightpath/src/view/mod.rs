@@ -28,7 +28,7 @@ mod data;
 mod http;
 pub mod preview;
 
-pub use data::{downsample, HalfImage, ViewData, NOISY_SUFFIX};
+pub use data::{downsample, HalfImage, ViewData, NOISY_SUFFIX, THUMBNAIL_WIDTH};
 
 use crate::post::comp::CompJob;
 use http::{Request, Response};
@@ -50,7 +50,7 @@ pub struct Shared {
     exr: Mutex<Option<PathBuf>>,
     /// The server's port, set once it listens.
     port: Arc<std::sync::OnceLock<u16>>,
-    /// A thread is measuring the partition checks.
+    /// A thread is making thumbnails or measuring the partition checks.
     measuring: AtomicBool,
 }
 
@@ -106,7 +106,7 @@ impl Viewer {
         let http = http::Server::bind(port, handler)
             .map_err(|e| format!("cannot listen on 127.0.0.1:{port}: {e}"))?;
         let _ = port_cell.set(http.addr().port());
-        measure_partitions(&shared);
+        prepare(&shared, true);
         Ok(Viewer { http, shared })
     }
 
@@ -202,7 +202,7 @@ fn route(shared: &Arc<Shared>, request: &Request) -> Response {
         ("GET", "/style.css") => text("text/css; charset=utf-8", STYLE_CSS),
         ("GET", "/api/info") => {
             let mut info = read().info();
-            measure_partitions(shared);
+            prepare(shared, false);
             let comp = shared
                 .exr
                 .lock()
@@ -247,18 +247,28 @@ fn route(shared: &Arc<Shared>, request: &Request) -> Response {
 }
 
 /// Measures the partition checks on a thread of their own, once per generation: the page
-/// shows them as "not measured yet" meanwhile, and every image request goes on.
-fn measure_partitions(shared: &Arc<Shared>) {
-    let unmeasured = shared
-        .data
-        .read()
-        .unwrap_or_else(|e| e.into_inner())
-        .unmeasured();
-    if unmeasured.is_none() || shared.measuring.swap(true, Ordering::SeqCst) {
+/// shows them as "not measured yet" meanwhile, and every image request goes on. With
+/// `thumbnails` (a file just shown, not a live render), the thread first makes every
+/// thumbnail, which the page asks for first: both passes read every AOV, and on two
+/// cores the thumbnails would otherwise wait behind the checks.
+fn prepare(shared: &Arc<Shared>, thumbnails: bool) {
+    let (unmeasured, live) = {
+        let data = shared.data.read().unwrap_or_else(|e| e.into_inner());
+        (data.unmeasured(), data.live)
+    };
+    let thumbnails = thumbnails && !live;
+    if (unmeasured.is_none() && !thumbnails) || shared.measuring.swap(true, Ordering::SeqCst) {
         return;
     }
     let shared = Arc::clone(shared);
     std::thread::spawn(move || {
+        if thumbnails {
+            shared
+                .data
+                .read()
+                .unwrap_or_else(|e| e.into_inner())
+                .thumbnails();
+        }
         let measured = {
             let data = shared.data.read().unwrap_or_else(|e| e.into_inner());
             data.unmeasured().map(|g| (g, data.measure()))

@@ -129,7 +129,52 @@ fn material(
     images: &mut Images,
     colored: bool,
 ) -> Result<Material, SceneError> {
+    check_parameters(name, m)?;
+    let t = &textures_of(m);
+    let textured = colored
+        || t.base_color.is_some()
+        || t.metallic_roughness.is_some()
+        || t.normal.is_some()
+        || t.emissive.is_some();
+    // A roughness texture keeps the lobes rough everywhere (their events are fixed).
+    let roughness = if t.metallic_roughness.is_some() {
+        m.roughness.max(MIN_TEXTURED_ROUGHNESS)
+    } else {
+        m.roughness
+    };
+    let alpha = roughness_to_alpha(roughness);
+    let eta = index_of_refraction(name, m)?;
     let v3 = Vec3A::from;
+    let bsdf = match &m.kind {
+        MaterialKind::Diffuse { albedo } => Bsdf::diffuse(v3(*albedo)),
+        MaterialKind::Translucent { reflect, transmit } => {
+            Bsdf::translucent(v3(*reflect), v3(*transmit))
+        }
+        MaterialKind::Conductor { f0 } => Bsdf::conductor(v3(*f0), alpha),
+        MaterialKind::Dielectric { tint, .. } => {
+            Bsdf::dielectric(eta, alpha, tint.map(v3).unwrap_or(Vec3A::ONE))
+        }
+        MaterialKind::Plastic { albedo, .. } => Bsdf::plastic(v3(*albedo), eta, alpha),
+        MaterialKind::Pbr { .. } => Bsdf::pbr(&pbr_params(m, alpha, eta)),
+    };
+    let textured = if textured {
+        Some(Box::new(Textured {
+            model: shade_model(m, roughness, alpha, eta),
+            textures: material_textures(t, images)?,
+        }))
+    } else {
+        None
+    };
+    Ok(Material {
+        bsdf,
+        regularized: None,
+        user_color: m.user_color.map(v3),
+        textured,
+    })
+}
+
+/// Colours finite and not negative, weights from 0 to 1, roughness from 0 up.
+fn check_parameters(name: &str, m: &MaterialDesc) -> Result<(), SceneError> {
     let mut colors = match &m.kind {
         MaterialKind::Diffuse { albedo } | MaterialKind::Plastic { albedo, .. } => {
             vec![("albedo", *albedo)]
@@ -172,92 +217,77 @@ fn material(
             m.roughness
         )));
     }
-    let t = &textures_of(m);
-    let textured = colored
-        || t.base_color.is_some()
-        || t.metallic_roughness.is_some()
-        || t.normal.is_some()
-        || t.emissive.is_some();
-    // A roughness texture keeps the lobes rough everywhere (their events are fixed).
-    let roughness = if t.metallic_roughness.is_some() {
-        m.roughness.max(MIN_TEXTURED_ROUGHNESS)
-    } else {
-        m.roughness
+    Ok(())
+}
+
+/// The index of refraction of a material that has one (1.5 unless given), checked
+/// positive; materials without one get 1.5, unused.
+fn index_of_refraction(name: &str, m: &MaterialDesc) -> Result<f32, SceneError> {
+    let given = match &m.kind {
+        MaterialKind::Dielectric { ior, .. } | MaterialKind::Plastic { ior, .. } => *ior,
+        MaterialKind::Pbr { .. } => pbr_ior(m),
+        _ => None,
     };
-    let alpha = roughness_to_alpha(roughness);
-    let ior = |ior: Option<f32>| match ior.unwrap_or(1.5) {
+    match given.unwrap_or(1.5) {
         eta if eta > 0.0 && eta.is_finite() => Ok(eta),
         eta => Err(m.origin.error(format!(
             "material '{name}': ior must be positive, got {eta}"
         ))),
+    }
+}
+
+/// What a textured material evaluates at each hit, before its textures.
+fn shade_model(m: &MaterialDesc, roughness: f32, alpha: f32, eta: f32) -> ShadeModel {
+    let v3 = Vec3A::from;
+    match &m.kind {
+        MaterialKind::Diffuse { albedo } => ShadeModel::Diffuse {
+            albedo: v3(*albedo),
+        },
+        MaterialKind::Translucent { reflect, transmit } => ShadeModel::Translucent {
+            reflect: v3(*reflect),
+            transmit: v3(*transmit),
+        },
+        MaterialKind::Conductor { f0 } => ShadeModel::Conductor {
+            f0: v3(*f0),
+            roughness,
+        },
+        MaterialKind::Dielectric { tint, .. } => ShadeModel::Dielectric {
+            eta,
+            roughness,
+            tint: tint.map(v3).unwrap_or(Vec3A::ONE),
+        },
+        MaterialKind::Plastic { albedo, .. } => ShadeModel::Plastic {
+            albedo: v3(*albedo),
+            eta,
+            roughness,
+        },
+        MaterialKind::Pbr {
+            clearcoat_roughness,
+            ..
+        } => ShadeModel::Pbr {
+            params: pbr_params(m, alpha, eta),
+            roughness,
+            clearcoat_roughness: *clearcoat_roughness,
+        },
+    }
+}
+
+/// The material's textures, each image decoded once for the whole scene.
+fn material_textures(
+    t: &TexturesDesc,
+    images: &mut Images,
+) -> Result<MaterialTextures, SceneError> {
+    let tex = |images: &mut Images, d: &Option<TextureDesc>, space| {
+        d.as_ref().map(|d| images.texture(d, space)).transpose()
     };
-    let bsdf = match &m.kind {
-        MaterialKind::Diffuse { albedo } => Bsdf::diffuse(v3(*albedo)),
-        MaterialKind::Translucent { reflect, transmit } => {
-            Bsdf::translucent(v3(*reflect), v3(*transmit))
-        }
-        MaterialKind::Conductor { f0 } => Bsdf::conductor(v3(*f0), alpha),
-        MaterialKind::Dielectric { ior: eta, tint } => {
-            Bsdf::dielectric(ior(*eta)?, alpha, tint.map(v3).unwrap_or(Vec3A::ONE))
-        }
-        MaterialKind::Plastic { albedo, ior: eta } => Bsdf::plastic(v3(*albedo), ior(*eta)?, alpha),
-        MaterialKind::Pbr { .. } => Bsdf::pbr(&pbr_params(m, alpha, ior(pbr_ior(m))?)),
-    };
-    let textured = if textured {
-        let model = match &m.kind {
-            MaterialKind::Diffuse { albedo } => ShadeModel::Diffuse {
-                albedo: v3(*albedo),
-            },
-            MaterialKind::Translucent { reflect, transmit } => ShadeModel::Translucent {
-                reflect: v3(*reflect),
-                transmit: v3(*transmit),
-            },
-            MaterialKind::Conductor { f0 } => ShadeModel::Conductor {
-                f0: v3(*f0),
-                roughness,
-            },
-            MaterialKind::Dielectric { ior: eta, tint } => ShadeModel::Dielectric {
-                eta: ior(*eta)?,
-                roughness,
-                tint: tint.map(v3).unwrap_or(Vec3A::ONE),
-            },
-            MaterialKind::Plastic { albedo, ior: eta } => ShadeModel::Plastic {
-                albedo: v3(*albedo),
-                eta: ior(*eta)?,
-                roughness,
-            },
-            MaterialKind::Pbr {
-                clearcoat_roughness,
-                ..
-            } => ShadeModel::Pbr {
-                params: pbr_params(m, alpha, ior(pbr_ior(m))?),
-                roughness,
-                clearcoat_roughness: *clearcoat_roughness,
-            },
-        };
-        let tex = |images: &mut Images, d: &Option<TextureDesc>, space| {
-            d.as_ref().map(|d| images.texture(d, space)).transpose()
-        };
-        Some(Box::new(Textured {
-            model,
-            textures: MaterialTextures {
-                base_color: tex(images, &t.base_color, ColorSpace::Srgb)?,
-                metallic_roughness: tex(images, &t.metallic_roughness, ColorSpace::Linear)?,
-                normal: match &t.normal {
-                    Some((d, scale)) => Some((images.texture(d, ColorSpace::Linear)?, *scale)),
-                    None => None,
-                },
-                emissive: tex(images, &t.emissive, ColorSpace::Srgb)?,
-            },
-        }))
-    } else {
-        None
-    };
-    Ok(Material {
-        bsdf,
-        regularized: None,
-        user_color: m.user_color.map(v3),
-        textured,
+    Ok(MaterialTextures {
+        base_color: tex(images, &t.base_color, ColorSpace::Srgb)?,
+        metallic_roughness: tex(images, &t.metallic_roughness, ColorSpace::Linear)?,
+        normal: match &t.normal {
+            Some((d, scale)) => Some((images.texture(d, ColorSpace::Linear)?, *scale)),
+            None => None,
+        },
+        emissive: tex(images, &t.emissive, ColorSpace::Srgb)?,
     })
 }
 

@@ -178,30 +178,64 @@ fn parse(bytes: &[u8], file: &str, path: &Path) -> Result<Obj, SceneError> {
         .file_stem()
         .map(|s| s.to_string_lossy().into_owned())
         .unwrap_or_else(|| "obj".into());
-    let mut positions: Vec<[f32; 3]> = Vec::new();
-    let mut normals: Vec<[f32; 3]> = Vec::new();
-    let mut uvs: Vec<[f32; 2]> = Vec::new();
-    let mut obj = Obj {
-        parts: Vec::new(),
-        mtllibs: Vec::new(),
-        warnings: Vec::new(),
-    };
-    let mut naming = Naming::default();
-    // Bumped by each `o`/`g`, so parts of one object share it.
-    let mut object_id = 0u32;
-    let mut material: Option<(String, Origin)> = None;
-    let mut part_of: HashMap<(u32, Option<String>), usize> = HashMap::new();
-    let mut skipped: BTreeMap<&'static str, (usize, Origin)> = BTreeMap::new();
-    let mut first_unknown: Option<(String, Origin)> = None;
-    let mut face: Vec<u32> = Vec::new();
+    let mut reader = Reader::new(stem);
     for line in text::lines(bytes, file) {
+        reader.statement(&line)?;
+    }
+    reader.finish(file)
+}
+
+/// What reading an OBJ file has gathered so far, one statement at a time.
+struct Reader {
+    /// The file's name without extension: the object name when it gives none.
+    stem: String,
+    positions: Vec<[f32; 3]>,
+    normals: Vec<[f32; 3]>,
+    uvs: Vec<[f32; 2]>,
+    obj: Obj,
+    naming: Naming,
+    /// Bumped by each `o`/`g`, so parts of one object share it.
+    object_id: u32,
+    material: Option<(String, Origin)>,
+    part_of: HashMap<(u32, Option<String>), usize>,
+    /// Statements read but not rendered, by kind: how many, and the first one.
+    skipped: BTreeMap<&'static str, (usize, Origin)>,
+    /// The first word that is no OBJ statement, for the error of a file with no faces.
+    first_unknown: Option<(String, Origin)>,
+    /// The current face's vertices (kept to reuse its allocation).
+    face: Vec<u32>,
+}
+
+impl Reader {
+    fn new(stem: String) -> Reader {
+        Reader {
+            stem,
+            positions: Vec::new(),
+            normals: Vec::new(),
+            uvs: Vec::new(),
+            obj: Obj {
+                parts: Vec::new(),
+                mtllibs: Vec::new(),
+                warnings: Vec::new(),
+            },
+            naming: Naming::default(),
+            object_id: 0,
+            material: None,
+            part_of: HashMap::new(),
+            skipped: BTreeMap::new(),
+            first_unknown: None,
+            face: Vec::new(),
+        }
+    }
+
+    fn statement(&mut self, line: &Line) -> Result<(), SceneError> {
         let mut words = line.words();
         let Some(keyword) = words.next() else {
-            continue;
+            return Ok(());
         };
         match keyword.text {
-            "v" => positions.push(line.vec3(words, keyword, "vertex")?),
-            "vn" => normals.push(line.vec3(words, keyword, "normal")?),
+            "v" => self.positions.push(line.vec3(words, keyword, "vertex")?),
+            "vn" => self.normals.push(line.vec3(words, keyword, "normal")?),
             "vt" => {
                 let u = line.number(words.next(), keyword, "texture coordinate u")?;
                 let v = match words.next() {
@@ -210,141 +244,159 @@ fn parse(bytes: &[u8], file: &str, path: &Path) -> Result<Obj, SceneError> {
                 };
                 // Our UVs put (0, 0) at the image's top-left corner (glTF's
                 // convention); OBJ's v runs up from the bottom.
-                uvs.push([u, 1.0 - v]);
+                self.uvs.push([u, 1.0 - v]);
             }
-            "f" => {
-                let key = (object_id, material.as_ref().map(|m| m.0.clone()));
-                let part = *part_of.entry(key).or_insert_with(|| {
-                    obj.parts.push(Part {
-                        name: naming.name(&stem),
-                        groups: naming.groups(&stem),
-                        material: material.clone(),
-                        origin: naming
-                            .origin
-                            .clone()
-                            .unwrap_or_else(|| line.origin(keyword)),
-                        mesh: MeshData::default(),
-                        remap: HashMap::new(),
-                        with_normal: 0,
-                        without_normal: 0,
-                        with_uv: 0,
-                    });
-                    obj.parts.len() - 1
-                });
-                let part = &mut obj.parts[part];
-                face.clear();
-                let mut n = 0;
-                for w in words {
-                    n += 1;
-                    let mut fields = w.text.split('/');
-                    let index =
-                        |s: Option<&str>, count: usize, what: &str| line.index(s, count, w, what);
-                    let v = index(fields.next(), positions.len(), "vertex")?;
-                    if v == NONE {
-                        return Err(line.origin(w).error(format!(
-                            "expected a vertex index first in '{}' (like 3, 3/1 or 3//2)",
-                            w.text
-                        )));
-                    }
-                    let vt = index(fields.next(), uvs.len(), "texture coordinate")?;
-                    let vn = index(fields.next(), normals.len(), "normal")?;
-                    let next = part.mesh.positions.len() as u32;
-                    let id = *part.remap.entry((v, vt, vn)).or_insert(next);
-                    if id == next {
-                        let m = &mut part.mesh;
-                        m.positions.push(positions[v as usize]);
-                        let nrm = normals.get(vn as usize).copied();
-                        part.with_normal += usize::from(nrm.is_some());
-                        part.without_normal += usize::from(nrm.is_none());
-                        m.normals
-                            .get_or_insert_with(Vec::new)
-                            .push(nrm.unwrap_or_default());
-                        let uv = uvs.get(vt as usize).copied();
-                        part.with_uv += usize::from(uv.is_some());
-                        m.uvs
-                            .get_or_insert_with(Vec::new)
-                            .push(uv.unwrap_or_default());
-                    }
-                    face.push(id);
-                }
-                if n < 3 {
-                    return Err(line
-                        .origin(keyword)
-                        .error(format!("a face needs at least 3 vertices, found {n}")));
-                }
-                // A fan, as tobj and Blender triangulate convex polygons.
-                for k in 1..face.len() - 1 {
-                    part.mesh.indices.push([face[0], face[k], face[k + 1]]);
-                }
-            }
+            "f" => self.face(line, keyword, words)?,
             "o" | "g" => {
                 let names: Vec<String> = words.map(|w| w.text.to_string()).collect();
                 if keyword.text == "o" {
-                    naming.o = (!names.is_empty()).then(|| names.join(" "));
-                    naming.g.clear();
+                    self.naming.o = (!names.is_empty()).then(|| names.join(" "));
+                    self.naming.g.clear();
                 } else {
-                    naming.g = names;
+                    self.naming.g = names;
                 }
-                naming.origin = Some(line.origin(keyword));
-                object_id += 1;
+                self.naming.origin = Some(line.origin(keyword));
+                self.object_id += 1;
             }
             "usemtl" => {
                 let name = line.rest_after(keyword);
-                material = (!name.is_empty()).then(|| (name.to_string(), line.origin(keyword)));
+                self.material =
+                    (!name.is_empty()).then(|| (name.to_string(), line.origin(keyword)));
             }
             "mtllib" => {
                 let rest = line.rest_after(keyword);
                 if !rest.is_empty() {
-                    obj.mtllibs.push((rest.to_string(), line.origin(keyword)));
+                    self.obj
+                        .mtllibs
+                        .push((rest.to_string(), line.origin(keyword)));
                 }
             }
-            "l" | "p" => {
-                let e = skipped
-                    .entry("lines and points")
-                    .or_insert((0, line.origin(keyword)));
-                e.0 += 1;
-            }
+            "l" | "p" => self.skip("lines and points", line.origin(keyword)),
             "vp" | "cstype" | "deg" | "bmat" | "step" | "curv" | "curv2" | "surf" | "parm"
             | "trim" | "hole" | "scrv" | "sp" | "end" | "con" => {
-                let e = skipped
-                    .entry("free-form curves and surfaces")
-                    .or_insert((0, line.origin(keyword)));
-                e.0 += 1;
+                self.skip("free-form curves and surfaces", line.origin(keyword))
             }
             "s" | "mg" | "lod" | "bevel" | "c_interp" | "d_interp" | "shadow_obj" | "trace_obj"
             | "ctech" | "stech" | "usemap" | "maplib" => {}
             other => {
-                if first_unknown.is_none() {
-                    first_unknown = Some((other.to_string(), line.origin(keyword)));
+                if self.first_unknown.is_none() {
+                    self.first_unknown = Some((other.to_string(), line.origin(keyword)));
                 }
             }
         }
+        Ok(())
     }
-    for (what, (count, at)) in skipped {
-        obj.warnings.push(format!(
-            "{at}: {count} statements of {what} skipped (only faces render)"
-        ));
+
+    fn skip(&mut self, what: &'static str, at: Origin) {
+        self.skipped.entry(what).or_insert((0, at)).0 += 1;
     }
-    obj.parts.retain(|p| !p.mesh.indices.is_empty());
-    if obj.parts.is_empty() {
-        let hint = match first_unknown {
-            Some((word, at)) => format!(
-                "; {at} starts with '{word}', which is no OBJ statement: is this an OBJ file?"
-            ),
-            None => String::new(),
-        };
-        return Err(Origin::file(file).error(format!("the OBJ file has no faces{hint}")));
+
+    /// The part that faces of the current object and material go to, made on first use.
+    fn current_part(&mut self, at: impl FnOnce() -> Origin) -> usize {
+        let key = (self.object_id, self.material.as_ref().map(|m| m.0.clone()));
+        *self.part_of.entry(key).or_insert_with(|| {
+            self.obj.parts.push(Part {
+                name: self.naming.name(&self.stem),
+                groups: self.naming.groups(&self.stem),
+                material: self.material.clone(),
+                origin: self.naming.origin.clone().unwrap_or_else(at),
+                mesh: MeshData::default(),
+                remap: HashMap::new(),
+                with_normal: 0,
+                without_normal: 0,
+                with_uv: 0,
+            });
+            self.obj.parts.len() - 1
+        })
     }
-    for p in &mut obj.parts {
-        p.remap = HashMap::new();
-        if p.with_normal == 0 || p.without_normal > 0 {
-            p.mesh.normals = None;
+
+    /// An `f` statement: its corners join the current part's vertices (one per distinct
+    /// position/uv/normal triple) and the polygon becomes a fan of triangles.
+    fn face<'w>(
+        &mut self,
+        line: &Line,
+        keyword: text::Word,
+        words: impl Iterator<Item = text::Word<'w>>,
+    ) -> Result<(), SceneError> {
+        let part = self.current_part(|| line.origin(keyword));
+        let part = &mut self.obj.parts[part];
+        let face = &mut self.face;
+        face.clear();
+        let mut n = 0;
+        for w in words {
+            n += 1;
+            let mut fields = w.text.split('/');
+            let index = |s: Option<&str>, count: usize, what: &str| line.index(s, count, w, what);
+            let v = index(fields.next(), self.positions.len(), "vertex")?;
+            if v == NONE {
+                return Err(line.origin(w).error(format!(
+                    "expected a vertex index first in '{}' (like 3, 3/1 or 3//2)",
+                    w.text
+                )));
+            }
+            let vt = index(fields.next(), self.uvs.len(), "texture coordinate")?;
+            let vn = index(fields.next(), self.normals.len(), "normal")?;
+            let next = part.mesh.positions.len() as u32;
+            let id = *part.remap.entry((v, vt, vn)).or_insert(next);
+            if id == next {
+                let m = &mut part.mesh;
+                m.positions.push(self.positions[v as usize]);
+                let nrm = self.normals.get(vn as usize).copied();
+                part.with_normal += usize::from(nrm.is_some());
+                part.without_normal += usize::from(nrm.is_none());
+                m.normals
+                    .get_or_insert_with(Vec::new)
+                    .push(nrm.unwrap_or_default());
+                let uv = self.uvs.get(vt as usize).copied();
+                part.with_uv += usize::from(uv.is_some());
+                m.uvs
+                    .get_or_insert_with(Vec::new)
+                    .push(uv.unwrap_or_default());
+            }
+            face.push(id);
         }
-        if p.with_uv == 0 {
-            p.mesh.uvs = None;
+        if n < 3 {
+            return Err(line
+                .origin(keyword)
+                .error(format!("a face needs at least 3 vertices, found {n}")));
         }
+        // A fan, as tobj and Blender triangulate convex polygons.
+        for k in 1..face.len() - 1 {
+            part.mesh.indices.push([face[0], face[k], face[k + 1]]);
+        }
+        Ok(())
     }
-    Ok(obj)
+
+    /// The parts with faces, each keeping normals and UVs only if all its vertices have
+    /// them; an error if the file has no faces at all.
+    fn finish(self, file: &str) -> Result<Obj, SceneError> {
+        let mut obj = self.obj;
+        for (what, (count, at)) in self.skipped {
+            obj.warnings.push(format!(
+                "{at}: {count} statements of {what} skipped (only faces render)"
+            ));
+        }
+        obj.parts.retain(|p| !p.mesh.indices.is_empty());
+        if obj.parts.is_empty() {
+            let hint = match self.first_unknown {
+                Some((word, at)) => format!(
+                    "; {at} starts with '{word}', which is no OBJ statement: is this an OBJ file?"
+                ),
+                None => String::new(),
+            };
+            return Err(Origin::file(file).error(format!("the OBJ file has no faces{hint}")));
+        }
+        for p in &mut obj.parts {
+            p.remap = HashMap::new();
+            if p.with_normal == 0 || p.without_normal > 0 {
+                p.mesh.normals = None;
+            }
+            if p.with_uv == 0 {
+                p.mesh.uvs = None;
+            }
+        }
+        Ok(obj)
+    }
 }
 
 impl Line<'_> {

@@ -82,54 +82,24 @@ pub fn load(path: &Path, at: &Origin) -> Result<(MeshData, Vec<String>), SceneEr
         Origin::file(&file).error(format!("PLY header: {}", first_line(&e.to_string())))
     })?;
     // Lines the header took, for the line numbers of an ASCII payload.
-    let header_lines = bytes[..bytes.len() - reader.len()]
+    let mut line = bytes[..bytes.len() - reader.len()]
         .iter()
         .filter(|&&b| b == b'\n')
         .count();
-    let mut mesh = MeshData::default();
+    let mut mesh = Gathered::default();
     let mut warnings = Vec::new();
-    let mut normals: Vec<[f32; 3]> = Vec::new();
-    let mut uvs: Vec<[f32; 2]> = Vec::new();
-    let mut colors: Vec<[f32; 3]> = Vec::new();
-    let mut has = (false, false, false);
-    // Integer colours are sRGB-encoded fractions of their range (as Blender's PLY
-    // importer reads them by default); float colours are linear.
-    let mut srgb = false;
-    let mut line = header_lines;
     for (name, def) in &header.elements {
-        let props = |names: &[&str]| names.iter().all(|n| def.properties.contains_key(*n));
-        if name == "vertex" {
-            has = (
-                props(&["nx", "ny", "nz"]),
-                UV_NAMES.iter().any(|[u, v]| props(&[u, v])),
-                props(&["red", "green", "blue"]),
-            );
-            srgb = ["red", "green", "blue"].iter().all(|n| {
-                def.properties.get(*n).is_some_and(|p| {
-                    !matches!(
-                        p.data_type,
-                        PropertyType::Scalar(ScalarType::Float | ScalarType::Double)
-                    )
-                })
-            });
-            if !props(&["x", "y", "z"]) {
-                return Err(
-                    Origin::file(&file).error("PLY element 'vertex' needs properties x, y and z")
-                );
+        match name.as_str() {
+            "vertex" => mesh.layout = VertexLayout::of(def, &file)?,
+            "face" => check_face_element(def, &file)?,
+            _ if def.count > 0 => {
+                warnings.push(format!("{file}: PLY element '{name}' is not used"))
             }
-        }
-        if name == "face"
-            && !["vertex_indices", "vertex_index"]
-                .iter()
-                .any(|n| props(&[n]))
-        {
-            return Err(Origin::file(&file).error(
-                "PLY element 'face' needs a list property vertex_indices (or vertex_index)",
-            ));
+            _ => {}
         }
         for k in 0..def.count {
             line += 1;
-            let where_ = || ElementAt {
+            let at = ElementAt {
                 file: &file,
                 element: name,
                 index: k,
@@ -137,76 +107,144 @@ pub fn load(path: &Path, at: &Origin) -> Result<(MeshData, Vec<String>), SceneEr
                 line: (header.encoding == Encoding::Ascii).then_some(line),
             };
             let row = read_row(&parser, &mut reader, def, header.encoding)
-                .map_err(|e| where_().error(&first_line(&e.to_string())))?;
+                .map_err(|e| at.error(&first_line(&e.to_string())))?;
             if let Some(bad) = &row.bad {
-                return Err(where_().error(bad));
+                return Err(at.error(bad));
             }
             match name.as_str() {
-                "vertex" => {
-                    let p = [row.v[X], row.v[Y], row.v[Z]].map(|c| c as f32);
-                    if !p.iter().all(|c| c.is_finite()) {
-                        return Err(where_().error(&format!("vertex position {p:?} is not finite")));
-                    }
-                    mesh.positions.push(p);
-                    if has.0 {
-                        let n = [row.v[NX], row.v[NY], row.v[NZ]].map(|c| c as f32);
-                        if !n.iter().all(|c| c.is_finite()) {
-                            return Err(
-                                where_().error(&format!("vertex normal {n:?} is not finite"))
-                            );
-                        }
-                        normals.push(n);
-                    }
-                    if has.1 {
-                        // v runs up in PLY as in OBJ; ours from the image's top.
-                        uvs.push([row.v[U] as f32, 1.0 - row.v[V] as f32]);
-                    }
-                    if has.2 {
-                        let c = [row.v[R], row.v[R + 1], row.v[R + 2]].map(|c| c as f32);
-                        if !c.iter().all(|v| v.is_finite() && *v >= 0.0) {
-                            return Err(where_().error(&format!(
-                                "vertex colour {c:?}: expected finite, non-negative numbers"
-                            )));
-                        }
-                        colors.push(if srgb {
-                            c.map(texture::srgb_to_linear)
-                        } else {
-                            c
-                        });
-                    }
-                }
-                "face" => {
-                    let n = mesh.positions.len();
-                    if let Some(&bad) = row.list.iter().find(|&&i| i as usize >= n) {
-                        return Err(where_().error(&format!(
-                            "vertex index {bad} is out of range: the file has {n} vertices"
-                        )));
-                    }
-                    if row.list.len() < 3 {
-                        return Err(where_().error(&format!(
-                            "a face needs at least 3 vertices, found {}",
-                            row.list.len()
-                        )));
-                    }
-                    for t in 1..row.list.len() - 1 {
-                        mesh.indices
-                            .push([row.list[0], row.list[t], row.list[t + 1]]);
-                    }
-                }
+                "vertex" => mesh.vertex(&row, &at)?,
+                "face" => mesh.face(&row, &at)?,
                 _ => {}
             }
         }
-        if name != "vertex" && name != "face" && def.count > 0 {
-            warnings.push(format!("{file}: PLY element '{name}' is not used"));
+    }
+    Ok((mesh.finish(&file)?, warnings))
+}
+
+/// Which of the optional vertex properties a PLY file has.
+#[derive(Clone, Copy, Default)]
+struct VertexLayout {
+    normals: bool,
+    uvs: bool,
+    colors: bool,
+    /// Integer colours are sRGB-encoded fractions of their range (as Blender's PLY
+    /// importer reads them by default); float colours are linear.
+    srgb: bool,
+}
+
+impl VertexLayout {
+    fn of(def: &ElementDef, file: &str) -> Result<VertexLayout, SceneError> {
+        let props = |names: &[&str]| names.iter().all(|n| def.properties.contains_key(*n));
+        if !props(&["x", "y", "z"]) {
+            return Err(
+                Origin::file(file).error("PLY element 'vertex' needs properties x, y and z")
+            );
         }
+        let srgb = ["red", "green", "blue"].iter().all(|n| {
+            def.properties.get(*n).is_some_and(|p| {
+                !matches!(
+                    p.data_type,
+                    PropertyType::Scalar(ScalarType::Float | ScalarType::Double)
+                )
+            })
+        });
+        Ok(VertexLayout {
+            normals: props(&["nx", "ny", "nz"]),
+            uvs: UV_NAMES.iter().any(|[u, v]| props(&[u, v])),
+            colors: props(&["red", "green", "blue"]),
+            srgb,
+        })
     }
-    if mesh.indices.is_empty() {
-        return Err(Origin::file(&file).error("the PLY file has no faces (a point cloud?)"));
+}
+
+fn check_face_element(def: &ElementDef, file: &str) -> Result<(), SceneError> {
+    if ["vertex_indices", "vertex_index"]
+        .iter()
+        .any(|n| def.properties.contains_key(*n))
+    {
+        Ok(())
+    } else {
+        Err(Origin::file(file)
+            .error("PLY element 'face' needs a list property vertex_indices (or vertex_index)"))
     }
-    mesh.normals = has.0.then_some(normals);
-    mesh.uvs = has.1.then_some(uvs);
-    mesh.colors = has.2.then_some(colors);
-    Ok((mesh, warnings))
+}
+
+/// The mesh as its elements are read.
+#[derive(Default)]
+struct Gathered {
+    layout: VertexLayout,
+    mesh: MeshData,
+    normals: Vec<[f32; 3]>,
+    uvs: Vec<[f32; 2]>,
+    colors: Vec<[f32; 3]>,
+}
+
+impl Gathered {
+    fn vertex(&mut self, row: &Row, at: &ElementAt) -> Result<(), SceneError> {
+        let p = [row.v[X], row.v[Y], row.v[Z]].map(|c| c as f32);
+        if !p.iter().all(|c| c.is_finite()) {
+            return Err(at.error(&format!("vertex position {p:?} is not finite")));
+        }
+        self.mesh.positions.push(p);
+        if self.layout.normals {
+            let n = [row.v[NX], row.v[NY], row.v[NZ]].map(|c| c as f32);
+            if !n.iter().all(|c| c.is_finite()) {
+                return Err(at.error(&format!("vertex normal {n:?} is not finite")));
+            }
+            self.normals.push(n);
+        }
+        if self.layout.uvs {
+            // v runs up in PLY as in OBJ; ours from the image's top.
+            self.uvs.push([row.v[U] as f32, 1.0 - row.v[V] as f32]);
+        }
+        if self.layout.colors {
+            let c = [row.v[R], row.v[R + 1], row.v[R + 2]].map(|c| c as f32);
+            if !c.iter().all(|v| v.is_finite() && *v >= 0.0) {
+                return Err(at.error(&format!(
+                    "vertex colour {c:?}: expected finite, non-negative numbers"
+                )));
+            }
+            self.colors.push(if self.layout.srgb {
+                c.map(texture::srgb_to_linear)
+            } else {
+                c
+            });
+        }
+        Ok(())
+    }
+
+    /// A polygon, fan-triangulated; its indices must name vertices read before it.
+    fn face(&mut self, row: &Row, at: &ElementAt) -> Result<(), SceneError> {
+        let n = self.mesh.positions.len();
+        if let Some(&bad) = row.list.iter().find(|&&i| i as usize >= n) {
+            return Err(at.error(&format!(
+                "vertex index {bad} is out of range: the file has {n} vertices"
+            )));
+        }
+        if row.list.len() < 3 {
+            return Err(at.error(&format!(
+                "a face needs at least 3 vertices, found {}",
+                row.list.len()
+            )));
+        }
+        for t in 1..row.list.len() - 1 {
+            self.mesh
+                .indices
+                .push([row.list[0], row.list[t], row.list[t + 1]]);
+        }
+        Ok(())
+    }
+
+    fn finish(self, file: &str) -> Result<MeshData, SceneError> {
+        let mut mesh = self.mesh;
+        if mesh.indices.is_empty() {
+            return Err(Origin::file(file).error("the PLY file has no faces (a point cloud?)"));
+        }
+        mesh.normals = self.layout.normals.then_some(self.normals);
+        mesh.uvs = self.layout.uvs.then_some(self.uvs);
+        mesh.colors = self.layout.colors.then_some(self.colors);
+        Ok(mesh)
+    }
 }
 
 fn first_line(s: &str) -> String {

@@ -4,18 +4,16 @@
 // on 2D canvases. `window.lpv` exposes the state and a few hooks for the browser test.
 'use strict';
 
-const THUMB_WIDTH = 160;
 const MAX_GROUPS = 15;
 const $ = (id) => document.getElementById(id);
 const lpv = (window.lpv = {
   ready: false,
   info: null,
   renderer: null,
-  timings: {},
+  timings: { script: performance.now() }, // ms since the navigation started
   view: { name: null, exposure: 0, srgb: true, channel: 'rgb', noisy: false },
   mixer: null, // { base, groups: [{ part, group, arg, gain, tint }] }
 });
-const started = performance.now();
 
 // ---------- half floats ----------
 const HALF = new Float32Array(65536);
@@ -53,31 +51,48 @@ function image(name, width) {
 
 // ---------- the display transform (the shader below does the same) ----------
 const srgb = (v) => (v <= 0.0031308 ? 12.92 * v : 1.055 * Math.pow(v, 1 / 2.4) - 0.055);
+// Allocates nothing: it runs for every pixel of every thumbnail (and of the CPU view).
+const encode = (v) => {
+  const x = Math.min(Math.max(v, 0), 1);
+  return Math.round((lpv.view.srgb ? srgb(x) : x) * 255);
+};
 function display(r, g, b, out, o) {
   const k = 2 ** lpv.view.exposure;
   r *= k; g *= k; b *= k;
   const c = lpv.view.channel;
   if (c === 'r') g = b = r; else if (c === 'g') r = b = g; else if (c === 'b') r = g = b;
   else if (c === 'lum') r = g = b = 0.2126 * r + 0.7152 * g + 0.0722 * b;
-  for (const [i, v] of [[0, r], [1, g], [2, b]]) {
-    let x = Math.min(Math.max(v, 0), 1);
-    if (lpv.view.srgb) x = srgb(x);
-    out[o + i] = Math.round(x * 255);
-  }
+  out[o] = encode(r); out[o + 1] = encode(g); out[o + 2] = encode(b);
   out[o + 3] = 255;
 }
 
 // ---------- the large view ----------
+// Sizes a view's canvas for an image of w × h: shown as large as fits in the viewer
+// (never enlarged), with as many pixels as it is shown with (`reduce`, on the GPU) or
+// the image's own. Returns the canvas's pixel size; `.size` keeps the image's.
+function fit(canvas, w, h, reduce) {
+  // The viewer's width less its padding and room for a scroll bar that may appear.
+  const room = $('viewer').clientWidth - 40, tall = 0.62 * window.innerHeight;
+  const s = Math.min(1, room / w, tall / h);
+  canvas.style.width = `${w * s}px`; canvas.style.height = `${h * s}px`;
+  const k = reduce ? Math.min(1, s * (window.devicePixelRatio || 1)) : 1;
+  const cw = Math.max(1, Math.round(w * k)), ch = Math.max(1, Math.round(h * k));
+  if (canvas.width !== cw || canvas.height !== ch) { canvas.width = cw; canvas.height = ch; }
+  lpv.renderer.size = [w, h];
+  return [cw, ch];
+}
 const VERT = `#version 300 es
 in vec2 p; void main() { gl_Position = vec4(p, 0.0, 1.0); }`;
 const FRAG = `#version 300 es
 precision highp float; precision highp int; precision highp sampler2DArray;
 uniform sampler2DArray img; uniform int n; uniform vec3 gain[${MAX_GROUPS}];
-uniform float scale; uniform int channel; uniform bool encode; uniform int height;
+uniform float scale; uniform int channel; uniform bool encode; uniform ivec2 size; uniform vec2 ratio;
 out vec4 color;
 float srgb(float v) { return v <= 0.0031308 ? 12.92 * v : 1.055 * pow(v, 1.0 / 2.4) - 0.055; }
 void main() {
-  ivec2 p = ivec2(gl_FragCoord.xy); p.y = height - 1 - p.y;
+  // The image pixel under this canvas pixel's centre (rows top down).
+  ivec2 p = ivec2(gl_FragCoord.x * ratio.x, float(size.y) - gl_FragCoord.y * ratio.y);
+  p = clamp(p, ivec2(0), size - 1);
   vec3 c = texelFetch(img, ivec3(p, 0), 0).rgb;
   for (int i = 0; i < ${MAX_GROUPS}; i++) {
     if (i >= n) break;
@@ -112,12 +127,14 @@ class GpuView {
     gl.enableVertexAttribArray(loc);
     gl.vertexAttribPointer(loc, 2, gl.FLOAT, false, 0, 0);
     this.u = {};
-    for (const k of ['img', 'n', 'gain', 'scale', 'channel', 'encode', 'height']) this.u[k] = gl.getUniformLocation(prog, k);
+    for (const k of ['img', 'n', 'gain', 'scale', 'channel', 'encode', 'size', 'ratio']) this.u[k] = gl.getUniformLocation(prog, k);
     gl.pixelStorei(gl.UNPACK_ALIGNMENT, 1);
     this.gl = gl; this.canvas = canvas; this.tex = null; this.layers = [];
     this.name = 'WebGL2';
   }
-  // layers: [base, part1, …] images of one size; uploaded only when they change.
+  // layers: [base, part1, …] images of one size; uploaded only when they change, as RGBA
+  // (RGB16F textures are converted to RGBA by the driver, slowly: 4× the time in
+  // SwiftShader, and ANGLE on Direct3D does the same).
   draw(layers, gains) {
     const gl = this.gl, base = layers[0];
     if (this.layers.length !== layers.length || this.layers.some((l, i) => l !== layers[i])) {
@@ -126,12 +143,21 @@ class GpuView {
       gl.bindTexture(gl.TEXTURE_2D_ARRAY, this.tex);
       gl.texParameteri(gl.TEXTURE_2D_ARRAY, gl.TEXTURE_MIN_FILTER, gl.NEAREST);
       gl.texParameteri(gl.TEXTURE_2D_ARRAY, gl.TEXTURE_MAG_FILTER, gl.NEAREST);
-      gl.texStorage3D(gl.TEXTURE_2D_ARRAY, 1, gl.RGB16F, base.w, base.h, layers.length);
-      layers.forEach((l, i) => gl.texSubImage3D(gl.TEXTURE_2D_ARRAY, 0, 0, 0, i, l.w, l.h, 1, gl.RGB, gl.HALF_FLOAT, l.half));
+      gl.texStorage3D(gl.TEXTURE_2D_ARRAY, 1, gl.RGBA16F, base.w, base.h, layers.length);
+      const n = base.w * base.h;
+      if (!this.rgba || this.rgba.length !== 4 * n) this.rgba = new Uint16Array(4 * n).fill(0x3c00);
+      const rgba = this.rgba;
+      for (const [i, l] of layers.entries()) {
+        const h = l.half;
+        for (let k = 0, j = 0; k < 3 * n; k += 3, j += 4) { rgba[j] = h[k]; rgba[j + 1] = h[k + 1]; rgba[j + 2] = h[k + 2]; }
+        gl.texSubImage3D(gl.TEXTURE_2D_ARRAY, 0, 0, 0, i, l.w, l.h, 1, gl.RGBA, gl.HALF_FLOAT, rgba);
+      }
       this.layers = layers.slice();
     }
-    this.canvas.width = base.w; this.canvas.height = base.h;
-    gl.viewport(0, 0, base.w, base.h);
+    // The canvas has the pixels it is shown with (no more than the image's): a 1080p AOV
+    // in a 900-pixel-wide view is sampled at 900 × 506, not drawn at 1920 × 1080.
+    const [cw, ch] = fit(this.canvas, base.w, base.h, true);
+    gl.viewport(0, 0, cw, ch);
     const g = new Float32Array(3 * MAX_GROUPS);
     gains.forEach((v, i) => g.set(v, 3 * i));
     gl.uniform1i(this.u.img, 0);
@@ -140,12 +166,16 @@ class GpuView {
     gl.uniform1f(this.u.scale, 2 ** lpv.view.exposure);
     gl.uniform1i(this.u.channel, ['rgb', 'r', 'g', 'b', 'lum'].indexOf(lpv.view.channel));
     gl.uniform1i(this.u.encode, lpv.view.srgb ? 1 : 0);
-    gl.uniform1i(this.u.height, base.h);
+    gl.uniform2i(this.u.size, base.w, base.h);
+    gl.uniform2f(this.u.ratio, base.w / cw, base.h / ch);
     gl.drawArrays(gl.TRIANGLES, 0, 3);
   }
+  // The shown pixel at image pixel (x, y) (itself when the view is not reduced).
   readPixel(x, y) {
-    const out = new Uint8Array(4);
-    this.gl.readPixels(x, this.canvas.height - 1 - y, 1, 1, this.gl.RGBA, this.gl.UNSIGNED_BYTE, out);
+    const out = new Uint8Array(4), c = this.canvas, [w, h] = this.size;
+    const cx = Math.min(c.width - 1, Math.floor(((x + 0.5) * c.width) / w));
+    const cy = Math.min(c.height - 1, Math.floor(((y + 0.5) * c.height) / h));
+    this.gl.readPixels(cx, c.height - 1 - cy, 1, 1, this.gl.RGBA, this.gl.UNSIGNED_BYTE, out);
     return Array.from(out);
   }
 }
@@ -156,7 +186,7 @@ class CpuView {
   draw(layers, gains) {
     const base = layers[0], n = base.w * base.h;
     const planes = layers.map((l) => this.f(l));
-    this.canvas.width = base.w; this.canvas.height = base.h;
+    fit(this.canvas, base.w, base.h, false);
     const out = this.ctx.createImageData(base.w, base.h);
     for (let i = 0; i < n; i++) {
       let r = planes[0][3 * i], g = planes[0][3 * i + 1], b = planes[0][3 * i + 2];
@@ -241,7 +271,7 @@ function buildList() {
 
 async function drawThumb(el) {
   const name = shownName(el.dataset.aov || el.dataset.crypto);
-  const img = await image(name, THUMB_WIDTH);
+  const img = await image(name, lpv.info.thumbnail_width);
   const c = el.querySelector('canvas');
   c.width = img.w; c.height = img.h;
   const ctx = c.getContext('2d'), out = ctx.createImageData(img.w, img.h);
@@ -308,6 +338,7 @@ function buildMixer() {
 }
 
 function mixChanged() {
+  $('command').textContent = ''; // the saved comp's command line no longer matches the view
   if (lpv.view.name !== lpv.mixer.base || lpv.view.noisy) { lpv.view.noisy = false; $('noisy').checked = false; select(lpv.mixer.base); return; }
   drawView();
 }
@@ -321,7 +352,9 @@ async function drawViewNow() {
   const name = lpv.view.name;
   if (!name) return;
   const shown = isCrypto(name) ? name : shownName(name);
+  const t0 = performance.now();
   const base = await image(shown, 0);
+  const t1 = performance.now();
   let layers = [base], gains = [];
   const mixing = lpv.mixer && name === lpv.mixer.base && shown === name;
   const args = mixing ? gainArgs() : [];
@@ -331,7 +364,9 @@ async function drawViewNow() {
     gains = gainsOf(args);
     lpv.mixer.loaded = true;
   }
+  const t2 = performance.now();
   lpv.renderer.draw(layers, gains);
+  lpv.timings.view = { fetch: t1 - t0, parts: t2 - t1, draw: performance.now() - t2 };
   $('current').textContent = shown + (args.length ? ` with ${args.join(' ')}` : '');
   const def = lpv.info.aovs.find((a) => a.name === shown);
   $('current').title = def ? def.definition : '';
@@ -340,10 +375,10 @@ async function drawViewNow() {
 
 // ---------- pixel inspector, Cryptomatte ----------
 function imageXY(ev) {
-  const c = $('view'), r = c.getBoundingClientRect();
-  const x = Math.floor(((ev.clientX - r.left) / r.width) * c.width);
-  const y = Math.floor(((ev.clientY - r.top) / r.height) * c.height);
-  return x >= 0 && y >= 0 && x < c.width && y < c.height ? [x, y] : null;
+  const r = $('view').getBoundingClientRect(), [w, h] = lpv.renderer.size || [0, 0];
+  const x = Math.floor(((ev.clientX - r.left) / r.width) * w);
+  const y = Math.floor(((ev.clientY - r.top) / r.height) * h);
+  return x >= 0 && y >= 0 && x < w && y < h ? [x, y] : null;
 }
 let inspecting = false, pendingXY = null;
 async function inspect(xy) {
@@ -373,7 +408,9 @@ async function inspect(xy) {
 
 async function pick(xy) {
   if (!lpv.info.cryptomatte.length) return;
-  const layer = isCrypto(lpv.view.name) ? lpv.view.name : lpv.info.cryptomatte[0].name;
+  // The layer shown, else objects (CryptoObject) before materials and assets.
+  const layers = lpv.info.cryptomatte;
+  const layer = isCrypto(lpv.view.name) ? lpv.view.name : (layers.find((l) => /object/i.test(l.name)) || layers[0]).name;
   const p = await getJSON(`/api/pixel?x=${xy[0]}&y=${xy[1]}`);
   const o = p.cryptomatte.find((c) => c.layer === layer);
   const overlay = $('matte');
@@ -450,21 +487,23 @@ async function main() {
   try { lpv.renderer = forceCpu ? new CpuView(canvas) : new GpuView(canvas); } catch (e) { lpv.renderer = new CpuView(canvas); lpv.gpuError = e.message; }
   $('renderer').textContent = `drawn with ${lpv.renderer.name}`;
   lpv.info = await getJSON('/api/info');
-  lpv.timings.info = performance.now() - started;
+  lpv.timings.info = performance.now();
   showSummary();
   buildMixer();
   const first = lpv.info.aovs.some((a) => a.name === lpv.info.beauty) ? lpv.info.beauty : lpv.info.aovs[0]?.name;
+  if (first) image(first, 0); // asked for before the thumbnails: the view is what is looked at
   const thumbs = buildList();
-  if (first) { await select(first); lpv.timings.beauty = performance.now() - started; }
+  if (first) { await select(first); lpv.timings.beauty = performance.now(); }
   await thumbs;
-  lpv.timings.thumbnails = performance.now() - started;
+  lpv.timings.thumbnails = performance.now();
 
   $('exposure').addEventListener('input', () => { lpv.view.exposure = +$('exposure').value; $('exposure-value').textContent = lpv.view.exposure.toFixed(1); drawView(); redrawThumbs(); });
   $('srgb').addEventListener('change', () => { lpv.view.srgb = $('srgb').checked; drawView(); redrawThumbs(); });
   $('channel').addEventListener('change', () => { lpv.view.channel = $('channel').value; drawView(); redrawThumbs(); });
   $('noisy').addEventListener('change', () => { lpv.view.noisy = $('noisy').checked; drawView(); redrawThumbs(); });
   $('save-comp').addEventListener('click', saveComp);
-  $('reset').addEventListener('click', () => { for (const g of lpv.mixer.groups) { g.gain = 1; g.tint = '#ffffff'; } buildMixer(); drawView(); });
+  window.addEventListener('resize', () => drawView());
+  $('reset').addEventListener('click', () => { for (const g of lpv.mixer.groups) { g.gain = 1; g.tint = '#ffffff'; } buildMixer(); mixChanged(); });
   canvas.addEventListener('mousemove', (ev) => { const xy = imageXY(ev); if (xy) inspect(xy); });
   canvas.addEventListener('click', (ev) => { const xy = imageXY(ev); if (xy) pick(xy).catch((e) => setStatus(e.message, true)); });
   lpv.readPixel = (x, y) => lpv.renderer.readPixel(x, y);
