@@ -156,6 +156,8 @@ struct Leaf<L: Lanes> {
     p0: [L; 3],
     e1: [L; 3],
     e2: [L; 3],
+    /// e1 × e2, unnormalised (`super::edge_normal`).
+    n: [L; 3],
     /// Slot of lane 0 in the primitive arrays; lane `l` is slot `first + l`.
     first: u32,
     /// For each ray-kind mask (0..8), the lanes holding a triangle that kind of ray sees.
@@ -256,35 +258,36 @@ impl<L: Lanes> RayLanes<L> {
         (tnear.le(tfar).bits() & node.lanes, tnear)
     }
 
-    /// Möller–Trumbore on a packet of triangles: distances and the lanes hit in (tmin, tmax).
+    /// The triangle test on a packet of triangles (`Prim::intersect`'s, lane by lane):
+    /// distances and the lanes hit in (tmin, tmax).
     #[inline(always)]
     fn hit_triangles(&self, leaf: &Leaf<L>, tmax: f32) -> (u32, L) {
         let [dx, dy, dz] = self.d;
         let [e1x, e1y, e1z] = leaf.e1;
         let [e2x, e2y, e2z] = leaf.e2;
-        let pvx = dy * e2z - dz * e2y;
-        let pvy = dz * e2x - dx * e2z;
-        let pvz = dx * e2y - dy * e2x;
-        let det = e1x * pvx + e1y * pvy + e1z * pvz;
-        let one = L::splat(1.0);
+        let [nx, ny, nz] = leaf.n;
         let zero = L::splat(0.0);
-        let inv = one / det;
         let tvx = self.o[0] - leaf.p0[0];
         let tvy = self.o[1] - leaf.p0[1];
         let tvz = self.o[2] - leaf.p0[2];
-        let u = (tvx * pvx + tvy * pvy + tvz * pvz) * inv;
-        let qvx = tvy * e1z - tvz * e1y;
-        let qvy = tvz * e1x - tvx * e1z;
-        let qvz = tvx * e1y - tvy * e1x;
-        let v = (dx * qvx + dy * qvy + dz * qvz) * inv;
-        let t = (e2x * qvx + e2y * qvy + e2z * qvz) * inv;
-        let ok = det.abs().ge(L::splat(1e-12))
+        let rx = dy * tvz - dz * tvy;
+        let ry = dz * tvx - dx * tvz;
+        let rz = dx * tvy - dy * tvx;
+        let den = dx * nx + dy * ny + dz * nz;
+        let absden = den.abs();
+        let neg = zero - den;
+        let u = (e2x * rx + e2y * ry + e2z * rz).xor_sign(den);
+        let v = (e1x * rx + e1y * ry + e1z * rz).xor_sign(neg);
+        let tn = (tvx * nx + tvy * ny + tvz * nz).xor_sign(neg);
+        let ok = absden.ge(L::splat(1e-12))
             & u.ge(zero)
             & v.ge(zero)
-            & (u + v).le(one)
-            & t.gt(L::splat(self.tmin))
-            & t.lt(L::splat(tmax));
-        (ok.bits(), t)
+            & (u + v).le(absden)
+            & tn.gt(L::splat(self.tmin) * absden)
+            & tn.lt(L::splat(tmax) * absden);
+        let bits = ok.bits();
+        // The division only for a packet with a hit (shadow rays never need it).
+        (bits, if bits != 0 { tn / absden } else { tn })
     }
 }
 
@@ -1087,6 +1090,7 @@ impl<L: Lanes> Tree<L> {
             let mut p0 = [L::ZERO_FLOATS; 3];
             let mut e1 = [L::ZERO_FLOATS; 3];
             let mut e2 = [L::ZERO_FLOATS; 3];
+            let mut n = [L::ZERO_FLOATS; 3];
             let mut triangles = [0u8; 8];
             let mut spheres = [0u8; 8];
             for lane in 0..(end - start).min(width) as usize {
@@ -1099,10 +1103,12 @@ impl<L: Lanes> Tree<L> {
                         e2: f2,
                         ..
                     } => {
+                        let m = super::edge_normal(f1, f2);
                         for axis in 0..3 {
                             p0[axis].as_mut()[lane] = q0[axis];
                             e1[axis].as_mut()[lane] = f1[axis];
                             e2[axis].as_mut()[lane] = f2[axis];
+                            n[axis].as_mut()[lane] = m[axis];
                         }
                         for (mask, lanes) in triangles.iter_mut().enumerate() {
                             if seen_by(mask) {
@@ -1123,6 +1129,7 @@ impl<L: Lanes> Tree<L> {
                 p0: p0.map(|a| L::load(&a)),
                 e1: e1.map(|a| L::load(&a)),
                 e2: e2.map(|a| L::load(&a)),
+                n: n.map(|a| L::load(&a)),
                 first: start,
                 triangles,
                 spheres,

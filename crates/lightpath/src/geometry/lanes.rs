@@ -39,6 +39,8 @@ pub(super) trait Lanes:
     fn min(self, o: Self) -> Self;
     fn max(self, o: Self) -> Self;
     fn abs(self) -> Self;
+    /// `self` with its sign flipped in the lanes where `of`'s sign bit is set (exact).
+    fn xor_sign(self, of: Self) -> Self;
     /// Lanes where `self <= o` (`<`, `>=`, `>`: the others), false for NaN.
     fn le(self, o: Self) -> Self::Mask;
     fn lt(self, o: Self) -> Self::Mask;
@@ -78,6 +80,11 @@ impl Lanes for Vec4 {
     #[inline(always)]
     fn abs(self) -> Self {
         Vec4::abs(self)
+    }
+    #[inline(always)]
+    fn xor_sign(self, of: Self) -> Self {
+        // Multiplying by ±1 is exact.
+        self * Vec4::ONE.copysign(of)
     }
     #[inline(always)]
     fn le(self, o: Self) -> BVec4A {
@@ -189,6 +196,15 @@ mod avx {
         #[inline(always)]
         fn abs(self) -> Self {
             unsafe { F8(_mm256_andnot_ps(_mm256_set1_ps(-0.0), self.0)) }
+        }
+        #[inline(always)]
+        fn xor_sign(self, of: Self) -> Self {
+            unsafe {
+                F8(_mm256_xor_ps(
+                    self.0,
+                    _mm256_and_ps(of.0, _mm256_set1_ps(-0.0)),
+                ))
+            }
         }
         #[inline(always)]
         fn le(self, o: Self) -> M8 {

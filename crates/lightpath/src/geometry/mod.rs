@@ -105,6 +105,16 @@ pub struct Hit {
 /// Self-intersection offset, relative to the scene's size (set at build).
 pub const RAY_EPSILON: f32 = 1e-4;
 
+/// e1 × e2, unnormalised: the triangle tests' normal, computed one way everywhere.
+#[inline(always)]
+pub(crate) fn edge_normal(e1: Vec3A, e2: Vec3A) -> Vec3A {
+    Vec3A::new(
+        e1.y * e2.z - e1.z * e2.y,
+        e1.z * e2.x - e1.x * e2.z,
+        e1.x * e2.y - e1.y * e2.x,
+    )
+}
+
 impl Prim {
     pub fn bounds(&self) -> (Vec3A, Vec3A) {
         match *self {
@@ -124,27 +134,31 @@ impl Prim {
     #[inline]
     pub fn intersect(&self, origin: Vec3A, dir: Vec3A, tmin: f32, tmax: f32) -> f32 {
         match *self {
-            // Möller–Trumbore.
+            // The normal precomputed (as the BVH's leaves store it) and the division
+            // left to the end: Embree's and pbrt's layout. Written out component by
+            // component, in the order the BVH's lanes compute, so both round alike.
             Prim::Triangle { p0, e1, e2, .. } => {
-                let pv = dir.cross(e2);
-                let det = e1.dot(pv);
-                if det.abs() < 1e-12 {
-                    return f32::INFINITY;
-                }
-                let inv = 1.0 / det;
-                let tv = origin - p0;
-                let u = tv.dot(pv) * inv;
-                if !(0.0..=1.0).contains(&u) {
-                    return f32::INFINITY;
-                }
-                let qv = tv.cross(e1);
-                let v = dir.dot(qv) * inv;
-                if v < 0.0 || u + v > 1.0 {
-                    return f32::INFINITY;
-                }
-                let t = e2.dot(qv) * inv;
-                if t > tmin && t < tmax {
-                    t
+                let n = edge_normal(e1, e2);
+                let (d, tv) = (dir, origin - p0);
+                let r = Vec3A::new(
+                    d.y * tv.z - d.z * tv.y,
+                    d.z * tv.x - d.x * tv.z,
+                    d.x * tv.y - d.y * tv.x,
+                );
+                let den = d.x * n.x + d.y * n.y + d.z * n.z;
+                let absden = den.abs();
+                let flip = |x: f32, of: f32| if of.is_sign_negative() { -x } else { x };
+                let u = flip(e2.x * r.x + e2.y * r.y + e2.z * r.z, den);
+                let v = flip(e1.x * r.x + e1.y * r.y + e1.z * r.z, -den);
+                let tn = flip(tv.x * n.x + tv.y * n.y + tv.z * n.z, -den);
+                if absden >= 1e-12
+                    && u >= 0.0
+                    && v >= 0.0
+                    && u + v <= absden
+                    && tn > tmin * absden
+                    && tn < tmax * absden
+                {
+                    tn / absden
                 } else {
                     f32::INFINITY
                 }
