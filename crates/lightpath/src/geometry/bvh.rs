@@ -110,6 +110,72 @@ impl Width {
     }
 }
 
+/// The boxes obvhs builds over: each primitive's, except that many exact duplicates of
+/// one box become one. Returns the boxes, and the primitives listed box by box
+/// (`by_group[group_start[g]..group_start[g + 1]]` are box `g`'s).
+fn group_duplicate_boxes(prims: &[Prim]) -> (Vec<Bounded>, Vec<u32>, Vec<u32>) {
+    // Many exact duplicates of one box (doubled faces, copies stacked in place) go to
+    // obvhs once: its PLOC build pairs identical boxes into a chain as deep as their
+    // number, in quadratic time. They share a leaf as consecutive packets (a ray that
+    // enters one box enters them all). A few (the two halves of an axis-aligned quad)
+    // stay apart, where the tree can separate them best.
+    const MERGE_ABOVE: u32 = 4;
+    let bounds: Vec<Aabb> = prims
+        .iter()
+        .map(|p| {
+            let (lo, hi) = p.bounds();
+            Aabb::new(lo, hi)
+        })
+        .collect();
+    let key = |b: &Aabb| [b.min.x, b.min.y, b.min.z, b.max.x, b.max.y, b.max.z].map(f32::to_bits);
+    // Copies found by sorting (key, index) pairs, in parallel and in memory order (a
+    // hash map's random probes were a third of a million-triangle build): for each
+    // primitive with more than MERGE_ABOVE copies, the first of them.
+    let mut keyed: Vec<([u32; 6], u32)> = bounds
+        .par_iter()
+        .enumerate()
+        .map(|(i, b)| (key(b), i as u32))
+        .collect();
+    keyed.par_sort_unstable();
+    let mut first_copy = vec![u32::MAX; bounds.len()];
+    for run in keyed.chunk_by(|a, b| a.0 == b.0) {
+        if run.len() > MERGE_ABOVE as usize {
+            for &(_, i) in run {
+                first_copy[i as usize] = run[0].1;
+            }
+        }
+    }
+    drop(keyed);
+    // Boxes numbered in the order of their first primitive.
+    let mut boxes: Vec<Bounded> = Vec::new();
+    let mut group = vec![0u32; bounds.len()];
+    for (i, b) in bounds.iter().enumerate() {
+        let first = first_copy[i];
+        group[i] = if first == u32::MAX || first == i as u32 {
+            boxes.push(Bounded(*b));
+            boxes.len() as u32 - 1
+        } else {
+            group[first as usize]
+        };
+    }
+    drop(first_copy);
+    // Primitives listed group by group (a counting sort).
+    let mut group_start = vec![0u32; boxes.len() + 1];
+    for &g in &group {
+        group_start[g as usize + 1] += 1;
+    }
+    for g in 0..boxes.len() {
+        group_start[g + 1] += group_start[g];
+    }
+    let mut by_group = vec![0u32; prims.len()];
+    let mut fill = group_start.clone();
+    for (i, &g) in group.iter().enumerate() {
+        by_group[fill[g as usize] as usize] = i as u32;
+        fill[g as usize] += 1;
+    }
+    (boxes, group_start, by_group)
+}
+
 /// A binary tree over `boxes` (obvhs's layout): nodes and primitive order.
 fn build_tree(boxes: &[Bounded], leaf_prims: u32) -> (Vec<Bvh2Node>, Vec<u32>) {
     let n = boxes.len();
@@ -338,66 +404,7 @@ impl Accel {
         if prims.is_empty() {
             return accel;
         }
-        // Many exact duplicates of one box (doubled faces, copies stacked in place) go to
-        // obvhs once: its PLOC build pairs identical boxes into a chain as deep as their
-        // number, in quadratic time. They share a leaf as consecutive packets (a ray that
-        // enters one box enters them all). A few (the two halves of an axis-aligned quad)
-        // stay apart, where the tree can separate them best.
-        const MERGE_ABOVE: u32 = 4;
-        let bounds: Vec<Aabb> = prims
-            .iter()
-            .map(|p| {
-                let (lo, hi) = p.bounds();
-                Aabb::new(lo, hi)
-            })
-            .collect();
-        let key =
-            |b: &Aabb| [b.min.x, b.min.y, b.min.z, b.max.x, b.max.y, b.max.z].map(f32::to_bits);
-        // Copies found by sorting (key, index) pairs, in parallel and in memory order (a
-        // hash map's random probes were a third of a million-triangle build): for each
-        // primitive with more than MERGE_ABOVE copies, the first of them.
-        let mut keyed: Vec<([u32; 6], u32)> = bounds
-            .par_iter()
-            .enumerate()
-            .map(|(i, b)| (key(b), i as u32))
-            .collect();
-        keyed.par_sort_unstable();
-        let mut first_copy = vec![u32::MAX; bounds.len()];
-        for run in keyed.chunk_by(|a, b| a.0 == b.0) {
-            if run.len() > MERGE_ABOVE as usize {
-                for &(_, i) in run {
-                    first_copy[i as usize] = run[0].1;
-                }
-            }
-        }
-        drop(keyed);
-        // Boxes numbered in the order of their first primitive.
-        let mut boxes: Vec<Bounded> = Vec::new();
-        let mut group = vec![0u32; bounds.len()];
-        for (i, b) in bounds.iter().enumerate() {
-            let first = first_copy[i];
-            group[i] = if first == u32::MAX || first == i as u32 {
-                boxes.push(Bounded(*b));
-                boxes.len() as u32 - 1
-            } else {
-                group[first as usize]
-            };
-        }
-        drop(first_copy);
-        // Primitives listed group by group (a counting sort).
-        let mut group_start = vec![0u32; boxes.len() + 1];
-        for &g in &group {
-            group_start[g as usize + 1] += 1;
-        }
-        for g in 0..boxes.len() {
-            group_start[g + 1] += group_start[g];
-        }
-        let mut by_group = vec![0u32; prims.len()];
-        let mut fill = group_start.clone();
-        for (i, &g) in group.iter().enumerate() {
-            by_group[fill[g as usize] as usize] = i as u32;
-            fill[g as usize] += 1;
-        }
+        let (boxes, group_start, by_group) = group_duplicate_boxes(&prims);
         let (tree, tree_indices) = build_tree(&boxes, width.leaf_prims());
         // Lay the primitives out in leaf order so leaves address them by range:
         // `slot_start[k]` is the first slot of the k-th box in obvhs's order.
