@@ -8,6 +8,8 @@
 #                                        apt-get install -y libllvm19 bc
 # Usage: benches/peer/mesh.sh [SPP] [REPEATS] [LIGHTPATH_BINARY]   (defaults 64, 5, the
 #        release build in $CARGO_TARGET_DIR or target/)
+#        LIGHTPATH_ARGS="--accel embree" adds options to Lightpath's command line (a build
+#        with the `embree` feature traces with Intel Embree).
 set -euo pipefail
 here="$(cd "$(dirname "$0")" && pwd)"
 root="$(cd "$here/../.." && pwd)"
@@ -48,7 +50,8 @@ for i in $(seq 1 "$repeats"); do
       --no-write "${extra[@]}" |
       sed -n "s/^RESULT.*Msamples_per_s_best=\([0-9.]*\).*/RESULT run=$i scene=$scene renderer=mitsuba_llvm Msamples_per_s=\1/p"
     start=$(date +%s.%N)
-    "$lightpath" render "$lp_scene" --quiet --aovs none --spp "$spp" --threads 2 \
+    # shellcheck disable=SC2086 # LIGHTPATH_ARGS is words
+    "$lightpath" render "$lp_scene" --quiet --aovs none --spp "$spp" --threads 2 ${LIGHTPATH_ARGS:-} \
       -o "$out/lightpath_$scene.exr" >/dev/null
     end=$(date +%s.%N)
     echo "RESULT run=$i scene=$scene renderer=lightpath_process Msamples_per_s=$(echo "$samples / ($end - $start) / 1000000" | bc -l | cut -c1-6)"

@@ -1,7 +1,8 @@
 //! Throughput of the renderer's parts on `cornell-classic`: closest-hit and shadow rays,
 //! and whole samples with beauty alone and with ~40 AOVs; rays and BVH builds with a
 //! bumpy sphere of ~82k and ~1.3M triangles in the box (made here: no mesh files in git).
-//! `cargo bench -p lightpath`.
+//! `cargo bench -p lightpath`; `LIGHTPATH_ACCEL=embree cargo bench -p lightpath --features
+//! embree` traces the same rays and samples with Intel Embree instead of the BVH.
 
 use criterion::{black_box, criterion_group, criterion_main, Criterion, Throughput};
 use glam::Vec3A;
@@ -15,7 +16,15 @@ fn classic(aovs: Vec<AovSpec>, res: u32) -> Scene {
     let src = lightpath::load_source("cornell-classic").unwrap();
     let mut desc = src.parse().unwrap();
     desc.film.resolution = [res, res];
-    Scene::build(&desc, &aov::assemble(aovs)).unwrap()
+    with_backend(Scene::build(&desc, &aov::assemble(aovs)).unwrap())
+}
+
+/// The scene traced by what `LIGHTPATH_ACCEL` names (`bvh`, the default, or `embree`).
+fn with_backend(mut scene: Scene) -> Scene {
+    let name = std::env::var("LIGHTPATH_ACCEL").unwrap_or_else(|_| "bvh".into());
+    let backend = lightpath::geometry::Backend::parse(&name).unwrap();
+    scene.accel.use_backend(backend).unwrap();
+    scene
 }
 
 /// An icosphere subdivided `levels` times (20·4^levels triangles), radius 0.4 with bumps,
@@ -138,7 +147,7 @@ fn mesh_rays(c: &mut Criterion) {
         g.bench_function("scene build", |b| {
             b.iter(|| black_box(Scene::build(&desc, &aov::assemble(vec![])).unwrap()))
         });
-        let scene = Scene::build(&desc, &aov::assemble(vec![])).unwrap();
+        let scene = with_backend(Scene::build(&desc, &aov::assemble(vec![])).unwrap());
         let rays = box_rays();
         g.throughput(Throughput::Elements(rays.len() as u64));
         g.bench_function("closest hit", |b| {

@@ -55,6 +55,8 @@ pub struct RenderJob {
     pub cancel: Option<Arc<AtomicBool>>,
     /// Denoise the EXR after rendering (`render --denoise`; feature `denoise`).
     pub denoise: Option<DenoiseRequest>,
+    /// What traces the rays (`--accel`): the BVH, or Embree (feature `embree`).
+    pub accel: crate::geometry::Backend,
 }
 
 /// `render --denoise`: the written EXR is the denoised one (post/denoise.rs).
@@ -191,6 +193,7 @@ impl RenderJob {
             checkpoint_every: None,
             cancel: None,
             denoise: None,
+            accel: crate::geometry::Backend::Bvh,
         }
     }
 
@@ -199,6 +202,13 @@ impl RenderJob {
         // Before the render: a build without denoising must not render for nothing.
         if self.denoise.is_some() && !crate::post::denoise::AVAILABLE {
             return Err(Error::Output(crate::post::denoise::UNAVAILABLE.into()));
+        }
+        if self.accel == crate::geometry::Backend::Embree
+            && !crate::geometry::Backend::EMBREE_AVAILABLE
+        {
+            return Err(Error::Setting(
+                crate::geometry::Backend::EMBREE_UNAVAILABLE.into(),
+            ));
         }
         let source = crate::load_source(&self.scene)?;
         let mut desc = source.parse()?;
@@ -217,6 +227,10 @@ impl RenderJob {
             .check_aovs(specs.len() as u64, "this render's AOV plan")
             .map_err(Error::Setting)?;
         let mut scene = Scene::build(&desc, &specs)?;
+        scene
+            .accel
+            .use_backend(self.accel)
+            .map_err(Error::Setting)?;
         scene.variance_aovs = self.variance_aovs(&desc, &scene)?;
         checks::film(&scene).map_err(Error::Setting)?;
         warnings.extend(checks::scene_warnings(&scene));

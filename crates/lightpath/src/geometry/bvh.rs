@@ -195,6 +195,12 @@ pub struct Accel {
     /// Shared meshes, each in its own space, and their placements (`Prim::Instance`).
     meshes: Vec<Accel>,
     instances: Vec<Instance>,
+    /// Which ray kinds see each primitive, in the same order (for building Embree's scene).
+    #[cfg(feature = "embree")]
+    visibility: Vec<u8>,
+    /// When set (`use_embree`), `intersect` and `occluded` ask Embree instead of the tree.
+    #[cfg(feature = "embree")]
+    embree: Option<Box<super::embree::EmbreeScene>>,
 }
 
 /// Per-ray constants of the box and triangle tests.
@@ -321,6 +327,10 @@ impl Accel {
             slots: Vec::new(),
             meshes: Vec::new(),
             instances: Vec::new(),
+            #[cfg(feature = "embree")]
+            visibility: Vec::new(),
+            #[cfg(feature = "embree")]
+            embree: None,
         };
         if prims.is_empty() {
             return accel;
@@ -404,6 +414,10 @@ impl Accel {
         }
         accel.objects = order.iter().map(|&i| objects[i as usize]).collect();
         let visibility: Vec<u8> = order.iter().map(|&i| visibility[i as usize]).collect();
+        #[cfg(feature = "embree")]
+        {
+            accel.visibility = visibility.clone();
+        }
         accel.face_normals = accel.prims.iter().map(Prim::face_normal).collect();
 
         accel.tree = match width {
@@ -417,6 +431,49 @@ impl Accel {
     }
     pub fn prims(&self) -> &[Prim] {
         &self.prims
+    }
+
+    /// Which ray kinds see each primitive of `prims()`.
+    #[cfg(feature = "embree")]
+    pub(super) fn visibility(&self) -> &[u8] {
+        &self.visibility
+    }
+
+    /// From now on `intersect` and `occluded` ask Intel Embree (an Embree scene built
+    /// over the same primitives, instances and visibility); hits are the BVH's up to
+    /// float rounding, and the surface at a hit is computed as before. Errors when Embree
+    /// cannot make a device or build the scene.
+    #[cfg(feature = "embree")]
+    pub fn use_embree(&mut self) -> Result<(), String> {
+        if !self.prims.is_empty() {
+            let scene = super::embree::EmbreeScene::build(self, &self.visibility, false)?;
+            self.embree = Some(Box::new(scene));
+        }
+        Ok(())
+    }
+
+    /// Traces with `backend` from now on (`Bvh`: nothing to do; `Embree`: `use_embree`,
+    /// or an error in a build without the `embree` feature).
+    pub fn use_backend(&mut self, backend: super::Backend) -> Result<(), String> {
+        match backend {
+            super::Backend::Bvh => Ok(()),
+            #[cfg(feature = "embree")]
+            super::Backend::Embree => self.use_embree(),
+            #[cfg(not(feature = "embree"))]
+            super::Backend::Embree => Err(super::Backend::EMBREE_UNAVAILABLE.into()),
+        }
+    }
+
+    /// Whether `use_embree` took effect.
+    pub fn uses_embree(&self) -> bool {
+        #[cfg(feature = "embree")]
+        {
+            self.embree.is_some()
+        }
+        #[cfg(not(feature = "embree"))]
+        {
+            false
+        }
     }
 
     /// Gives the accelerator the meshes and placements its `Prim::Instance` primitives
@@ -462,6 +519,11 @@ impl Accel {
     pub fn intersect(&self, ray: &Ray, tmin: f32, mask: u8) -> Option<Hit> {
         if self.prims.is_empty() {
             return None;
+        }
+        #[cfg(feature = "embree")]
+        if let Some(embree) = &self.embree {
+            let (prim, t, inner) = embree.intersect(ray, tmin, mask)?;
+            return Some(self.surface(ray, prim, t, inner));
         }
         let (prim, t, inner) = self.nearest(ray, tmin, mask, &DEEP_CLOSEST);
         (prim != u32::MAX).then(|| self.surface(ray, prim, t, inner))
@@ -715,6 +777,10 @@ impl Accel {
     pub fn occluded(&self, ray: &Ray, tmin: f32, ignore: u32) -> bool {
         if self.prims.is_empty() {
             return false;
+        }
+        #[cfg(feature = "embree")]
+        if let Some(embree) = &self.embree {
+            return embree.occluded(ray, tmin, ignore);
         }
         self.occluded_with(ray, tmin, ignore, &DEEP_ANY)
     }

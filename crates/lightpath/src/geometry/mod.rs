@@ -4,6 +4,8 @@
 
 pub mod attrs;
 mod bvh;
+#[cfg(feature = "embree")]
+mod embree;
 mod instance;
 mod lanes;
 mod sah;
@@ -14,6 +16,44 @@ pub use bvh::{Accel, Visibility};
 pub use instance::Instance;
 
 use glam::Vec3A;
+
+/// Which code traces rays (`render --accel`): Lightpath's own BVH, or Intel Embree 3 in a
+/// build with the `embree` feature. Both find the same hits up to float rounding.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Backend {
+    #[default]
+    Bvh,
+    Embree,
+}
+
+impl Backend {
+    /// Whether this build can trace with Embree (cargo feature `embree`).
+    pub const EMBREE_AVAILABLE: bool = cfg!(feature = "embree");
+
+    /// The error of `--accel embree` in a build without the feature.
+    pub const EMBREE_UNAVAILABLE: &'static str =
+        "--accel embree: this lightpath was built without Embree (cargo feature `embree`). \
+         To get it: `apt-get install libembree-dev` (Embree 3.13), then `cargo install --path \
+         crates/lightpath --features embree` (or `cargo run --release --features embree -- \
+         render --accel embree ...`)";
+
+    pub fn parse(s: &str) -> Result<Backend, String> {
+        match s {
+            "bvh" => Ok(Backend::Bvh),
+            "embree" => Ok(Backend::Embree),
+            other => Err(format!(
+                "unknown accelerator '{other}': expected bvh or embree"
+            )),
+        }
+    }
+
+    pub fn as_str(self) -> &'static str {
+        match self {
+            Backend::Bvh => "bvh",
+            Backend::Embree => "embree",
+        }
+    }
+}
 
 /// A ray with its valid interval.
 #[derive(Clone, Copy, Debug)]

@@ -284,6 +284,10 @@ pub(crate) struct RenderArgs {
     /// With --denoise: Open Image Denoise quality, high, balanced or fast.
     #[arg(long, default_value = "high", value_parser = lightpath::post::denoise::Quality::parse)]
     pub(crate) denoise_quality: lightpath::post::denoise::Quality,
+    /// What traces the rays: bvh (Lightpath's own, the default) or embree (Intel Embree 3;
+    /// needs a build with the `embree` feature). Same hits up to float rounding.
+    #[arg(long, default_value = "bvh", value_parser = lightpath::geometry::Backend::parse)]
+    pub(crate) accel: lightpath::geometry::Backend,
 }
 
 pub(crate) fn parse_seconds(s: &str) -> Result<f64, String> {

@@ -237,6 +237,7 @@ fn render(args: RenderArgs) -> ExitCode {
             keep_noisy: args.keep_noisy,
             quality: args.denoise_quality,
         }),
+        accel: args.accel,
     };
     let prepared = match job.prepare() {
         Ok(p) => p,
