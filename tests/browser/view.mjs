@@ -291,6 +291,7 @@ async function pictures(dir) {
   await evaluate(page, 'lpv.idle()');
   await screenshot(page, 'view-overview.png');
 
+  if (!(await evaluate(page, '!!lpv.mixer'))) throw new Error(`${file} has no light groups: the mixer's picture needs a render with --light-groups`);
   const groups = await evaluate(page, `lpv.mixer.groups.map((g) => g.arg)`);
   const pickGroup = (name, i) => (groups.includes(name) ? name : groups[i]);
   for (const [arg, gain, tint] of [[pickGroup('key', 0), 0.3, '#ffffff'], [pickGroup('fill', 1), 3, '#ffb060']]) {

@@ -312,6 +312,7 @@ function gainsOf(args) {
 function buildMixer() {
   const m = lpv.info.mixers[0];
   $('mixer').hidden = !m;
+  $('no-mixer').hidden = !!m;
   if (!m) { lpv.mixer = null; return; }
   const groups = m.groups.slice(0, MAX_GROUPS);
   const keep = lpv.mixer && lpv.mixer.base === m.base ? new Map(lpv.mixer.groups.map((g) => [g.part, g])) : new Map();
