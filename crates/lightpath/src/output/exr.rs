@@ -433,6 +433,19 @@ pub struct ExrContents {
 }
 
 impl ExrContents {
+    /// The header of a file made from this one (a comp, a denoise): the same frame and
+    /// crop, camera and capture date, with `text` as its attributes.
+    pub fn derived_header(&self, text: Vec<(String, String)>) -> ExrHeader {
+        ExrHeader {
+            frame: Some(self.frame),
+            origin: self.origin,
+            world_to_camera: self.world_to_camera,
+            world_to_ndc: self.world_to_ndc,
+            capture_date: self.capture_date.clone(),
+            text,
+        }
+    }
+
     pub fn channel(&self, name: &str) -> Option<&[f32]> {
         self.channels
             .iter()

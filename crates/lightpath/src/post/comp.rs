@@ -2,7 +2,7 @@
 //! and subtraction, never a re-render.
 
 use crate::aov::naming::{self, channel_names};
-use crate::output::{read_exr, write_image, write_png_rgb, ExrContents, ExrHeader};
+use crate::output::{read_exr, write_image, write_png_rgb, ExrContents};
 use glam::Vec3A;
 use std::path::PathBuf;
 
@@ -296,14 +296,7 @@ pub fn run(job: &CompJob) -> Result<PathBuf, String> {
         format!("comp of {}: {}", job.exr.display(), description.trim()),
     )];
     // A comp of a tile stays that tile of its frame, seen by the same camera.
-    let header = ExrHeader {
-        frame: Some(exr.frame),
-        origin: exr.origin,
-        world_to_camera: exr.world_to_camera,
-        world_to_ndc: exr.world_to_ndc,
-        text: attributes,
-        ..ExrHeader::default()
-    };
+    let header = exr.derived_header(attributes);
     write_image(
         &job.output,
         exr.width,
@@ -325,6 +318,7 @@ pub fn run(job: &CompJob) -> Result<PathBuf, String> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::output::ExrHeader;
 
     #[test]
     fn parses_the_guides_compositing_expressions() {

@@ -29,7 +29,7 @@
 //!   beauty when every gain is 1.
 
 use crate::aov::naming::{self, channel_names, AovKind};
-use crate::output::{read_exr, write_image, ExrContents, ExrHeader, ExrOptions};
+use crate::output::{read_exr, write_image, ExrContents, ExrOptions};
 use std::collections::HashMap;
 use std::path::PathBuf;
 
@@ -645,14 +645,7 @@ pub fn run(job: &DenoiseJob) -> Result<DenoiseSummary, String> {
     .and_then(|r| r)
     .map_err(|e| format!("cannot denoise {}: {e}", job.input.display()))?;
     // The input's header with the denoiser's attributes: a crop stays a crop of its frame.
-    let header = ExrHeader {
-        frame: Some(exr.frame),
-        origin: exr.origin,
-        world_to_camera: exr.world_to_camera,
-        world_to_ndc: exr.world_to_ndc,
-        capture_date: exr.capture_date.clone(),
-        text: attributes,
-    };
+    let header = exr.derived_header(attributes);
     write_image(
         &job.output,
         exr.width,
