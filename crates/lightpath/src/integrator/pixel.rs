@@ -1,13 +1,19 @@
 //! The samples of one pixel: which sampler makes their numbers, and how many to take.
 //!
 //! Adaptive sampling (`--noise-threshold X`, `[render] noise_threshold`): every pixel
-//! takes `min_spp` samples, then stops as soon as the relative standard error of its
-//! beauty's luminance — estimated from its own samples, √(s² / n) / mean — is at most
-//! X, or at `spp`. It checks every [`CHECK_EVERY`] samples: Sobol points come in
-//! balanced blocks of powers of two, so a pixel stops at the end of a block. Every AOV
-//! of the pixel is accumulated from the same samples, so partitions still sum exactly;
-//! the decision reads only the pixel's own samples, so it is the same for any thread
-//! count. The film records each pixel's sample count (the `sampleCount` channel).
+//! takes `min_spp` samples, then stops as soon as the standard error of its beauty's
+//! luminance — estimated from its own samples, √(s² / n) — is at most X times the square
+//! root of its mean (as Cycles weighs its error), or at `spp`. Dividing by √mean rather
+//! than the mean spends samples where they lower the image's squared error: with noise
+//! proportional to brightness it gives each pixel samples in proportion to its standard
+//! deviation, the allocation that minimises the summed variance for a given total, and
+//! it does not starve bright pixels (a lamp's edge) the way a relative error would.
+//! A pixel checks only when its count reaches a power of two: Sobol points are balanced
+//! in blocks of powers of two, and few checks leave few chances to stop on a lucky run of
+//! samples (each stop on a low estimate is a small bias). Every AOV of the pixel is
+//! accumulated from the same samples, so partitions still sum exactly; the decision
+//! reads only the pixel's own samples, so it is the same for any thread count. The film
+//! records each pixel's sample count (the `sampleCount` channel).
 
 use super::{Sink, Tracer};
 use crate::film::Film;
@@ -15,8 +21,9 @@ use crate::light::luminance;
 use crate::sampler::{dim, IndependentPixel, PixelSampler, Sampler, SamplerKind, SobolPixel};
 use glam::Vec2;
 
-/// Adaptive sampling checks a pixel's noise after this many samples past `min_spp`.
-pub const CHECK_EVERY: u32 = 8;
+/// Below this mean luminance a pixel's error is weighed as at this mean (the square root
+/// would otherwise ask near-black pixels for ever more samples).
+const DARKEST_WEIGHED: f64 = 1e-4;
 
 /// Where one pixel's samples go and which samples it takes.
 pub(super) struct PixelJob<'p> {
@@ -48,8 +55,8 @@ impl Moments {
         self.sum2 += v * v;
     }
 
-    /// Whether the relative standard error of the mean is at most `threshold`. A pixel
-    /// whose samples are all equal (black background, a clamped light) has none.
+    /// Whether the standard error of the mean is at most `threshold` × √mean. A pixel
+    /// whose samples are all equal (black background, a lamp's inside) has none.
     fn converged(&self, threshold: f32) -> bool {
         let n = self.n as f64;
         let mean = self.sum / n;
@@ -57,7 +64,7 @@ impl Moments {
         if var == 0.0 {
             return true;
         }
-        mean > 0.0 && (var / n).sqrt() <= threshold as f64 * mean
+        (var / n).sqrt() <= threshold as f64 * mean.max(DARKEST_WEIGHED).sqrt()
     }
 }
 
@@ -98,7 +105,7 @@ impl Tracer<'_> {
             job.run[alpha_slot] += alpha;
             if adaptive
                 && moments.n >= settings.min_spp
-                && (moments.n - settings.min_spp) % CHECK_EVERY == 0
+                && moments.n.is_power_of_two()
                 && moments.converged(settings.noise_threshold)
             {
                 return moments.n;
@@ -113,20 +120,28 @@ mod tests {
     use super::*;
 
     #[test]
-    fn relative_standard_error_decides() {
+    fn standard_error_over_root_mean_decides() {
         let mut m = Moments::default();
         for v in [1.0, 1.0, 1.0, 1.0] {
             m.add(v);
         }
         assert!(m.converged(1e-6), "no variance: nothing to estimate");
         let mut m = Moments::default();
-        // Mean 1, sample standard deviation 1 over 4 samples: relative error 0.5.
+        // Mean 1, sample variance 4/3 over 4 samples: standard error √(1/3), √mean 1.
         for v in [0.0, 2.0, 0.0, 2.0] {
             m.add(v);
         }
         let se = (4.0f64 / 3.0 / 4.0).sqrt();
         assert!(m.converged(se as f32 * 1.001));
         assert!(!m.converged(se as f32 * 0.999));
+        // Four times brighter: the error doubles relative to √mean, where a relative
+        // error would have stayed the same (0.577 < 0.6) and stopped the pixel.
+        let mut m = Moments::default();
+        for v in [0.0, 8.0, 0.0, 8.0] {
+            m.add(v);
+        }
+        assert!(m.converged(2.0 * se as f32 * 1.001));
+        assert!(!m.converged(0.6));
         let mut m = Moments::default();
         for v in [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 4.0] {
             m.add(v);

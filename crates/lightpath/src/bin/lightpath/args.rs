@@ -234,8 +234,9 @@ pub(crate) struct RenderArgs {
     /// bit for bit).
     #[arg(long, value_parser = ["tree", "power", "uniform"])]
     pub(crate) light_selection: Option<String>,
-    /// Adaptive sampling: a pixel stops once the relative standard error of its beauty
-    /// is below this (e.g. 0.02); --spp is then the most a pixel takes.
+    /// Adaptive sampling: a pixel stops once the standard error of its beauty is below
+    /// this times the square root of its brightness (e.g. 0.05); --spp is then the most
+    /// a pixel takes.
     #[arg(long)]
     pub(crate) noise_threshold: Option<f32>,
     /// Adaptive sampling: samples every pixel takes first.
