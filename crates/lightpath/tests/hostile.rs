@@ -420,7 +420,7 @@ fn a_cancelled_render_resumed_from_its_checkpoint_equals_the_uninterrupted_one_b
     let whole = render_resumable(&scene, &options, &request, &silent, Resumable::default());
     // Stop after the first band of 8 rows.
     let cancel = AtomicBool::new(false);
-    let mut stop = |_: &lightpath::film::Film, _: &[bool]| cancel.store(true, Ordering::SeqCst);
+    let mut stop = |_: &lightpath::integrator::Snapshot| cancel.store(true, Ordering::SeqCst);
     let part = render_resumable(
         &scene,
         &options,
@@ -439,13 +439,19 @@ fn a_cancelled_render_resumed_from_its_checkpoint_equals_the_uninterrupted_one_b
     let dir = std::env::temp_dir().join(format!("lightpath-resume-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     let path = dir.join("a.exr.checkpoint");
-    lightpath::checkpoint::write(&path, 7, &part.film, &part.rows_done).unwrap();
+    let snapshot = lightpath::integrator::Snapshot {
+        film: &part.film,
+        rows_done: &part.rows_done,
+        pilot: None,
+    };
+    lightpath::checkpoint::write(&path, 7, &snapshot).unwrap();
     let shape = lightpath::checkpoint::FilmShape {
         width: 24,
         height: 40,
         aovs: scene.aovs.len(),
         spp: 4,
         squared: Vec::new(),
+        adaptive: false,
     };
     let back = lightpath::checkpoint::read(&path, 7, shape).unwrap();
     std::fs::remove_dir_all(&dir).unwrap();

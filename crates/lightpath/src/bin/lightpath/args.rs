@@ -235,10 +235,11 @@ pub(crate) struct RenderArgs {
     #[arg(long, value_parser = ["tree", "power", "uniform"])]
     pub(crate) light_selection: Option<String>,
     /// Adaptive sampling: a pixel stops once the relative standard error of its beauty
-    /// is below this (e.g. 0.02); --spp is then the most a pixel takes.
+    /// is below this (e.g. 0.02) and it has the samples its 3x3 neighbourhood predicts
+    /// after a pilot pass; --spp is then the most a pixel takes.
     #[arg(long)]
     pub(crate) noise_threshold: Option<f32>,
-    /// Adaptive sampling: samples every pixel takes first.
+    /// Adaptive sampling: samples every pixel takes first (the pilot pass).
     #[arg(long)]
     pub(crate) min_spp: Option<u32>,
     /// Largest luminance of one contribution of indirect light (0: off).

@@ -1,0 +1,289 @@
+//! Adaptive sampling (`--noise-threshold X --min-spp N --spp MAX`, `[render]
+//! noise_threshold`) in two passes over the frame, so that a pixel's count can depend on
+//! its neighbours and still be the same for any thread count:
+//!
+//! 1. **Pilot**: every pixel of the window takes `min_spp` samples (at most `spp`), and
+//!    the luminance moments of its beauty are kept ([`Pilot`]).
+//! 2. From the pilot alone, each pixel *predicts* the count at which its relative standard
+//!    error would reach X: `min_spp · (relerr / X)²`, clamped to `min_spp ..= spp`
+//!    (a pixel without variance predicts `min_spp`). Its **target** is the largest
+//!    prediction within [`NEIGHBOUR_RADIUS`] pixels (a `(2r + 1)²` window, as Cycles
+//!    marks the neighbours of an unconverged pixel unconverged too), rounded up to a
+//!    block of [`CHECK_EVERY`] samples.
+//! 3. **The rest**: each pixel goes on from its pilot samples and stops once it holds
+//!    its target *and* its own running test says converged, or at `spp`.
+//!
+//! Why the neighbours: a small bright lamp covering part of a pixel may be missed (or hit)
+//! by all of its first samples; the pixel then has no sample variance and would stop at
+//! `min_spp` with the largest error of the image. Its neighbours that did see the lamp's
+//! edge predict many samples, and lend it their target.
+//!
+//! The target plane is a function of the pilot's moments only, so the second pass is
+//! again one independent job per pixel: any thread count gives the same image, and a
+//! checkpoint holding the pilot's moments resumes bit for bit. A crop (`--crop`) takes
+//! pilot samples of the pixels just outside its window too (their moments only, not their
+//! values), so tiles see the same neighbourhoods as the whole frame and join into it
+//! exactly.
+
+use super::pixel::CHECK_EVERY;
+use crate::film::PixelWindow;
+use crate::scene::RenderSettings;
+
+/// How far a pixel looks for a neighbour that needs more samples than itself: 1, a 3 × 3
+/// window, as Cycles' adaptive sampling does.
+pub const NEIGHBOUR_RADIUS: u32 = 1;
+
+/// Running sums of a pixel's beauty luminance, for its standard error.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct Moments {
+    pub n: u32,
+    pub sum: f64,
+    pub sum2: f64,
+}
+
+impl Moments {
+    pub fn add(&mut self, v: f32) {
+        let v = v as f64;
+        self.n += 1;
+        self.sum += v;
+        self.sum2 += v * v;
+    }
+
+    /// The relative standard error of the mean, √(s² / n) / mean: 0 when the samples are
+    /// all equal (black background, a clamped light: nothing to estimate), infinite when
+    /// they vary around a mean that is not positive.
+    pub fn relative_error(&self) -> f64 {
+        let n = self.n as f64;
+        let mean = self.sum / n;
+        let var = ((self.sum2 - self.sum * mean) / (n - 1.0)).max(0.0);
+        if var == 0.0 {
+            return 0.0;
+        }
+        if mean > 0.0 {
+            (var / n).sqrt() / mean
+        } else {
+            f64::INFINITY
+        }
+    }
+
+    /// Whether the relative standard error of the mean is at most `threshold`.
+    pub fn converged(&self, threshold: f32) -> bool {
+        self.relative_error() <= threshold as f64
+    }
+}
+
+/// The pilot pass of an adaptive render: each pixel's luminance moments over its first
+/// samples. A checkpoint holds it, so that a resumed render computes the same targets.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Pilot {
+    /// Whether every pixel of the window has its pilot samples (the render is in its
+    /// second pass).
+    pub complete: bool,
+    /// Per pixel of the window, row by row: the sum and the sum of squares of the
+    /// beauty's luminance over the pilot samples (zero where not yet taken).
+    pub sums: Vec<[f64; 2]>,
+}
+
+impl Pilot {
+    /// A pilot not yet started for `pixels` pixels.
+    pub fn new(pixels: usize) -> Pilot {
+        Pilot {
+            complete: false,
+            sums: vec![[0.0; 2]; pixels],
+        }
+    }
+}
+
+/// The numbers of one adaptive render: the pilot's count, `min_spp`, the most samples a
+/// pixel takes and the noise threshold.
+#[derive(Clone, Copy, Debug)]
+pub(super) struct Rule {
+    /// Samples every pixel takes in the pilot pass: `min_spp`, or `spp` if fewer.
+    pub pilot: u32,
+    pub min_spp: u32,
+    pub spp: u32,
+    pub threshold: f32,
+}
+
+impl Rule {
+    /// The rule of a render of `spp` samples per pixel with these settings.
+    pub fn new(settings: &RenderSettings, spp: u32) -> Rule {
+        Rule {
+            pilot: settings.min_spp.min(spp),
+            min_spp: settings.min_spp,
+            spp,
+            threshold: settings.noise_threshold,
+        }
+    }
+
+    /// The moments of a pixel after the pilot, from its stored sums.
+    pub fn pilot_moments(&self, sums: [f64; 2]) -> Moments {
+        Moments {
+            n: self.pilot,
+            sum: sums[0],
+            sum2: sums[1],
+        }
+    }
+
+    /// The count at which a pixel's relative standard error would reach the threshold,
+    /// from its pilot moments (the error falls as 1/√n), rounded up to the end of a block
+    /// and clamped to `min_spp ..= spp`.
+    pub fn predicted_count(&self, m: &Moments) -> u32 {
+        let ratio = m.relative_error() / self.threshold as f64;
+        let wanted = m.n as f64 * ratio * ratio;
+        // NaN and infinity (a varying pixel of mean ≤ 0) take every sample too.
+        if wanted.is_nan() || wanted >= self.spp as f64 {
+            return self.spp;
+        }
+        let count = (wanted.ceil() as u32).max(self.pilot);
+        let blocks = (count - self.pilot).div_ceil(CHECK_EVERY);
+        (self.pilot + blocks * CHECK_EVERY).min(self.spp)
+    }
+
+    /// Whether a pixel with these moments may stop (once it holds its target): at the end
+    /// of a block past `min_spp`, converged.
+    #[inline]
+    pub fn may_stop(&self, m: &Moments) -> bool {
+        m.n >= self.min_spp
+            && (m.n - self.min_spp) % CHECK_EVERY == 0
+            && m.converged(self.threshold)
+    }
+}
+
+/// The region whose pilot moments decide the targets of `window`: the window grown by
+/// `radius` on every side, within the frame.
+pub(super) fn neighbourhood(window: PixelWindow, frame: [u32; 2], radius: u32) -> PixelWindow {
+    PixelWindow {
+        x0: window.x0.saturating_sub(radius),
+        y0: window.y0.saturating_sub(radius),
+        x1: (window.x1.saturating_add(radius)).min(frame[0]),
+        y1: (window.y1.saturating_add(radius)).min(frame[1]),
+    }
+}
+
+/// Each pixel of `window`'s target: the largest of `predicted` (one count per pixel of
+/// `region`, row by row) within `radius` of it. A max filter is separable: along rows,
+/// then along columns.
+pub(super) fn targets(
+    predicted: &[u32],
+    region: PixelWindow,
+    window: PixelWindow,
+    radius: u32,
+) -> Vec<u32> {
+    let (w, h) = (region.width() as usize, region.height() as usize);
+    let r = radius as usize;
+    let mut across = vec![0u32; w * h];
+    for (src, dst) in predicted.chunks_exact(w).zip(across.chunks_exact_mut(w)) {
+        for (x, d) in dst.iter_mut().enumerate() {
+            let span = x.saturating_sub(r)..(x + r + 1).min(w);
+            *d = src[span].iter().copied().max().unwrap_or(0);
+        }
+    }
+    let (ox, oy) = (
+        (window.x0 - region.x0) as usize,
+        (window.y0 - region.y0) as usize,
+    );
+    let mut out = Vec::with_capacity(window.width() as usize * window.height() as usize);
+    for y in oy..oy + window.height() as usize {
+        for x in ox..ox + window.width() as usize {
+            let rows = y.saturating_sub(r)..(y + r + 1).min(h);
+            out.push(rows.map(|yy| across[yy * w + x]).max().unwrap_or(0));
+        }
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn relative_standard_error_decides() {
+        let mut m = Moments::default();
+        for v in [1.0, 1.0, 1.0, 1.0] {
+            m.add(v);
+        }
+        assert!(m.converged(1e-6), "no variance: nothing to estimate");
+        let mut m = Moments::default();
+        // Mean 1, sample standard deviation 1 over 4 samples: relative error 0.5.
+        for v in [0.0, 2.0, 0.0, 2.0] {
+            m.add(v);
+        }
+        let se = (4.0f64 / 3.0 / 4.0).sqrt();
+        assert!(m.converged(se as f32 * 1.001));
+        assert!(!m.converged(se as f32 * 0.999));
+        let mut m = Moments::default();
+        for v in [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 4.0] {
+            m.add(v);
+        }
+        assert!(
+            !m.converged(0.5),
+            "a rare bright sample keeps the pixel going"
+        );
+    }
+
+    fn rule(min_spp: u32, spp: u32, threshold: f32) -> Rule {
+        let mut desc = crate::scene::desc::SceneDesc::default();
+        desc.render.min_spp = min_spp;
+        desc.render.noise_threshold = threshold;
+        Rule::new(&crate::scene::build::camera::settings(&desc), spp)
+    }
+
+    #[test]
+    fn a_pixel_predicts_the_count_its_error_needs_in_whole_blocks() {
+        let s = rule(16, 1024, 0.125);
+        // Relative error √0.275 at 16 samples: 0.275 / 0.125² × 16 = 281.6 samples, so 288
+        // (16 + 34 blocks of 8).
+        let m = Moments {
+            n: 16,
+            sum: 16.0,
+            sum2: 82.0,
+        };
+        assert!((m.relative_error() - 0.275f64.sqrt()).abs() < 1e-12);
+        assert_eq!(s.predicted_count(&m), 288);
+        let flat = Moments {
+            n: 16,
+            sum: 16.0,
+            sum2: 16.0,
+        };
+        assert_eq!(s.predicted_count(&flat), 16, "no variance: min_spp");
+        let dark = Moments {
+            n: 16,
+            sum: 0.0,
+            sum2: 1.0,
+        };
+        assert_eq!(s.predicted_count(&dark), 1024, "no mean to be relative to");
+        assert_eq!(rule(16, 100, 0.125).predicted_count(&m), 100);
+        assert_eq!(rule(16, 8, 0.125).predicted_count(&m), 8);
+    }
+
+    #[test]
+    fn a_target_is_the_largest_prediction_of_its_neighbourhood() {
+        let frame = [5, 4];
+        let all = PixelWindow::full(5, 4);
+        let mut predicted = vec![16u32; 20];
+        predicted[5 + 2] = 64; // (2, 1)
+        let t = targets(&predicted, all, all, 1);
+        for y in 0..4usize {
+            for x in 0..5usize {
+                let near = x.abs_diff(2) <= 1 && y.abs_diff(1) <= 1;
+                assert_eq!(t[y * 5 + x], if near { 64 } else { 16 }, "({x}, {y})");
+            }
+        }
+        assert_eq!(targets(&predicted, all, all, 0), predicted);
+        // A crop sees the pixels around it: (3, 2)..(5, 4) has (2, 1) as a neighbour.
+        let crop = PixelWindow {
+            x0: 3,
+            y0: 2,
+            x1: 5,
+            y1: 4,
+        };
+        let region = neighbourhood(crop, frame, 1);
+        assert_eq!((region.x0, region.y0, region.x1, region.y1), (2, 1, 5, 4));
+        let inside: Vec<u32> = (1..4)
+            .flat_map(|y| (2..5).map(move |x| (x, y)))
+            .map(|(x, y)| predicted[y * 5 + x])
+            .collect();
+        assert_eq!(targets(&inside, region, crop, 1), vec![64, 16, 16, 16]);
+    }
+}
