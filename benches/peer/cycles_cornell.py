@@ -41,6 +41,10 @@ def parse(argv):
     ap.add_argument("--two-sided", action="store_true", help="do NOT force one-sided BSDFs/emission (Cycles default behaviour)")
     ap.add_argument("--out", default=None, help="output prefix (default out/cycles_<spp>spp_d<depth>)")
     ap.add_argument("--save-blend", default=None, help="also save the built scene as a .blend file")
+    ap.add_argument("--adaptive-threshold", type=float, default=0.0,
+                    help="Cycles adaptive sampling's noise threshold (0: off, the default); --spp is then the most")
+    ap.add_argument("--adaptive-min-samples", type=int, default=0,
+                    help="with --adaptive-threshold: samples every pixel takes first (0: Cycles' automatic choice)")
     ap.add_argument("--repeat", type=int, default=1, help="render this many times (timing); the last one is written")
     ap.add_argument("--beauty-only", action="store_true",
                     help="no extra passes and no light groups (Combined only), for beauty-only timing")
@@ -101,7 +105,10 @@ def build_scene(bpy, js, args):
     cyc = scene.cycles
     cyc.device = "CPU"
     cyc.samples = args.spp
-    cyc.use_adaptive_sampling = False
+    cyc.use_adaptive_sampling = args.adaptive_threshold > 0.0
+    if cyc.use_adaptive_sampling:
+        cyc.adaptive_threshold = args.adaptive_threshold
+        cyc.adaptive_min_samples = args.adaptive_min_samples
     cyc.use_denoising = False
     cyc.seed = args.seed
     bounces = max(args.max_depth - 2, 0)

@@ -25,8 +25,9 @@ for line in open(results):
     if m:
         scene, renderer, secs, image = m.groups()
         ref = load(refs[scene]) if scene in refs else None
-        mse = float(np.mean((load(f"{out}/{image}") - ref) ** 2))
-        runs.setdefault((scene, renderer), []).append((float(secs), mse))
+        img = load(f"{out}/{image}")
+        mse = float(np.mean((img - ref) ** 2))
+        runs.setdefault((scene, renderer), []).append((float(secs), mse, img.mean() / ref.mean()))
 for scene in sorted({s for s, _ in runs}):
     print(f"{scene}:")
     eff = {}
@@ -36,9 +37,12 @@ for scene in sorted({s for s, _ in runs}):
         secs = statistics.median(r[0] for r in rs)
         mse = statistics.median(r[1] for r in rs)
         eff[renderer] = 1.0 / (mse * secs)
+        # The image's mean over the reference's: a bias shows as the same offset in every run.
+        means = " ".join(f"{r[2]:.4f}" for r in rs)
         print(f"  {renderer:>22}: {secs:7.2f} s  MSE {mse:.3e}  RMSE {mse ** 0.5:.5f}  "
-              f"efficiency {eff[renderer]:10.1f}  ({len(rs)} runs)")
-    if "lightpath" in eff:
-        for renderer, e in sorted(eff.items()):
-            if renderer != "lightpath":
-                print(f"  lightpath / {renderer}: {eff['lightpath'] / e:.2f}x")
+              f"efficiency {eff[renderer]:10.1f}  mean/ref {means}  ({len(rs)} runs)")
+    for ours in ("lightpath", "lightpath_adaptive"):
+        if ours in eff:
+            for renderer, e in sorted(eff.items()):
+                if renderer != ours:
+                    print(f"  {ours} / {renderer}: {eff[ours] / e:.2f}x")

@@ -14,6 +14,10 @@
 #   scenes with its defaults (how "today's efficiency" was measured).
 #   EFFICIENCY_SKIP_PEERS=1  Lightpath only.
 #   LIGHTPATH=/path/to/lightpath  times that binary instead of building this tree's.
+#   LIGHTPATH_ADAPTIVE="--min-spp 64 --spp 1024 --noise-threshold 0.1"  adds Lightpath
+#   with these sampling flags (adaptive sampling) on both scenes.
+#   CYCLES_ADAPTIVE="0.01 16 1024"  adds Cycles with its adaptive sampling on: threshold,
+#   min samples, max samples.
 set -euo pipefail
 here="$(cd "$(dirname "$0")" && pwd)"
 root="$(cd "$here/../.." && pwd)"
@@ -48,6 +52,13 @@ for i in $(seq 1 "$repeats"); do
     python3 "$here/cycles_cornell.py" --spp "$spp" --max-depth 8 --threads 2 --seed "$i" --repeat 2 \
         --beauty-only --out "$out/eff_cycles_$i" 2>/dev/null \
       | sed -n "s/^RESULT.* best_s=\([0-9.]*\).*/RESULT scene=cornell-classic renderer=cycles seconds=\1 image=eff_cycles_$i.exr/p" >> "$results"
+    if [ -n "${CYCLES_ADAPTIVE:-}" ]; then
+      read -r c_threshold c_min c_max <<< "$CYCLES_ADAPTIVE"
+      python3 "$here/cycles_cornell.py" --spp "$c_max" --adaptive-threshold "$c_threshold" \
+          --adaptive-min-samples "$c_min" --max-depth 8 --threads 2 --seed "$i" --repeat 2 \
+          --beauty-only --out "$out/eff_cycles_adaptive_$i" 2>/dev/null \
+        | sed -n "s/^RESULT.* best_s=\([0-9.]*\).*/RESULT scene=cornell-classic renderer=cycles_adaptive seconds=\1 image=eff_cycles_adaptive_$i.exr/p" >> "$results"
+    fi
   fi
   t=$("$lightpath" render cornell-classic --quiet --aovs none --spp "$spp" --threads 2 --seed "$i" \
       -o "$out/eff_lightpath_$i.exr" | seconds)
@@ -55,6 +66,15 @@ for i in $(seq 1 "$repeats"); do
   t=$("$lightpath" render "$many" --quiet --aovs none --spp "$spp" --threads 2 --seed "$i" \
       --clamp-indirect 0 -o "$out/eff_many_$i.exr" | seconds)
   echo "RESULT scene=many-lights renderer=lightpath seconds=$t image=eff_many_$i.exr" >> "$results"
+  if [ -n "${LIGHTPATH_ADAPTIVE:-}" ]; then
+    read -r -a adaptive <<< "$LIGHTPATH_ADAPTIVE"
+    t=$("$lightpath" render cornell-classic --quiet --aovs none "${adaptive[@]}" --threads 2 \
+        --seed "$i" -o "$out/eff_lightpath_adaptive_$i.exr" | seconds)
+    echo "RESULT scene=cornell-classic renderer=lightpath_adaptive seconds=$t image=eff_lightpath_adaptive_$i.exr" >> "$results"
+    t=$("$lightpath" render "$many" --quiet --aovs none "${adaptive[@]}" --threads 2 --seed "$i" \
+        --clamp-indirect 0 -o "$out/eff_many_adaptive_$i.exr" | seconds)
+    echo "RESULT scene=many-lights renderer=lightpath_adaptive seconds=$t image=eff_many_adaptive_$i.exr" >> "$results"
+  fi
   if [ -n "${LIGHTPATH_BASELINE:-}" ]; then
     t=$("$LIGHTPATH_BASELINE" render cornell-classic --quiet --aovs none --spp "$spp" --threads 2 \
         --seed "$i" -o "$out/eff_baseline_$i.exr" | seconds)

@@ -364,7 +364,7 @@ enum Pass<'p> {
     /// Adaptive sampling's pilot: `min_spp` samples a pixel, their moments kept.
     Pilot(&'p mut Pilot),
     /// Adaptive sampling's second pass: each pixel on from its pilot samples to its
-    /// target (one per pixel of the window) and its own test.
+    /// target (one per pixel of the window).
     Rest {
         pilot: &'p Pilot,
         targets: &'p [u32],
@@ -633,7 +633,7 @@ impl FrameRender<'_> {
             let matte_run = col * matte_stride..(col + 1) * matte_stride;
             let (taken, spp, mut adaptive) = match &plan {
                 RowPass::All => (0, self.options.spp, None),
-                RowPass::Pilot { .. } => (0, rule.pilot, Some(AdaptivePixel::pilot(rule))),
+                RowPass::Pilot { .. } => (0, rule.pilot, Some(AdaptivePixel::pilot())),
                 RowPass::Rest { sums, targets, .. } => {
                     if let Some(t) = self.table {
                         matte.resume(t, &matte_row[matte_run.clone()], rule.pilot);
@@ -641,7 +641,6 @@ impl FrameRender<'_> {
                     let pixel = AdaptivePixel {
                         moments: rule.pilot_moments(sums[col]),
                         target: targets[col],
-                        rule,
                     };
                     (rule.pilot, self.options.spp, Some(pixel))
                 }
@@ -682,8 +681,8 @@ impl FrameRender<'_> {
         c.samples.fetch_add(samples, Ordering::Relaxed);
     }
 
-    /// Each pixel's target after the pilot (`adaptive.rs`): the largest count predicted
-    /// within `radius`, from the pilot's moments and, for a crop, from pilot samples of
+    /// Each pixel's target after the pilot (`adaptive.rs`): the largest count its
+    /// neighbours within `radius` predicted, from the pilot's moments and, for a crop, from pilot samples of
     /// the pixels around the window.
     fn targets(&self, pilot: &Pilot, radius: u32) -> Vec<u32> {
         let scene = self.tracer.scene;
@@ -710,7 +709,7 @@ impl FrameRender<'_> {
                 },
             )
             .collect();
-        adaptive::targets(&predicted, region, win, radius)
+        adaptive::targets(&predicted, region, win, radius, self.rule.pilot)
     }
 
     /// An accumulator and a pixel run for samples whose values are not kept.
@@ -739,7 +738,7 @@ impl FrameRender<'_> {
             holdout: false,
             first_object: None,
         };
-        let mut pixel = AdaptivePixel::pilot(self.rule);
+        let mut pixel = AdaptivePixel::pilot();
         let mut no_mattes = |_: &Sink| {};
         let job = PixelJob {
             x,

@@ -1,24 +1,17 @@
 //! The samples of one pixel: which sampler makes their numbers, and how many to take.
 //!
 //! A pixel takes the samples `first_sample + taken ..` of its job, up to `spp` in all.
-//! Under adaptive sampling (`adaptive.rs`) it may stop earlier: once it has at least its
-//! target count (the most any pixel of its neighbourhood predicted after the pilot pass)
-//! and the relative standard error of its beauty's luminance — estimated from its own
-//! samples, √(s² / n) / mean — is at most the noise threshold. It checks every
-//! [`CHECK_EVERY`] samples past `min_spp`: Sobol points come in balanced blocks of powers
-//! of two, so a pixel stops at the end of a block. Every AOV of the pixel is accumulated
-//! from the same samples, so partitions still sum exactly; the film records each pixel's
-//! sample count (the `sampleCount` channel).
+//! Under adaptive sampling (`adaptive.rs`) its second pass takes it to its target count,
+//! which its neighbourhood's pilot samples set, and no further. Every AOV of the pixel is
+//! accumulated from the same samples, so partitions still sum exactly; the film records
+//! each pixel's sample count (the `sampleCount` channel).
 
-use super::adaptive::{Moments, Rule};
+use super::adaptive::Moments;
 use super::{Sink, Tracer};
 use crate::film::Film;
 use crate::light::luminance;
 use crate::sampler::{dim, IndependentPixel, PixelSampler, Sampler, SamplerKind, SobolPixel};
 use glam::Vec2;
-
-/// Adaptive sampling checks a pixel's noise after this many samples past `min_spp`.
-pub const CHECK_EVERY: u32 = 8;
 
 /// Where one pixel's samples go and which samples it takes.
 pub(super) struct PixelJob<'p> {
@@ -45,7 +38,6 @@ pub(super) struct AdaptivePixel {
     pub moments: Moments,
     /// The pixel may not stop before this count (`u32::MAX` in the pilot pass).
     pub target: u32,
-    pub rule: Rule,
 }
 
 impl Tracer<'_> {
@@ -72,7 +64,7 @@ impl Tracer<'_> {
         let mut n = job.taken;
         while n < job.spp {
             if let Some(a) = &adaptive {
-                if n >= a.target && a.rule.may_stop(&a.moments) {
+                if n >= a.target {
                     break;
                 }
             }
@@ -96,11 +88,10 @@ impl Tracer<'_> {
 
 impl AdaptivePixel {
     /// A pixel of the pilot pass: no samples yet, and no stop before the pass's end.
-    pub fn pilot(rule: Rule) -> AdaptivePixel {
+    pub fn pilot() -> AdaptivePixel {
         AdaptivePixel {
             moments: Moments::default(),
             target: u32::MAX,
-            rule,
         }
     }
 }

@@ -234,9 +234,9 @@ pub(crate) struct RenderArgs {
     /// bit for bit).
     #[arg(long, value_parser = ["tree", "power", "uniform"])]
     pub(crate) light_selection: Option<String>,
-    /// Adaptive sampling: a pixel stops once the relative standard error of its beauty
-    /// is below this (e.g. 0.02) and it has the samples its 3x3 neighbourhood predicts
-    /// after a pilot pass; --spp is then the most a pixel takes.
+    /// Adaptive sampling: after a pilot pass of --min-spp samples, a pixel takes the most
+    /// samples its 3x3 neighbourhood predicts for a standard error of its beauty of this
+    /// times the square root of its brightness (e.g. 0.1); --spp is then the most.
     #[arg(long)]
     pub(crate) noise_threshold: Option<f32>,
     /// Adaptive sampling: samples every pixel takes first (the pilot pass).
