@@ -264,29 +264,14 @@ fn render_passes(
         &frame,
         band_rows(frame.stride * w, h, max_band_rows, progress),
     );
+    let mut output = PassOutput {
+        film: &mut film,
+        bands: &mut bands,
+        after_band: &mut after_band,
+    };
     match &mut pilot {
-        None => frame.run_pass(&mut Pass::All, &mut film, &mut bands, &mut after_band),
-        Some(p) => {
-            if !p.complete {
-                let mut pass = Pass::Pilot(&mut *p);
-                frame.run_pass(&mut pass, &mut film, &mut bands, &mut after_band);
-                if frame.rows_done().iter().all(|d| *d) {
-                    p.complete = true;
-                    frame
-                        .done
-                        .iter()
-                        .for_each(|d| d.store(false, Ordering::Relaxed));
-                }
-            }
-            if p.complete && !frame.stopped() {
-                let targets = frame.targets(p, radius);
-                let mut pass = Pass::Rest {
-                    pilot: p,
-                    targets: &targets,
-                };
-                frame.run_pass(&mut pass, &mut film, &mut bands, &mut after_band);
-            }
-        }
+        None => frame.run_pass(&mut Pass::All, &mut output),
+        Some(p) => frame.run_adaptive(p, &mut output, radius),
     }
     if let Some(t) = frame.table {
         film.mattes = Some(Mattes {
@@ -425,6 +410,13 @@ enum RowPass<'r> {
     },
 }
 
+/// Where a pass puts its rows, and whom it shows them to.
+struct PassOutput<'o, 'a> {
+    film: &'o mut Film,
+    bands: &'o mut Bands,
+    after_band: &'o mut Option<AfterBand<'a>>,
+}
+
 /// The buffers a pass reuses band after band, and the Cryptomatte planes.
 struct Bands {
     rows: usize,
@@ -511,16 +503,37 @@ impl FrameRender<'_> {
             .collect()
     }
 
+    /// An adaptive render's passes still to do: the pilot's rows not yet done, then (if
+    /// not cancelled) the second pass from the targets the pilot gives.
+    fn run_adaptive(&self, pilot: &mut Pilot, output: &mut PassOutput, radius: u32) {
+        if !pilot.complete {
+            self.run_pass(&mut Pass::Pilot(&mut *pilot), output);
+            if self.rows_done().iter().all(|d| *d) {
+                pilot.complete = true;
+                self.done
+                    .iter()
+                    .for_each(|d| d.store(false, Ordering::Relaxed));
+            }
+        }
+        if pilot.complete && !self.stopped() {
+            let targets = self.targets(pilot, radius);
+            let mut pass = Pass::Rest {
+                pilot,
+                targets: &targets,
+            };
+            self.run_pass(&mut pass, output);
+        }
+    }
+
     /// Renders the rows of `pass` not yet done, a band at a time: each band is moved into
     /// the film's planes, shown to the progress reporter and to `after_band`. The peak
     /// memory is the film plus one band, with no allocation churn.
-    fn run_pass(
-        &self,
-        pass: &mut Pass,
-        film: &mut Film,
-        bands: &mut Bands,
-        after_band: &mut Option<AfterBand>,
-    ) {
+    fn run_pass(&self, pass: &mut Pass, output: &mut PassOutput) {
+        let PassOutput {
+            film,
+            bands,
+            after_band,
+        } = output;
         let w = self.window.width() as usize;
         let h = self.window.height() as usize;
         let row_len = self.stride * w;
