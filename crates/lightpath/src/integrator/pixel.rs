@@ -69,14 +69,14 @@ impl Tracer<'_> {
         let cam = &scene.camera;
         let alpha_slot = Film::alpha_slot(job.run.len());
         let mut adaptive = job.adaptive;
-        let mut n = job.taken;
-        while n < job.spp {
-            if let Some(a) = &adaptive {
-                if n >= a.target && a.rule.may_stop(&a.moments) {
-                    break;
-                }
+        if let Some(a) = &adaptive {
+            // A second pass's pixel may need nothing more.
+            if job.taken >= a.target && a.rule.may_stop(&a.moments) {
+                return job.taken;
             }
-            let mut sampler = samplers.sample((job.first_sample + n) as u64);
+        }
+        for s in job.first_sample + job.taken..job.first_sample + job.spp {
+            let mut sampler = samplers.sample(s as u64);
             let offset = scene.filter.offset(sampler.get_2d(dim::FILTER));
             let film_pos = Vec2::new(job.x as f32 + 0.5, job.y as f32 + 0.5) + offset;
             let ray = cam.ray(film_pos, sampler.get_2d(dim::LENS));
@@ -88,9 +88,13 @@ impl Tracer<'_> {
             }
             out.acc.flush(job.run);
             job.run[alpha_slot] += alpha;
-            n += 1;
+            if let Some(a) = &adaptive {
+                if a.moments.n >= a.target && a.rule.may_stop(&a.moments) {
+                    return a.moments.n;
+                }
+            }
         }
-        n
+        job.spp.max(job.taken)
     }
 }
 
