@@ -14,6 +14,7 @@
 #   NEW_ARGS="--spp 256 --min-spp 16 --noise-threshold 0.3"  renders the new build with
 #   these sampling flags instead of --spp $SPP (adaptive sampling; the mean of its
 #   sampleCount channel is printed).
+#   OLD_ARGS  the same for the old build (to compare two adaptive rules).
 #   OUT=DIR  where renders and the results go (default benches/sampling/out), so that
 #   runs of several builds can share the reference.
 # Efficiency is only spp-independent for independent samples (MSE ~ 1/n): Sobol points'
@@ -32,6 +33,7 @@ sed 's/^groups = \["lamps"\]$/groups = ["lamps"]\ncamera_visible = false/' "$sce
 common=(--resolution 128x128 --threads 1 --quiet)
 spp_both="${SPP:-16}"
 read -r -a new_args <<< "${NEW_ARGS:---spp $spp_both}"
+read -r -a old_args <<< "${OLD_ARGS:---spp $spp_both}"
 # Builds from before issue 11 have no clamps (nor the flag); later ones are unclamped
 # unless a scene asks, and this one does not: the flag only makes sure.
 clamp_off() { if "$1" render --help | grep -q -- --clamp-indirect; then echo --clamp-indirect 0; fi; }
@@ -45,7 +47,7 @@ for variant in visible hidden; do
   for build in new old; do
     bin="$new"; [ "$build" = old ] && bin="$old"
     read -r -a clamp <<< "$(clamp_off "$bin")"
-    spp=(--spp "$spp_both"); [ "$build" = new ] && spp=("${new_args[@]}")
+    spp=("${old_args[@]}"); [ "$build" = new ] && spp=("${new_args[@]}")
     for seed in $(seq 1 "$seeds"); do
       img="$out/many_${variant}_${build}_$seed.exr"
       user=$( { /usr/bin/time -f "%U" "$bin" render "$file" --aovs none --aov "seen=CO" \

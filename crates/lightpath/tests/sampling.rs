@@ -326,11 +326,11 @@ fn adaptive_tiles_equal_the_whole_frame() {
     use lightpath::integrator::{render_frame, FrameRequest};
     let src = lightpath::load_source("cornell").unwrap();
     let mut desc = src.parse().unwrap();
-    adaptive(0.05, 48)(&mut desc);
+    adaptive(0.2, 256)(&mut desc);
     desc.film.resolution = [20, 16];
     let scene = Scene::build(&desc, &aov::assemble(vec![])).unwrap();
     let options = RenderOptions {
-        spp: 48,
+        spp: 256,
         first_sample: 0,
     };
     let silent = lightpath::progress::Silent;

@@ -1,15 +1,15 @@
 //! Adaptive sampling (`--noise-threshold X --min-spp N --spp MAX`, `[render]
 //! noise_threshold`) in two passes over the frame, so that a pixel's count can depend on
-//! its neighbours and still be the same for any thread count:
+//! its neighbours, be the same for any thread count, and never depend on the pixel's own
+//! samples:
 //!
 //! 1. **Pilot**: every pixel of the window takes `min_spp` samples (at most `spp`), and
 //!    the luminance moments of its beauty are kept ([`Pilot`]).
 //! 2. From the pilot alone, each pixel *predicts* the count at which its error would
 //!    reach X: `min_spp · (error / X)²` ([`Moments::error`]), rounded up to a power of two
 //!    and clamped to `min_spp ..= spp` (a pixel without variance predicts `min_spp`).
-//! 3. **The rest**: each pixel takes, in all, the largest count predicted within
-//!    [`NEIGHBOUR_RADIUS`] of it (a `(2r + 1)²` window, as Cycles marks the neighbours of
-//!    an unconverged pixel unconverged too), and no more.
+//! 3. **The rest**: each pixel takes, in all, the largest count its **neighbours**
+//!    predicted — the eight pixels around it within [`NEIGHBOUR_RADIUS`], not itself.
 //!
 //! The error is the standard error of the mean luminance divided by the square root of
 //! the mean, as Cycles weighs it: with noise proportional to brightness this gives each
@@ -17,19 +17,19 @@
 //! image's summed variance most for a given total, and a bright lamp's edge is not left
 //! at `min_spp` as a relative error would leave it.
 //!
-//! Why the neighbours: a small bright lamp covering part of a pixel may be missed (or
-//! hit) by all of its first samples; the pixel then has no sample variance and would
-//! stop at `min_spp` with the largest error of the image. Its neighbours that did see
-//! the lamp's edge predict many samples, and lend it their count.
-//!
-//! Why one decision, after the pilot, rather than a test the pixel repeats as it goes: a
-//! pixel that may stop whenever its own samples happen to look alike stops early on
-//! lucky runs — a glossy pixel whose samples missed the rare reflection of a small lamp —
-//! and those stops add up to a bias (dark, by up to 7 % around the metal ball of
-//! `scenes/many-lights.toml` with a test at every power of two). A single decision from nine
-//! pixels' pilots weighs each pixel's own luck little; `adaptive_sampling_is_unbiased`
-//! checks the mean stays within the noise of a fixed-count render. Powers of two keep the
-//! Sobol points of every count balanced.
+//! Why the neighbours, and only them: a count that depended on the pixel's own samples
+//! would be smaller when they happened to be alike — a glossy pixel whose first samples
+//! missed the rare reflection of a small lamp — and its mean biased dark (on
+//! `scenes/many-lights.toml`: −0.5 % over the image and down to −7 % around the metal
+//! ball with a per-pixel test at every power of two, −0.24 % and −4 % with the largest
+//! prediction of the 3 × 3 window including the pixel). A count taken from the other
+//! pixels' samples is independent of the pixel's own, so its mean stays an unbiased
+//! estimate (`adaptive_sampling_is_unbiased`). And a small bright lamp covering part of a
+//! pixel may be missed (or hit) by all of its first samples, leaving it no variance; the
+//! neighbours, which see the lamp's edge, predict many samples and lend it their count.
+//! The price: a feature smaller than a pixel that no neighbour sees (a lamp well under a
+//! pixel wide, a one-pixel glint) keeps `min_spp`. Powers of two keep the Sobol points of
+//! every count balanced.
 //!
 //! The target plane is a function of the pilot's moments only, so the second pass is
 //! again one independent job per pixel: any thread count gives the same image, and a
@@ -41,8 +41,8 @@
 use crate::film::PixelWindow;
 use crate::scene::RenderSettings;
 
-/// How far a pixel looks for a neighbour that needs more samples than itself: 1, a 3 × 3
-/// window, as Cycles' adaptive sampling does.
+/// How far a pixel looks for the neighbours whose predictions set its count: 1, the
+/// eight pixels around it (Cycles' adaptive sampling looks as far).
 pub const NEIGHBOUR_RADIUS: u32 = 1;
 
 /// Below this mean luminance a pixel's error is weighed as at this mean (the square root
@@ -156,7 +156,8 @@ pub(super) fn neighbourhood(window: PixelWindow, frame: [u32; 2], radius: u32) -
 }
 
 /// Each pixel of `window`'s target: the largest of `predicted` (one count per pixel of
-/// `region`, row by row) within `radius` of it, and at least `floor` (the pilot's count).
+/// `region`, row by row) at its neighbours within `radius` — not its own — and at least
+/// `floor` (the pilot's count).
 pub(super) fn targets(
     predicted: &[u32],
     region: PixelWindow,
@@ -176,7 +177,9 @@ pub(super) fn targets(
             let mut most = floor;
             for yy in y.saturating_sub(r)..(y + r + 1).min(h) {
                 for xx in x.saturating_sub(r)..(x + r + 1).min(w) {
-                    most = most.max(predicted[yy * w + xx]);
+                    if (xx, yy) != (x, y) {
+                        most = most.max(predicted[yy * w + xx]);
+                    }
                 }
             }
             out.push(most);
@@ -249,7 +252,7 @@ mod tests {
     }
 
     #[test]
-    fn a_target_is_the_largest_prediction_of_its_neighbourhood() {
+    fn a_target_is_the_largest_prediction_of_the_other_pixels_around() {
         let frame = [5, 4];
         let all = PixelWindow::full(5, 4);
         let mut predicted = vec![16u32; 20];
@@ -257,11 +260,12 @@ mod tests {
         let t = targets(&predicted, all, all, 1, 16);
         for y in 0..4usize {
             for x in 0..5usize {
-                let near = x.abs_diff(2) <= 1 && y.abs_diff(1) <= 1;
+                let near = x.abs_diff(2) <= 1 && y.abs_diff(1) <= 1 && (x, y) != (2, 1);
                 assert_eq!(t[y * 5 + x], if near { 64 } else { 16 }, "({x}, {y})");
             }
         }
-        assert_eq!(targets(&predicted, all, all, 0, 16), predicted);
+        // Radius 0: no neighbours, every pixel stays at the pilot's count.
+        assert_eq!(targets(&predicted, all, all, 0, 16), vec![16; 20]);
         // A crop sees the pixels around it: (3, 2)..(5, 4) has (2, 1) as a neighbour.
         let crop = PixelWindow {
             x0: 3,

@@ -21,7 +21,7 @@ use crate::progress::{Progress, Silent};
 use crate::scene::Scene;
 use adaptive::{Moments, Pilot, Rule};
 use glam::Vec3A;
-use pixel::{AdaptivePixel, PixelJob};
+use pixel::PixelJob;
 use rayon::prelude::*;
 use routing::Route;
 use std::ops::Range;
@@ -264,29 +264,14 @@ fn render_passes(
         &frame,
         band_rows(frame.stride * w, h, max_band_rows, progress),
     );
+    let mut output = PassOutput {
+        film: &mut film,
+        bands: &mut bands,
+        after_band: &mut after_band,
+    };
     match &mut pilot {
-        None => frame.run_pass(&mut Pass::All, &mut film, &mut bands, &mut after_band),
-        Some(p) => {
-            if !p.complete {
-                let mut pass = Pass::Pilot(&mut *p);
-                frame.run_pass(&mut pass, &mut film, &mut bands, &mut after_band);
-                if frame.rows_done().iter().all(|d| *d) {
-                    p.complete = true;
-                    frame
-                        .done
-                        .iter()
-                        .for_each(|d| d.store(false, Ordering::Relaxed));
-                }
-            }
-            if p.complete && !frame.stopped() {
-                let targets = frame.targets(p, radius);
-                let mut pass = Pass::Rest {
-                    pilot: p,
-                    targets: &targets,
-                };
-                frame.run_pass(&mut pass, &mut film, &mut bands, &mut after_band);
-            }
-        }
+        None => frame.run_pass(&mut Pass::All, &mut output),
+        Some(p) => frame.run_adaptive(p, &mut output, radius),
     }
     if let Some(t) = frame.table {
         film.mattes = Some(Mattes {
@@ -396,15 +381,10 @@ impl Pass<'_> {
                 .zip(counts.chunks_mut(w))
                 .map(|(sums, counts)| RowPass::Pilot { sums, counts })
                 .collect(),
-            Pass::Rest { pilot, targets } => pilot.sums[pixels.clone()]
+            Pass::Rest { targets, .. } => targets[pixels]
                 .chunks(w)
-                .zip(targets[pixels].chunks(w))
                 .zip(counts.chunks_mut(w))
-                .map(|((sums, targets), counts)| RowPass::Rest {
-                    sums,
-                    targets,
-                    counts,
-                })
+                .map(|(targets, counts)| RowPass::Rest { targets, counts })
                 .collect(),
         }
     }
@@ -419,10 +399,16 @@ enum RowPass<'r> {
         counts: &'r mut [u32],
     },
     Rest {
-        sums: &'r [[f64; 2]],
         targets: &'r [u32],
         counts: &'r mut [u32],
     },
+}
+
+/// Where a pass puts its rows, and whom it shows them to.
+struct PassOutput<'o, 'a> {
+    film: &'o mut Film,
+    bands: &'o mut Bands,
+    after_band: &'o mut Option<AfterBand<'a>>,
 }
 
 /// The buffers a pass reuses band after band, and the Cryptomatte planes.
@@ -511,16 +497,37 @@ impl FrameRender<'_> {
             .collect()
     }
 
+    /// An adaptive render's passes still to do: the pilot's rows not yet done, then (if
+    /// not cancelled) the second pass from the targets the pilot gives.
+    fn run_adaptive(&self, pilot: &mut Pilot, output: &mut PassOutput, radius: u32) {
+        if !pilot.complete {
+            self.run_pass(&mut Pass::Pilot(&mut *pilot), output);
+            if self.rows_done().iter().all(|d| *d) {
+                pilot.complete = true;
+                self.done
+                    .iter()
+                    .for_each(|d| d.store(false, Ordering::Relaxed));
+            }
+        }
+        if pilot.complete && !self.stopped() {
+            let targets = self.targets(pilot, radius);
+            let mut pass = Pass::Rest {
+                pilot,
+                targets: &targets,
+            };
+            self.run_pass(&mut pass, output);
+        }
+    }
+
     /// Renders the rows of `pass` not yet done, a band at a time: each band is moved into
     /// the film's planes, shown to the progress reporter and to `after_band`. The peak
     /// memory is the film plus one band, with no allocation churn.
-    fn run_pass(
-        &self,
-        pass: &mut Pass,
-        film: &mut Film,
-        bands: &mut Bands,
-        after_band: &mut Option<AfterBand>,
-    ) {
+    fn run_pass(&self, pass: &mut Pass, output: &mut PassOutput) {
+        let PassOutput {
+            film,
+            bands,
+            after_band,
+        } = output;
         let w = self.window.width() as usize;
         let h = self.window.height() as usize;
         let row_len = self.stride * w;
@@ -631,18 +638,16 @@ impl FrameRender<'_> {
         let rule = self.rule;
         for (col, x) in (self.window.x0..self.window.x1).enumerate() {
             let matte_run = col * matte_stride..(col + 1) * matte_stride;
-            let (taken, spp, mut adaptive) = match &plan {
-                RowPass::All => (0, self.options.spp, None),
-                RowPass::Pilot { .. } => (0, rule.pilot, Some(AdaptivePixel::pilot())),
-                RowPass::Rest { sums, targets, .. } => {
+            // The pilot keeps each pixel's moments; the second pass takes it to its target.
+            let mut moments = Moments::default();
+            let (taken, spp, keep) = match &plan {
+                RowPass::All => (0, self.options.spp, false),
+                RowPass::Pilot { .. } => (0, rule.pilot, true),
+                RowPass::Rest { targets, .. } => {
                     if let Some(t) = self.table {
                         matte.resume(t, &matte_row[matte_run.clone()], rule.pilot);
                     }
-                    let pixel = AdaptivePixel {
-                        moments: rule.pilot_moments(sums[col]),
-                        target: targets[col],
-                    };
-                    (rule.pilot, self.options.spp, Some(pixel))
+                    (rule.pilot, targets[col], false)
                 }
             };
             let mut after_sample = |out: &Sink| {
@@ -658,15 +663,14 @@ impl FrameRender<'_> {
                 taken,
                 spp,
                 after_sample: &mut after_sample,
-                adaptive: adaptive.as_mut(),
+                moments: keep.then_some(&mut moments),
             };
             let held = self.tracer.render_pixel(job, &mut out);
             samples += (held - taken) as u64;
             match &mut plan {
                 RowPass::All => {}
                 RowPass::Pilot { sums, counts } => {
-                    let m = adaptive.map_or(Moments::default(), |a| a.moments);
-                    sums[col] = [m.sum, m.sum2];
+                    sums[col] = [moments.sum, moments.sum2];
                     counts[col] = held;
                 }
                 RowPass::Rest { counts, .. } => counts[col] = held,
@@ -682,8 +686,8 @@ impl FrameRender<'_> {
     }
 
     /// Each pixel's target after the pilot (`adaptive.rs`): the largest count its
-    /// neighbours within `radius` predicted, from the pilot's moments and, for a crop, from pilot samples of
-    /// the pixels around the window.
+    /// neighbours within `radius` predicted, from the pilot's moments and, for a crop,
+    /// from pilot samples of the pixels around the window.
     fn targets(&self, pilot: &Pilot, radius: u32) -> Vec<u32> {
         let scene = self.tracer.scene;
         let frame = [scene.camera.width, scene.camera.height];
@@ -738,7 +742,7 @@ impl FrameRender<'_> {
             holdout: false,
             first_object: None,
         };
-        let mut pixel = AdaptivePixel::pilot();
+        let mut moments = Moments::default();
         let mut no_mattes = |_: &Sink| {};
         let job = PixelJob {
             x,
@@ -748,10 +752,10 @@ impl FrameRender<'_> {
             taken: 0,
             spp: self.rule.pilot,
             after_sample: &mut no_mattes,
-            adaptive: Some(&mut pixel),
+            moments: Some(&mut moments),
         };
         self.tracer.render_pixel(job, &mut out);
-        pixel.moments
+        moments
     }
 }
 

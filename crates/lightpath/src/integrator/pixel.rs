@@ -24,20 +24,13 @@ pub(super) struct PixelJob<'p> {
     /// Samples `run` already holds (an adaptive pilot's): the pixel goes on from sample
     /// `first_sample + taken`.
     pub taken: u32,
-    /// Samples to have in all, or at most when adaptive.
+    /// Samples to have in all (under adaptive sampling: the pass's, or the pixel's target).
     pub spp: u32,
     /// Called after each sample with what it left in the sink (Cryptomatte coverage).
     pub after_sample: &'p mut dyn FnMut(&Sink),
-    /// Adaptive sampling's state of the pixel; `None`: take every sample.
-    pub adaptive: Option<&'p mut AdaptivePixel>,
-}
-
-/// What adaptive sampling knows of one pixel while it takes samples.
-pub(super) struct AdaptivePixel {
-    /// Luminance moments of the beauty over every sample the pixel holds.
-    pub moments: Moments,
-    /// The pixel may not stop before this count (`u32::MAX` in the pilot pass).
-    pub target: u32,
+    /// The pilot's moments of the pixel's beauty, which the samples add to (adaptive
+    /// sampling's pilot pass); `None`: none kept.
+    pub moments: Option<&'p mut Moments>,
 }
 
 impl Tracer<'_> {
@@ -60,38 +53,21 @@ impl Tracer<'_> {
         let scene = self.scene;
         let cam = &scene.camera;
         let alpha_slot = Film::alpha_slot(job.run.len());
-        let mut adaptive = job.adaptive;
-        let mut n = job.taken;
-        while n < job.spp {
-            if let Some(a) = &adaptive {
-                if n >= a.target {
-                    break;
-                }
-            }
-            let mut sampler = samplers.sample((job.first_sample + n) as u64);
+        let mut moments = job.moments;
+        for s in job.first_sample + job.taken..job.first_sample + job.spp {
+            let mut sampler = samplers.sample(s as u64);
             let offset = scene.filter.offset(sampler.get_2d(dim::FILTER));
             let film_pos = Vec2::new(job.x as f32 + 0.5, job.y as f32 + 0.5) + offset;
             let ray = cam.ray(film_pos, sampler.get_2d(dim::LENS));
             let alpha = self.trace(ray, &mut sampler, out);
             (job.after_sample)(out);
-            if let Some(a) = &mut adaptive {
+            if let Some(m) = &mut moments {
                 // The beauty is AOV 0 (aov::plan puts it first).
-                a.moments.add(luminance(out.acc.value(0)));
+                m.add(luminance(out.acc.value(0)));
             }
             out.acc.flush(job.run);
             job.run[alpha_slot] += alpha;
-            n += 1;
         }
-        n
-    }
-}
-
-impl AdaptivePixel {
-    /// A pixel of the pilot pass: no samples yet, and no stop before the pass's end.
-    pub fn pilot() -> AdaptivePixel {
-        AdaptivePixel {
-            moments: Moments::default(),
-            target: u32::MAX,
-        }
+        job.spp.max(job.taken)
     }
 }
