@@ -235,7 +235,7 @@ pub(crate) struct RenderArgs {
     #[arg(long, value_parser = ["tree", "power", "uniform"])]
     pub(crate) light_selection: Option<String>,
     /// Adaptive sampling: after a pilot pass of --min-spp samples, a pixel takes the most
-    /// samples its 3x3 neighbourhood predicts for a standard error of its beauty of this
+    /// samples its eight neighbours predict for a standard error of its beauty of this
     /// times the square root of its brightness (e.g. 0.1); --spp is then the most.
     #[arg(long)]
     pub(crate) noise_threshold: Option<f32>,
