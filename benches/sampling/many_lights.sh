@@ -12,13 +12,17 @@
 # Usage: benches/sampling/many_lights.sh NEW_LIGHTPATH OLD_LIGHTPATH [SEEDS]
 #   SPP=64  samples per pixel for both builds (default 16).
 #   NEW_ARGS="--spp 256 --min-spp 16 --noise-threshold 0.3"  renders the new build with
-#   these sampling flags instead of --spp $SPP (adaptive sampling).
+#   these sampling flags instead of --spp $SPP (adaptive sampling; the mean of its
+#   sampleCount channel is printed).
+#   OLD_ARGS  the same for the old build (to compare two adaptive rules).
+#   OUT=DIR  where renders and the results go (default benches/sampling/out), so that
+#   runs of several builds can share the reference.
 # Efficiency is only spp-independent for independent samples (MSE ~ 1/n): Sobol points'
 # MSE falls faster, so the new build's efficiency grows with SPP; compare at equal SPP.
 set -euo pipefail
 here="$(cd "$(dirname "$0")" && pwd)"
 root="$(cd "$here/../.." && pwd)"
-out="$here/out"
+out="${OUT:-$here/out}"
 mkdir -p "$out"
 new="$1"
 old="$2"
@@ -29,6 +33,7 @@ sed 's/^groups = \["lamps"\]$/groups = ["lamps"]\ncamera_visible = false/' "$sce
 common=(--resolution 128x128 --threads 1 --quiet)
 spp_both="${SPP:-16}"
 read -r -a new_args <<< "${NEW_ARGS:---spp $spp_both}"
+read -r -a old_args <<< "${OLD_ARGS:---spp $spp_both}"
 # Builds from before issue 11 have no clamps (nor the flag); later ones are unclamped
 # unless a scene asks, and this one does not: the flag only makes sure.
 clamp_off() { if "$1" render --help | grep -q -- --clamp-indirect; then echo --clamp-indirect 0; fi; }
@@ -42,7 +47,7 @@ for variant in visible hidden; do
   for build in new old; do
     bin="$new"; [ "$build" = old ] && bin="$old"
     read -r -a clamp <<< "$(clamp_off "$bin")"
-    spp=(--spp "$spp_both"); [ "$build" = new ] && spp=("${new_args[@]}")
+    spp=("${old_args[@]}"); [ "$build" = new ] && spp=("${new_args[@]}")
     for seed in $(seq 1 "$seeds"); do
       img="$out/many_${variant}_${build}_$seed.exr"
       user=$( { /usr/bin/time -f "%U" "$bin" render "$file" --aovs none --aov "seen=CO" \
@@ -62,13 +67,21 @@ def rgb(path, name):
     with OpenEXR.File(path, separate_channels=False) as f:
         return np.asarray(f.channels()[name].pixels, dtype=np.float64)[..., :3]
 
+def mean_spp(path):
+    """The mean of the sampleCount channel (adaptive sampling), else None."""
+    with OpenEXR.File(path, separate_channels=True) as f:
+        channels = f.channels()
+        if "sampleCount" not in channels:
+            return None
+        return float(np.mean(np.asarray(channels["sampleCount"].pixels, dtype=np.float64)))
+
 runs = {}
 for line in open(f"{out}/many_lights.txt"):
     variant, build, seed, user, img = line.split()
     ref = f"{out}/many_{variant}_ref.exr"
     mse = np.mean((rgb(img, "RGBA") - rgb(ref, "RGBA")) ** 2)
     seen = np.mean((rgb(img, "seen") - rgb(ref, "seen")) ** 2)
-    runs.setdefault((variant, build), []).append((float(user), mse, seen))
+    runs.setdefault((variant, build), []).append((float(user), mse, seen, mean_spp(img)))
 for variant in ("visible", "hidden"):
     eff = {}
     for build in ("old", "new"):
@@ -77,7 +90,9 @@ for variant in ("visible", "hidden"):
         mse = statistics.median(r[1] for r in rs)
         seen = statistics.median(r[2] for r in rs)
         eff[build] = 1 / (mse * t)
+        spps = [r[3] for r in rs if r[3] is not None]
+        spp = f"  mean spp {statistics.median(spps):.1f}" if spps else ""
         print(f"lamps {variant:7} {build}: user {t:.2f} s  MSE {mse:.4e} (camera-seen emission "
-              f"{seen:.4e})  efficiency {eff[build]:.1f}  ({len(rs)} runs)")
+              f"{seen:.4e})  efficiency {eff[build]:.1f}{spp}  ({len(rs)} runs)")
     print(f"lamps {variant:7} new / old efficiency: {eff['new'] / eff['old']:.2f}x")
 PY

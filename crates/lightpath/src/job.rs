@@ -7,7 +7,7 @@
 use crate::aov::{self, AovSpec};
 use crate::checkpoint::{self, Checkpoint};
 use crate::film::{Film, PixelWindow};
-use crate::integrator::FrameRequest;
+use crate::integrator::{FrameRequest, Snapshot};
 use crate::output;
 use crate::post::cryptomatte::MatteTable;
 use crate::progress::Progress;
@@ -135,11 +135,33 @@ pub struct RenderSummary {
     pub denoised: Option<String>,
 }
 
+/// The two passes of an adaptive render (`integrator/adaptive.rs`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum AdaptivePass {
+    Pilot,
+    Second,
+}
+
+impl Interrupted {
+    /// `12 of 40 rows`, and for an adaptive render which pass's.
+    pub fn rows_line(&self) -> String {
+        let pass = match self.pass {
+            None => "",
+            Some(AdaptivePass::Pilot) => " of the pilot pass",
+            Some(AdaptivePass::Second) => " of the second pass (the pilot pass is complete)",
+        };
+        format!("{} of {} rows{pass}", self.rows_done, self.rows)
+    }
+}
+
 /// How far a stopped render got.
 #[derive(Clone, Debug)]
 pub struct Interrupted {
+    /// Rows finished in the pass that was stopped.
     pub rows_done: u32,
     pub rows: u32,
+    /// For an adaptive render, the pass that was stopped (its rows are that pass's).
+    pub pass: Option<AdaptivePass>,
     pub checkpoint: PathBuf,
 }
 
@@ -258,13 +280,6 @@ impl RenderJob {
                         .into(),
                 ));
             }
-            if scene.settings.noise_threshold > 0.0 {
-                return Err(Error::Setting(
-                    "--resume with adaptive sampling (--noise-threshold): a checkpoint does \
-                     not hold the per-pixel sample counts; render again without --resume"
-                        .into(),
-                ));
-            }
             if !checkpoint_path.exists() {
                 return Err(Error::Setting(format!(
                     "--resume: there is no checkpoint {} (it is written when a render is \
@@ -281,6 +296,7 @@ impl RenderJob {
                     aovs: scene.aovs.len(),
                     spp: scene.settings.spp,
                     squared: scene.variance_aovs.clone(),
+                    adaptive: scene.settings.noise_threshold > 0.0,
                 },
             )
             .map_err(Error::Setting)?;
@@ -455,18 +471,22 @@ impl PreparedRender {
         let fingerprint = fingerprint(&source, &scene, job.first_sample, frame.window);
         let mut last_checkpoint = std::time::Instant::now();
         let mut checkpoint_error = None;
-        let mut save = |film: &Film, rows: &[bool]| {
+        let mut save = |snapshot: &Snapshot| {
             let Some(every) = job.checkpoint_every else {
                 return;
             };
-            if last_checkpoint.elapsed() >= every && !rows.iter().all(|d| *d) {
-                if let Err(e) = checkpoint::write(&checkpoint_path, fingerprint, film, rows) {
+            let unfinished = snapshot.pilot.is_some_and(|p| !p.complete)
+                || !snapshot.rows_done.iter().all(|d| *d);
+            if last_checkpoint.elapsed() >= every && unfinished {
+                if let Err(e) = checkpoint::write(&checkpoint_path, fingerprint, snapshot) {
                     checkpoint_error.get_or_insert(e);
                 }
                 last_checkpoint = std::time::Instant::now();
             }
         };
-        let (film, rows_done) = resume.map_or((None, Vec::new()), |c| (Some(c.film), c.rows_done));
+        let (film, rows_done, pilot) = resume.map_or((None, Vec::new(), None), |c| {
+            (Some(c.film), c.rows_done, c.pilot)
+        });
         let rendered = crate::integrator::render_resumable(
             &scene,
             &options,
@@ -475,6 +495,7 @@ impl PreparedRender {
             Resumable {
                 film,
                 rows_done,
+                pilot,
                 cancel: job.cancel.as_deref(),
                 after_band: Some(&mut save),
                 // Checkpoints come between bands: about 64 of them per frame.
@@ -486,20 +507,29 @@ impl PreparedRender {
         if let Some(e) = checkpoint_error {
             return Err(Error::Output(e));
         }
+        let complete = rendered.finished();
         let Rendered {
             film,
             stats,
             rows_done,
+            pilot,
         } = rendered;
-        let finished = rows_done.iter().filter(|d| **d).count() as u32;
-        let interrupted = (finished < film.height).then(|| Interrupted {
-            rows_done: finished,
+        let interrupted = (!complete).then(|| Interrupted {
+            rows_done: rows_done.iter().filter(|d| **d).count() as u32,
             rows: film.height,
+            pass: pilot.as_ref().map(|p| match p.complete {
+                false => AdaptivePass::Pilot,
+                true => AdaptivePass::Second,
+            }),
             checkpoint: checkpoint_path.clone(),
         });
         if interrupted.is_some() {
-            checkpoint::write(&checkpoint_path, fingerprint, &film, &rows_done)
-                .map_err(Error::Output)?;
+            let snapshot = Snapshot {
+                film: &film,
+                rows_done: &rows_done,
+                pilot: pilot.as_ref(),
+            };
+            checkpoint::write(&checkpoint_path, fingerprint, &snapshot).map_err(Error::Output)?;
         }
         let overflowed = film
             .planes
@@ -558,15 +588,28 @@ fn exr_header(
     text.extend(metadata);
     if let Some(i) = interrupted {
         let per_row = film.width as u64 * film.spp as u64;
+        let samples = match &film.sample_counts {
+            // Adaptive: how many pixels will take is not known yet.
+            Some(counts) => format!(
+                "{} samples so far",
+                counts.iter().map(|&n| n as u64).sum::<u64>()
+            ),
+            None => format!(
+                "{} of {} samples",
+                i.rows_done as u64 * per_row,
+                i.rows as u64 * per_row
+            ),
+        };
+        let rest = if i.pass.is_some() {
+            "the other pixels hold only their pilot samples or none"
+        } else {
+            "the other rows are empty"
+        };
         text.push((
             crate::aov::naming::INTERRUPTED_ATTRIBUTE.to_string(),
             format!(
-                "{} of {} rows rendered ({} of {} samples); the other rows are empty: \
-                 run the same command with --resume to finish",
-                i.rows_done,
-                i.rows,
-                i.rows_done as u64 * per_row,
-                i.rows as u64 * per_row
+                "{} rendered ({samples}); {rest}: run the same command with --resume to finish",
+                i.rows_line()
             ),
         ));
     }

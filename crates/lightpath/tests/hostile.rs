@@ -420,7 +420,7 @@ fn a_cancelled_render_resumed_from_its_checkpoint_equals_the_uninterrupted_one_b
     let whole = render_resumable(&scene, &options, &request, &silent, Resumable::default());
     // Stop after the first band of 8 rows.
     let cancel = AtomicBool::new(false);
-    let mut stop = |_: &lightpath::film::Film, _: &[bool]| cancel.store(true, Ordering::SeqCst);
+    let mut stop = |_: &lightpath::integrator::Snapshot| cancel.store(true, Ordering::SeqCst);
     let part = render_resumable(
         &scene,
         &options,
@@ -439,13 +439,19 @@ fn a_cancelled_render_resumed_from_its_checkpoint_equals_the_uninterrupted_one_b
     let dir = std::env::temp_dir().join(format!("lightpath-resume-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     let path = dir.join("a.exr.checkpoint");
-    lightpath::checkpoint::write(&path, 7, &part.film, &part.rows_done).unwrap();
+    let snapshot = lightpath::integrator::Snapshot {
+        film: &part.film,
+        rows_done: &part.rows_done,
+        pilot: None,
+    };
+    lightpath::checkpoint::write(&path, 7, &snapshot).unwrap();
     let shape = lightpath::checkpoint::FilmShape {
         width: 24,
         height: 40,
         aovs: scene.aovs.len(),
         spp: 4,
         squared: Vec::new(),
+        adaptive: false,
     };
     let back = lightpath::checkpoint::read(&path, 7, shape).unwrap();
     std::fs::remove_dir_all(&dir).unwrap();
@@ -589,4 +595,61 @@ fn sigint_then_resume_gives_the_uninterrupted_render_and_kill_9_leaves_the_old_o
         std::fs::read(&out).unwrap(),
         std::fs::read(&reference).unwrap()
     );
+}
+
+/// The same for an adaptive render (two passes; the checkpoint holds the pass, the
+/// per-pixel counts and the pilot's moments): SIGINT, then `--resume` gives the
+/// uninterrupted render's EXR byte for byte.
+#[cfg(unix)]
+#[test]
+fn sigint_then_resume_an_adaptive_render_gives_the_uninterrupted_one() {
+    let scratch = Scratch::new("adaptive-signals");
+    let args = |out: &Path| -> Vec<String> {
+        [
+            "render",
+            "cornell",
+            "--resolution",
+            "32x32",
+            "--spp",
+            "512",
+            "--min-spp",
+            "16",
+            "--noise-threshold",
+            "0.02",
+            "-q",
+            "--checkpoint-every",
+            "0.001",
+            "-o",
+        ]
+        .iter()
+        .map(|s| s.to_string())
+        .chain([out.display().to_string()])
+        .collect()
+    };
+    let reference = scratch.0.join("ref.exr");
+    let mut c = lightpath();
+    c.args(args(&reference));
+    check("ok", &run(c, "reference"), "reference");
+    let out = scratch.0.join("int.exr");
+    let checkpoint = scratch.0.join("int.exr.checkpoint");
+    let mut child = lightpath()
+        .args(args(&out))
+        .stdout(Stdio::piped())
+        .spawn()
+        .unwrap();
+    wait_for(&checkpoint, &mut child);
+    // SAFETY: signalling our own child by its id.
+    unsafe { libc::kill(child.id() as i32, libc::SIGINT) };
+    let status = child.wait_with_output().unwrap();
+    let said = String::from_utf8_lossy(&status.stdout);
+    assert_eq!(status.status.code(), Some(130), "{said}");
+    assert!(said.contains(" pass"), "the message names the pass: {said}");
+    let mut resume = lightpath();
+    resume.args(args(&out)).arg("--resume");
+    check("ok", &run(resume, "resume"), "resume");
+    assert_eq!(
+        std::fs::read(&out).unwrap(),
+        std::fs::read(&reference).unwrap()
+    );
+    assert!(!checkpoint.exists());
 }

@@ -7,6 +7,7 @@
 //! `path.rs` holds the named steps of one path, `direct.rs` light sampling and MIS,
 //! `routing.rs` what each AOV takes of a contribution; this module runs the render loop.
 
+pub mod adaptive;
 mod direct;
 mod path;
 mod pixel;
@@ -18,10 +19,12 @@ use crate::geometry::{Hit, Ray};
 use crate::post::cryptomatte::{MatteTable, PixelMatte};
 use crate::progress::{Progress, Silent};
 use crate::scene::Scene;
+use adaptive::{Moments, Pilot, Rule};
 use glam::Vec3A;
 use pixel::PixelJob;
 use rayon::prelude::*;
 use routing::Route;
+use std::ops::Range;
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 
 #[derive(Clone, Debug, Default)]
@@ -140,31 +143,53 @@ pub struct Resumable<'a> {
     /// checkpoint does not hold them; `job.rs` refuses the combination).
     pub film: Option<Film>,
     pub rows_done: Vec<bool>,
+    /// An adaptive render's pilot pass (a checkpoint's): once it is complete, `rows_done`
+    /// are rows of the second pass. An adaptive render resumed without it starts afresh.
+    pub pilot: Option<Pilot>,
     /// When set, rows not yet started are skipped: the render ends with the rows in
     /// flight (a row is never left half-rendered).
     pub cancel: Option<&'a AtomicBool>,
-    /// Called after each band with the film and the rows finished so far (checkpoints).
+    /// Called after each band with what the render holds so far (checkpoints).
     pub after_band: Option<AfterBand<'a>>,
     /// At most this many rows per band (at least 8), so `after_band` comes often enough
     /// on a small film; `None`: bands as large as `BAND_BYTES` allows.
     pub max_band_rows: Option<usize>,
 }
 
-/// What `Resumable::after_band` is given: the film, and which rows are finished.
-pub type AfterBand<'a> = &'a mut dyn FnMut(&Film, &[bool]);
+/// What a render holds between two bands: enough to write a checkpoint.
+pub struct Snapshot<'s> {
+    pub film: &'s Film,
+    /// Rows finished in the current pass.
+    pub rows_done: &'s [bool],
+    /// An adaptive render's pilot.
+    pub pilot: Option<&'s Pilot>,
+}
+
+/// What `Resumable::after_band` is given.
+pub type AfterBand<'a> = &'a mut dyn FnMut(&Snapshot);
 
 /// A render that may have stopped early.
 pub struct Rendered {
     pub film: Film,
     pub stats: RenderStats,
-    /// One entry per row of the window: finished? All true unless the render was
-    /// cancelled.
+    /// One entry per row of the window: finished in the current pass? All true unless the
+    /// render was cancelled.
     pub rows_done: Vec<bool>,
+    /// An adaptive render's pilot (complete unless it was cancelled during the pilot).
+    pub pilot: Option<Pilot>,
+}
+
+impl Rendered {
+    /// Whether every pixel has all its samples.
+    pub fn finished(&self) -> bool {
+        self.pilot.as_ref().is_none_or(|p| p.complete) && self.rows_done.iter().all(|d| *d)
+    }
 }
 
 /// [`render_frame`] of the rows `resume` does not already hold, stopping early if its
-/// `cancel` flag is set. Each row's sums start from zero and add its samples in order,
-/// so a row is the same whichever run renders it.
+/// `cancel` flag is set. Each row's sums start from zero (or from its pilot samples) and
+/// add its samples in order, so a row is the same whichever run renders it. An adaptive
+/// render makes two passes over the window (`adaptive.rs`).
 pub fn render_resumable(
     scene: &Scene,
     options: &RenderOptions,
@@ -172,9 +197,30 @@ pub fn render_resumable(
     progress: &dyn Progress,
     resume: Resumable,
 ) -> Rendered {
+    render_passes(
+        scene,
+        options,
+        request,
+        progress,
+        resume,
+        adaptive::NEIGHBOUR_RADIUS,
+    )
+}
+
+/// [`render_resumable`] with the adaptive neighbourhood's radius as a parameter (tests
+/// compare it with 0, each pixel deciding alone).
+fn render_passes(
+    scene: &Scene,
+    options: &RenderOptions,
+    request: &FrameRequest,
+    progress: &dyn Progress,
+    resume: Resumable,
+    radius: u32,
+) -> Rendered {
     let Resumable {
-        film: resumed,
-        rows_done: resumed_rows,
+        film: mut resumed,
+        rows_done: mut resumed_rows,
+        pilot,
         cancel,
         mut after_band,
         max_band_rows,
@@ -183,9 +229,19 @@ pub fn render_resumable(
     let win = request.window;
     debug_assert!(win.check(scene.camera.width, scene.camera.height).is_ok());
     let (w, h) = (win.width() as usize, win.height() as usize);
+    let adaptive = scene.settings.noise_threshold > 0.0;
+    let mut pilot = adaptive.then(|| match pilot.filter(|p| p.sums.len() == w * h) {
+        Some(p) => p,
+        None => {
+            // Rows finished without their pilot's moments cannot be continued.
+            (resumed, resumed_rows) = (None, Vec::new());
+            Pilot::new(w * h)
+        }
+    });
     let frame = FrameRender {
         tracer: Tracer::new(scene),
         options,
+        rule: Rule::new(&scene.settings, options.spp),
         window: win,
         stride: Film::stride_with(scene.aovs.len(), scene.variance_aovs.len()),
         table: request.mattes.as_ref(),
@@ -196,67 +252,31 @@ pub fn render_resumable(
         progress,
         counters: Counters::default(),
     };
-    let rows_before = frame
-        .done
-        .iter()
-        .filter(|d| d.load(Ordering::Relaxed))
-        .count();
-    progress.start(h as u64, (w * h) as u64 * options.spp as u64);
-    progress.advance(rows_before as u64);
-    // Rows are rendered a band at a time into one reused interleaved buffer (a sample
-    // writes one contiguous run), and each band is moved into the film's planes: the
-    // peak memory is the film plus one band, with no allocation churn.
-    let row_len = frame.stride * w;
-    let band_rows = band_rows(row_len, h, max_band_rows, progress);
-    let mut band = vec![0.0f32; band_rows * row_len];
-    let adaptive = scene.settings.noise_threshold > 0.0;
-    let mut counts = vec![0u32; if adaptive { band_rows * w } else { 0 }];
+    let pilot_rows = match &pilot {
+        Some(p) if p.complete => h,
+        _ => 0,
+    };
+    let passes = if adaptive { 2 } else { 1 };
+    progress.start((h * passes) as u64, (w * h) as u64 * options.spp as u64);
+    progress.advance((pilot_rows + frame.rows_done().iter().filter(|d| **d).count()) as u64);
     let mut film = starting_film(scene, options, win, resumed);
-    // Cryptomatte values, band by band beside the AOVs' (one dummy value per row without).
-    let matte_stride = frame.table.map_or(0, |t| t.stride());
-    let matte_row = (matte_stride * w).max(1);
-    let mut matte_band = vec![0.0f32; band_rows * matte_row];
-    let mut matte_planes: Vec<Vec<f32>> = (0..matte_stride).map(|_| vec![0.0; w * h]).collect();
-    for first_row in (0..h).step_by(band_rows) {
-        let rows = first_row..first_row + band_rows.min(h - first_row);
-        let band_done = &frame.done[rows.clone()];
-        if frame.stopped() || band_done.iter().all(|d| d.load(Ordering::Relaxed)) {
-            continue;
-        }
-        let band = &mut band[..rows.len() * row_len];
-        // The band starts as the film holds it: zero, or a resumed row's finished sums,
-        // which the skipped row leaves as they are.
-        if band_done.iter().any(|d| d.load(Ordering::Relaxed)) {
-            film.load_rows(first_row, band);
-        } else {
-            band.fill(0.0);
-        }
-        // A finished (resumed) row keeps its counts; a row left unrendered keeps the film's.
-        let counts = &mut counts[..if adaptive { rows.len() * w } else { 0 }];
-        if let (true, Some(film_counts)) = (adaptive, &film.sample_counts) {
-            counts.copy_from_slice(&film_counts[first_row * w..rows.end * w]);
-        }
-        let matte_band = &mut matte_band[..rows.len() * matte_row];
-        frame.render_band(rows.clone(), band, matte_band, counts);
-        film.store_rows(first_row, band);
-        film.store_counts(first_row, counts);
-        for (c, plane) in matte_planes.iter_mut().enumerate() {
-            for (d, px) in plane[first_row * w..rows.end * w]
-                .iter_mut()
-                .zip(matte_band.chunks_exact(matte_stride))
-            {
-                *d = px[c];
-            }
-        }
-        progress.rows_done(&film, rows);
-        if let Some(f) = after_band.as_mut() {
-            f(&film, &frame.rows_done());
-        }
+    let mut bands = Bands::new(
+        &frame,
+        band_rows(frame.stride * w, h, max_band_rows, progress),
+    );
+    let mut output = PassOutput {
+        film: &mut film,
+        bands: &mut bands,
+        after_band: &mut after_band,
+    };
+    match &mut pilot {
+        None => frame.run_pass(&mut Pass::All, &mut output),
+        Some(p) => frame.run_adaptive(p, &mut output, radius),
     }
     if let Some(t) = frame.table {
         film.mattes = Some(Mattes {
             table: t.clone(),
-            planes: matte_planes,
+            planes: std::mem::take(&mut bands.matte_planes),
         });
     }
     progress.finish();
@@ -272,6 +292,7 @@ pub fn render_resumable(
         film,
         stats,
         rows_done,
+        pilot,
     }
 }
 
@@ -321,11 +342,132 @@ fn starting_film(
     film
 }
 
+/// One pass over the window's rows.
+enum Pass<'p> {
+    /// Every sample of the range (a render that is not adaptive).
+    All,
+    /// Adaptive sampling's pilot: `min_spp` samples a pixel, their moments kept.
+    Pilot(&'p mut Pilot),
+    /// Adaptive sampling's second pass: each pixel on from its pilot samples to its
+    /// target (one per pixel of the window).
+    Rest {
+        pilot: &'p Pilot,
+        targets: &'p [u32],
+    },
+}
+
+impl Pass<'_> {
+    fn pilot(&self) -> Option<&Pilot> {
+        match self {
+            Pass::All => None,
+            Pass::Pilot(p) => Some(p),
+            Pass::Rest { pilot, .. } => Some(pilot),
+        }
+    }
+
+    /// What the pixels of rows `rows` (a band, `w` pixels a row) do, row by row, with
+    /// the band's per-pixel `counts` (empty unless adaptive).
+    fn rows<'r>(
+        &'r mut self,
+        rows: Range<usize>,
+        w: usize,
+        counts: &'r mut [u32],
+    ) -> Vec<RowPass<'r>> {
+        let pixels = rows.start * w..rows.end * w;
+        match self {
+            Pass::All => rows.map(|_| RowPass::All).collect(),
+            Pass::Pilot(p) => p.sums[pixels]
+                .chunks_mut(w)
+                .zip(counts.chunks_mut(w))
+                .map(|(sums, counts)| RowPass::Pilot { sums, counts })
+                .collect(),
+            Pass::Rest { targets, .. } => targets[pixels]
+                .chunks(w)
+                .zip(counts.chunks_mut(w))
+                .map(|(targets, counts)| RowPass::Rest { targets, counts })
+                .collect(),
+        }
+    }
+}
+
+/// What the pixels of one row do in a pass (see [`Pass`]), with the row's slices of the
+/// pilot's sums, the targets and the sample counts.
+enum RowPass<'r> {
+    All,
+    Pilot {
+        sums: &'r mut [[f64; 2]],
+        counts: &'r mut [u32],
+    },
+    Rest {
+        targets: &'r [u32],
+        counts: &'r mut [u32],
+    },
+}
+
+/// Where a pass puts its rows, and whom it shows them to.
+struct PassOutput<'o, 'a> {
+    film: &'o mut Film,
+    bands: &'o mut Bands,
+    after_band: &'o mut Option<AfterBand<'a>>,
+}
+
+/// The buffers a pass reuses band after band, and the Cryptomatte planes.
+struct Bands {
+    rows: usize,
+    /// Interleaved sums of a band (a sample writes one contiguous run).
+    sums: Vec<f32>,
+    /// Per-pixel sample counts of a band (adaptive sampling; else empty).
+    counts: Vec<u32>,
+    /// Cryptomatte values of a band beside the AOVs' (one dummy value per row without).
+    mattes: Vec<f32>,
+    matte_row: usize,
+    matte_planes: Vec<Vec<f32>>,
+}
+
+impl Bands {
+    fn new(frame: &FrameRender, rows: usize) -> Bands {
+        let (w, h) = (
+            frame.window.width() as usize,
+            frame.window.height() as usize,
+        );
+        let adaptive = frame.tracer.scene.settings.noise_threshold > 0.0;
+        let matte_stride = frame.table.map_or(0, |t| t.stride());
+        let matte_row = (matte_stride * w).max(1);
+        Bands {
+            rows,
+            sums: vec![0.0; rows * frame.stride * w],
+            counts: vec![0; if adaptive { rows * w } else { 0 }],
+            mattes: vec![0.0; rows * matte_row],
+            matte_row,
+            matte_planes: (0..matte_stride).map(|_| vec![0.0; w * h]).collect(),
+        }
+    }
+
+    /// Copies the band's Cryptomatte values between the band and the planes: into the
+    /// planes when `store`, else back into the band.
+    fn move_mattes(&mut self, rows: Range<usize>, w: usize, store: bool) {
+        let stride = self.matte_planes.len();
+        let band = &mut self.mattes[..rows.len() * self.matte_row];
+        for (c, plane) in self.matte_planes.iter_mut().enumerate() {
+            let plane = &mut plane[rows.start * w..rows.end * w];
+            for (d, px) in plane.iter_mut().zip(band.chunks_exact_mut(stride)) {
+                if store {
+                    *d = px[c];
+                } else {
+                    px[c] = *d;
+                }
+            }
+        }
+    }
+}
+
 /// What every row of one render shares: the tracer, the window, which rows are done,
 /// and the counters the rows add to.
 struct FrameRender<'a> {
     tracer: Tracer<'a>,
     options: &'a RenderOptions,
+    /// Adaptive sampling's numbers (unused when it is off).
+    rule: Rule,
     window: PixelWindow,
     /// Values per pixel in a row (Film::stride_with).
     stride: usize,
@@ -355,26 +497,100 @@ impl FrameRender<'_> {
             .collect()
     }
 
-    /// Renders the unfinished rows `rows` of the window into `band` (interleaved sums),
-    /// `mattes` (Cryptomatte values) and `counts` (per-pixel samples; empty when not
-    /// adaptive), a row per task.
+    /// An adaptive render's passes still to do: the pilot's rows not yet done, then (if
+    /// not cancelled) the second pass from the targets the pilot gives.
+    fn run_adaptive(&self, pilot: &mut Pilot, output: &mut PassOutput, radius: u32) {
+        if !pilot.complete {
+            self.run_pass(&mut Pass::Pilot(&mut *pilot), output);
+            if self.rows_done().iter().all(|d| *d) {
+                pilot.complete = true;
+                self.done
+                    .iter()
+                    .for_each(|d| d.store(false, Ordering::Relaxed));
+            }
+        }
+        if pilot.complete && !self.stopped() {
+            let targets = self.targets(pilot, radius);
+            let mut pass = Pass::Rest {
+                pilot,
+                targets: &targets,
+            };
+            self.run_pass(&mut pass, output);
+        }
+    }
+
+    /// Renders the rows of `pass` not yet done, a band at a time: each band is moved into
+    /// the film's planes, shown to the progress reporter and to `after_band`. The peak
+    /// memory is the film plus one band, with no allocation churn.
+    fn run_pass(&self, pass: &mut Pass, output: &mut PassOutput) {
+        let PassOutput {
+            film,
+            bands,
+            after_band,
+        } = output;
+        let w = self.window.width() as usize;
+        let h = self.window.height() as usize;
+        let row_len = self.stride * w;
+        let continues = matches!(pass, Pass::Rest { .. });
+        for first_row in (0..h).step_by(bands.rows) {
+            let rows = first_row..first_row + bands.rows.min(h - first_row);
+            let band_done = &self.done[rows.clone()];
+            if self.stopped() || band_done.iter().all(|d| d.load(Ordering::Relaxed)) {
+                continue;
+            }
+            if continues {
+                bands.move_mattes(rows.clone(), w, false);
+            }
+            let band = &mut bands.sums[..rows.len() * row_len];
+            // The band starts as the film holds it: zero, a resumed row's finished sums
+            // (which the skipped row leaves as they are), or the pilot's samples.
+            if continues || band_done.iter().any(|d| d.load(Ordering::Relaxed)) {
+                film.load_rows(first_row, band);
+            } else {
+                band.fill(0.0);
+            }
+            // A finished (resumed) row keeps its counts, a pixel of the second pass starts
+            // from its pilot's, and a row left unrendered keeps the film's.
+            let counted = if bands.counts.is_empty() {
+                0
+            } else {
+                rows.len() * w
+            };
+            let counts = &mut bands.counts[..counted];
+            if let (false, Some(film_counts)) = (counts.is_empty(), &film.sample_counts) {
+                counts.copy_from_slice(&film_counts[first_row * w..rows.end * w]);
+            }
+            let matte_band = &mut bands.mattes[..rows.len() * bands.matte_row];
+            let plans = pass.rows(rows.clone(), w, counts);
+            self.render_band(rows.clone(), band, matte_band, plans);
+            film.store_rows(first_row, band);
+            film.store_counts(first_row, &bands.counts[..counted]);
+            bands.move_mattes(rows.clone(), w, true);
+            self.progress.rows_done(film, rows);
+            if let Some(f) = after_band.as_mut() {
+                f(&Snapshot {
+                    film,
+                    rows_done: &self.rows_done(),
+                    pilot: pass.pilot(),
+                });
+            }
+        }
+    }
+
+    /// Renders the unfinished rows `rows` of the window into `band` (interleaved sums)
+    /// and `mattes` (Cryptomatte values), a row per task, each as `plans` says.
     fn render_band(
         &self,
-        rows: std::ops::Range<usize>,
+        rows: Range<usize>,
         band: &mut [f32],
         mattes: &mut [f32],
-        counts: &mut [u32],
+        plans: Vec<RowPass>,
     ) {
         let scene = self.tracer.scene;
         let w = self.window.width() as usize;
-        let count_rows: Vec<&mut [u32]> = if counts.is_empty() {
-            (0..rows.len()).map(|_| &mut [][..]).collect()
-        } else {
-            counts.chunks_mut(w).collect()
-        };
         band.par_chunks_mut(self.stride * w)
             .zip(mattes.par_chunks_mut(mattes.len() / rows.len()))
-            .zip(count_rows)
+            .zip(plans)
             .enumerate()
             .for_each_init(
                 || {
@@ -386,26 +602,26 @@ impl FrameRender<'_> {
                         PixelMatte::new(self.table.map_or(0, |t| t.layers.len())),
                     )
                 },
-                |(acc, matte), (i, ((row, matte_row), row_counts))| {
+                |(acc, matte), (i, ((row, matte_row), plan))| {
                     let y = rows.start + i;
                     if self.done[y].load(Ordering::Relaxed) || self.stopped() {
                         return;
                     }
-                    self.render_row(y, row, (matte, matte_row), row_counts, acc);
+                    self.render_row(y, row, (matte, matte_row), plan, acc);
                     self.done[y].store(true, Ordering::Relaxed);
                     self.progress.advance(1);
                 },
             );
     }
 
-    /// Renders row `y` of the window: its pixels' sums into `row`, their Cryptomatte
-    /// values into `mattes.1`, their sample counts into `counts` (if not empty).
+    /// Renders row `y` of the window as `plan` says: its pixels' sums into `row`, their
+    /// Cryptomatte values into `mattes.1`, their moments and counts into `plan`'s slices.
     fn render_row(
         &self,
         y: usize,
         row: &mut [f32],
         mattes: (&mut PixelMatte, &mut [f32]),
-        counts: &mut [u32],
+        mut plan: RowPass,
         acc: &mut SampleAccumulator,
     ) {
         let (matte, matte_row) = mattes;
@@ -419,7 +635,21 @@ impl FrameRender<'_> {
         };
         let mut samples = 0u64;
         let y = self.window.y0 + y as u32;
+        let rule = self.rule;
         for (col, x) in (self.window.x0..self.window.x1).enumerate() {
+            let matte_run = col * matte_stride..(col + 1) * matte_stride;
+            // The pilot keeps each pixel's moments; the second pass takes it to its target.
+            let mut moments = Moments::default();
+            let (taken, spp, keep) = match &plan {
+                RowPass::All => (0, self.options.spp, false),
+                RowPass::Pilot { .. } => (0, rule.pilot, true),
+                RowPass::Rest { targets, .. } => {
+                    if let Some(t) = self.table {
+                        matte.resume(t, &matte_row[matte_run.clone()], rule.pilot);
+                    }
+                    (rule.pilot, targets[col], false)
+                }
+            };
             let mut after_sample = |out: &Sink| {
                 if let Some(t) = self.table {
                     matte.add(t, out.first_object);
@@ -430,17 +660,23 @@ impl FrameRender<'_> {
                 y,
                 run: &mut row[col * self.stride..(col + 1) * self.stride],
                 first_sample: self.options.first_sample,
-                spp: self.options.spp,
+                taken,
+                spp,
                 after_sample: &mut after_sample,
+                moments: keep.then_some(&mut moments),
             };
-            let taken = self.tracer.render_pixel(job, &mut out);
-            samples += taken as u64;
-            if let Some(c) = counts.get_mut(col) {
-                *c = taken;
+            let held = self.tracer.render_pixel(job, &mut out);
+            samples += (held - taken) as u64;
+            match &mut plan {
+                RowPass::All => {}
+                RowPass::Pilot { sums, counts } => {
+                    sums[col] = [moments.sum, moments.sum2];
+                    counts[col] = held;
+                }
+                RowPass::Rest { counts, .. } => counts[col] = held,
             }
             if let Some(t) = self.table {
-                let run = col * matte_stride..(col + 1) * matte_stride;
-                matte.flush(t, &mut matte_row[run]);
+                matte.flush(t, &mut matte_row[matte_run]);
             }
         }
         let c = &self.counters;
@@ -448,4 +684,80 @@ impl FrameRender<'_> {
         c.nonfinite.fetch_add(out.nonfinite, Ordering::Relaxed);
         c.samples.fetch_add(samples, Ordering::Relaxed);
     }
+
+    /// Each pixel's target after the pilot (`adaptive.rs`): the largest count its
+    /// neighbours within `radius` predicted, from the pilot's moments and, for a crop,
+    /// from pilot samples of the pixels around the window.
+    fn targets(&self, pilot: &Pilot, radius: u32) -> Vec<u32> {
+        let scene = self.tracer.scene;
+        let frame = [scene.camera.width, scene.camera.height];
+        let win = self.window;
+        let region = adaptive::neighbourhood(win, frame, radius);
+        let region_width = region.width() as usize;
+        let predicted: Vec<u32> = (0..region_width * region.height() as usize)
+            .into_par_iter()
+            .map_init(
+                || self.scratch_pixel(),
+                |scratch, i| {
+                    let x = region.x0 + (i % region_width) as u32;
+                    let y = region.y0 + (i / region_width) as u32;
+                    let inside = (win.x0..win.x1).contains(&x) && (win.y0..win.y1).contains(&y);
+                    let moments = if inside {
+                        let i =
+                            (y - win.y0) as usize * win.width() as usize + (x - win.x0) as usize;
+                        self.rule.pilot_moments(pilot.sums[i])
+                    } else {
+                        self.pilot_outside(x, y, scratch)
+                    };
+                    self.rule.predicted_count(&moments)
+                },
+            )
+            .collect();
+        adaptive::targets(&predicted, region, win, radius, self.rule.pilot)
+    }
+
+    /// An accumulator and a pixel run for samples whose values are not kept.
+    fn scratch_pixel(&self) -> (SampleAccumulator, Vec<f32>) {
+        let scene = self.tracer.scene;
+        (
+            SampleAccumulator::with_squares(scene.aovs.len(), scene.variance_aovs.clone()),
+            vec![0.0; self.stride],
+        )
+    }
+
+    /// The pilot moments of pixel (x, y) of the frame outside the window: its pilot
+    /// samples taken again, their values dropped (the pixel is another part's).
+    fn pilot_outside(
+        &self,
+        x: u32,
+        y: u32,
+        scratch: &mut (SampleAccumulator, Vec<f32>),
+    ) -> Moments {
+        let (acc, run) = scratch;
+        run.fill(0.0);
+        let mut out = Sink {
+            acc,
+            rays: 0,
+            nonfinite: 0,
+            holdout: false,
+            first_object: None,
+        };
+        let mut moments = Moments::default();
+        let mut no_mattes = |_: &Sink| {};
+        let job = PixelJob {
+            x,
+            y,
+            run,
+            first_sample: self.options.first_sample,
+            taken: 0,
+            spp: self.rule.pilot,
+            after_sample: &mut no_mattes,
+            moments: Some(&mut moments),
+        };
+        self.tracer.render_pixel(job, &mut out);
+        moments
+    }
 }
+
+#[cfg(test)]
+mod tests;

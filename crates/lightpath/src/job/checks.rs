@@ -39,7 +39,12 @@ pub fn film(scene: &Scene) -> Result<(), String> {
     let stride = Film::stride_with(scene.aovs.len(), scene.variance_aovs.len()) as u64;
     // The film's planes and the EXR encoder's blocks in flight: the peak is 1.04× the
     // film with `zips`, 1.33× with `piz` (docs/performance.md), so 1.5× with a margin.
-    let bytes = w * h * stride * 4 * 3 / 2;
+    let mut bytes = w * h * stride * 4 * 3 / 2;
+    if scene.settings.noise_threshold > 0.0 {
+        // Adaptive sampling: the pilot's moments (2 f64), counts, predictions, targets
+        // and the max filter's rows (u32 each) per pixel.
+        bytes += w * h * (16 + 4 * 4);
+    }
     Limits::current().check_memory(
         bytes,
         &format!("a {w}x{h} film with {} AOVs", scene.aovs.len()),

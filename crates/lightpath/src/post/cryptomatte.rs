@@ -248,6 +248,28 @@ impl PixelMatte {
         }
     }
 
+    /// Starts the pixel's record from ranked pairs [`PixelMatte::flush`] wrote after
+    /// `samples` samples (an adaptive render's pilot), so that the samples added next
+    /// count on top of them. Ids ranked below `table.ranks` were dropped by that flush.
+    pub fn resume(&mut self, table: &MatteTable, pairs: &[f32], samples: u32) {
+        self.samples = samples;
+        for (l, chunk) in pairs.chunks_exact(table.layer_stride()).enumerate() {
+            let mut len = 0;
+            for p in chunk
+                .chunks_exact(2)
+                .filter(|p| p[1] > 0.0)
+                .take(PIXEL_CAPACITY)
+            {
+                // A coverage is count / samples in f32: exact back to the count for any
+                // pilot under 2^22 samples.
+                let count = (p[1] * samples as f32).round() as u32;
+                self.entries[l][len] = (p[0].to_bits(), count);
+                len += 1;
+            }
+            self.len[l] = len;
+        }
+    }
+
     /// Writes the pixel's ranked (id, coverage) pairs into `out` (`table.stride()`
     /// values) and clears the record for the next pixel. Ranks by coverage, then by id
     /// so that ties are ordered the same in every render.

@@ -168,8 +168,8 @@ pub struct RenderDesc {
     pub sampler: crate::sampler::SamplerKind,
     /// How lights are chosen for light sampling (`light/select.rs`).
     pub light_selection: crate::light::select::LightSelection,
-    /// Adaptive sampling: stop a pixel once the relative standard error of its beauty is
-    /// below this (0: off, every pixel takes `spp` samples).
+    /// Adaptive sampling: the standard error of a pixel's beauty to aim for, over the
+    /// square root of its brightness (0: off, every pixel takes `spp` samples).
     pub noise_threshold: f32,
     /// Adaptive sampling: samples every pixel takes before it may stop.
     pub min_spp: u32,

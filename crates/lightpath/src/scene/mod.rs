@@ -65,7 +65,7 @@ pub struct RenderSettings {
     pub seed: u64,
     pub sampler: crate::sampler::SamplerKind,
     pub light_selection: crate::light::select::LightSelection,
-    /// Adaptive sampling's relative standard error (0: off) and its first samples.
+    /// Adaptive sampling's error over √brightness (0: off) and its pilot's samples.
     pub noise_threshold: f32,
     pub min_spp: u32,
     /// Path regularisation: the roughness specular lobes get after a diffuse bounce

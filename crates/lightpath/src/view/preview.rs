@@ -78,7 +78,6 @@ impl Progress for LivePreview<'_> {
     fn rows_done(&self, film: &Film, rows: Range<usize>) {
         let w = film.width as usize;
         let pixels = rows.start * w..rows.end * w;
-        let inv = 1.0 / film.spp.max(1) as f32;
         self.shared.update(|data| {
             if (data.exr.width, data.exr.height) != (w, film.height as usize) {
                 return; // not the film this preview was made for
@@ -87,8 +86,9 @@ impl Progress for LivePreview<'_> {
                 if let (Some(src), Some(dst)) =
                     (plane.get(pixels.clone()), channel.get_mut(pixels.clone()))
                 {
-                    for (d, s) in dst.iter_mut().zip(src) {
-                        *d = s * inv;
+                    // Adaptive sampling: each pixel's own count (the pilot's, mid-render).
+                    for ((d, s), i) in dst.iter_mut().zip(src).zip(pixels.clone()) {
+                        *d = s * (1.0 / film.samples_at(i).max(1) as f32);
                     }
                 }
             }

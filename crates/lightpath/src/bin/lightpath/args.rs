@@ -234,12 +234,12 @@ pub(crate) struct RenderArgs {
     /// bit for bit).
     #[arg(long, value_parser = ["tree", "power", "uniform"])]
     pub(crate) light_selection: Option<String>,
-    /// Adaptive sampling: a pixel stops once the standard error of its beauty is below
-    /// this times the square root of its brightness (e.g. 0.05); --spp is then the most
-    /// a pixel takes.
+    /// Adaptive sampling: after a pilot pass of --min-spp samples, a pixel takes the most
+    /// samples its eight neighbours predict for a standard error of its beauty of this
+    /// times the square root of its brightness (e.g. 0.1); --spp is then the most.
     #[arg(long)]
     pub(crate) noise_threshold: Option<f32>,
-    /// Adaptive sampling: samples every pixel takes first.
+    /// Adaptive sampling: samples every pixel takes first (the pilot pass).
     #[arg(long)]
     pub(crate) min_spp: Option<u32>,
     /// Largest luminance of one contribution of indirect light (0: off).

@@ -269,9 +269,8 @@ fn render(args: RenderArgs) -> ExitCode {
             ..
         }) => {
             say!(
-                "interrupted after {} of {} rows: wrote {} and {} with the rows done, and the checkpoint {}; run the same command with --resume to finish",
-                i.rows_done,
-                i.rows,
+                "interrupted after {}: wrote {} and {} with the rows done, and the checkpoint {}; run the same command with --resume to finish",
+                i.rows_line(),
                 paths.exr.display(),
                 paths.png.display(),
                 i.checkpoint.display()

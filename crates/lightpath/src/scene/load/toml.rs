@@ -174,7 +174,7 @@ struct RenderDesc {
     /// `tree`, `power` or `uniform`.
     #[serde(default)]
     light_selection: Option<Spanned<String>>,
-    /// Adaptive sampling's relative standard error (0: off) and its first samples.
+    /// Adaptive sampling's error over √brightness (0: off) and its pilot's samples.
     #[serde(default)]
     noise_threshold: Option<Spanned<f32>>,
     #[serde(default)]
