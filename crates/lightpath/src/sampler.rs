@@ -148,10 +148,6 @@ pub trait PixelSampler {
         Self: 'a;
     /// The numbers of camera sample `sample` of this pixel.
     fn sample(&mut self, sample: u64) -> Self::Sampler<'_>;
-    /// The numbers of camera sample `sample` for its path after the camera's dimensions
-    /// (filter, lens) were read from another `sample(sample)`: what that sampler would
-    /// give from the first bounce on (camera rays traced as a packet come first).
-    fn sample_past_camera(&mut self, sample: u64) -> Self::Sampler<'_>;
 }
 
 /// The independent sampler's pixel: its samples' streams are seeded by (seed, pixel,
@@ -172,14 +168,6 @@ impl PixelSampler for IndependentPixel {
     #[inline]
     fn sample(&mut self, sample: u64) -> IndependentSampler {
         IndependentSampler::new(self.seed, self.pixel, sample)
-    }
-    #[inline]
-    fn sample_past_camera(&mut self, sample: u64) -> IndependentSampler {
-        // One stream read in order: the camera's numbers are drawn again and dropped.
-        let mut sampler = self.sample(sample);
-        sampler.get_2d(dim::FILTER);
-        sampler.get_2d(dim::LENS);
-        sampler
     }
 }
 
@@ -321,12 +309,6 @@ impl PixelSampler for SobolPixel {
             set: u32::MAX,
             cached: [0.0; 4],
         }
-    }
-
-    #[inline]
-    fn sample_past_camera(&mut self, sample: u64) -> SobolSampler<'_> {
-        // Numbers depend on the dimension alone: nothing to skip.
-        self.sample(sample)
     }
 }
 

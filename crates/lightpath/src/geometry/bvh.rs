@@ -21,10 +21,6 @@ use obvhs::bvh2::node::Bvh2Node;
 use obvhs::{Boundable, BvhBuildParams};
 use rayon::prelude::*;
 
-#[path = "bvh_packet.rs"]
-mod packet;
-pub use packet::PACKET;
-
 struct Bounded(Aabb);
 
 impl Boundable for Bounded {
@@ -1278,7 +1274,7 @@ mod tests {
 
     /// A soup of triangles and spheres of mixed visibility, some duplicated, in and around a
     /// unit box.
-    pub(super) fn soup(n: usize, rng: &mut Rng) -> (Vec<Prim>, Vec<u32>, Vec<u8>) {
+    fn soup(n: usize, rng: &mut Rng) -> (Vec<Prim>, Vec<u32>, Vec<u8>) {
         let mut point =
             || Vec3A::new(rng.next_f32(), rng.next_f32(), rng.next_f32()) * 2.0 - Vec3A::ONE;
         let mut prims = Vec::new();

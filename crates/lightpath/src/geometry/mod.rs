@@ -12,7 +12,7 @@ mod sah;
 pub mod shapes;
 
 pub use attrs::{SurfaceAttrs, SurfaceUv};
-pub use bvh::{Accel, Visibility, PACKET};
+pub use bvh::{Accel, Visibility};
 pub use instance::Instance;
 
 use glam::Vec3A;

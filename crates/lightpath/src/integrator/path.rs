@@ -50,15 +50,8 @@ pub(super) struct Vertex<'a> {
 }
 
 impl Tracer<'_> {
-    /// Follows one camera path from its camera ray `ray` and that ray's hit `first`
-    /// (traced with the other samples' camera rays); returns its alpha.
-    pub(super) fn trace<S: Sampler>(
-        &self,
-        mut ray: Ray,
-        first: Option<Hit>,
-        sampler: &mut S,
-        out: &mut Sink,
-    ) -> f32 {
+    /// Traces one camera path; returns its alpha.
+    pub(super) fn trace<S: Sampler>(&self, mut ray: Ray, sampler: &mut S, out: &mut Sink) -> f32 {
         let scene = self.scene;
         let a = &scene.automaton;
         let mut path = PathState {
@@ -79,9 +72,14 @@ impl Tracer<'_> {
         let mut alpha = 0.0;
         out.holdout = false;
         out.first_object = None;
-        let mut found = first;
         loop {
             out.rays += 1;
+            let mask = if path.depth == 0 {
+                Visibility::CAMERA
+            } else {
+                Visibility::INDIRECT
+            };
+            let found = scene.accel.intersect(&ray, 0.0, mask);
             if let Some(hit) = &found {
                 let holdout = scene.objects[hit.object as usize].holdout;
                 if path.depth == 0 {
@@ -139,7 +137,6 @@ impl Tracer<'_> {
             if !self.roulette(&mut path, sampler) {
                 break;
             }
-            found = scene.accel.intersect(&ray, 0.0, Visibility::INDIRECT);
         }
         alpha
     }

@@ -11,10 +11,9 @@
 
 use super::{Sink, Tracer};
 use crate::film::Film;
-use crate::geometry::{Ray, Visibility, PACKET};
 use crate::light::luminance;
 use crate::sampler::{dim, IndependentPixel, PixelSampler, Sampler, SamplerKind, SobolPixel};
-use glam::{Vec2, Vec3A};
+use glam::Vec2;
 
 /// Adaptive sampling checks a pixel's noise after this many samples past `min_spp`.
 pub const CHECK_EVERY: u32 = 8;
@@ -79,57 +78,33 @@ impl Tracer<'_> {
 
     fn pixel_samples(&self, job: PixelJob, out: &mut Sink, mut samplers: impl PixelSampler) -> u32 {
         let scene = self.scene;
+        let cam = &scene.camera;
         let settings = &scene.settings;
         let alpha_slot = Film::alpha_slot(job.run.len());
         let adaptive = settings.noise_threshold > 0.0;
         let mut moments = Moments::default();
-        let mut rays = [Ray {
-            origin: Vec3A::ZERO,
-            dir: Vec3A::Z,
-            tmax: 0.0,
-        }; PACKET];
-        let mut hits = [None; PACKET];
-        let end = job.first_sample + job.spp;
-        // The camera rays of the next few samples are traced together (a packet), then
-        // each sample's path continues from its ray's hit, in sample order.
-        for first in (job.first_sample..end).step_by(PACKET) {
-            let n = (end - first).min(PACKET as u32) as usize;
-            for (k, ray) in rays[..n].iter_mut().enumerate() {
-                let mut sampler = samplers.sample((first + k as u32) as u64);
-                *ray = self.camera_ray(job.x, job.y, &mut sampler);
+        for s in job.first_sample..job.first_sample + job.spp {
+            let mut sampler = samplers.sample(s as u64);
+            let offset = scene.filter.offset(sampler.get_2d(dim::FILTER));
+            let film_pos = Vec2::new(job.x as f32 + 0.5, job.y as f32 + 0.5) + offset;
+            let ray = cam.ray(film_pos, sampler.get_2d(dim::LENS));
+            let alpha = self.trace(ray, &mut sampler, out);
+            (job.after_sample)(out);
+            if adaptive {
+                // The beauty is AOV 0 (aov::plan puts it first).
+                moments.add(luminance(out.acc.value(0)));
             }
-            let mask = Visibility::CAMERA;
-            scene
-                .accel
-                .intersect_packet(&rays[..n], 0.0, mask, &mut hits[..n]);
-            for k in 0..n {
-                let mut sampler = samplers.sample_past_camera((first + k as u32) as u64);
-                let alpha = self.trace(rays[k], hits[k], &mut sampler, out);
-                (job.after_sample)(out);
-                if adaptive {
-                    // The beauty is AOV 0 (aov::plan puts it first).
-                    moments.add(luminance(out.acc.value(0)));
-                }
-                out.acc.flush(job.run);
-                job.run[alpha_slot] += alpha;
-                if adaptive
-                    && moments.n >= settings.min_spp
-                    && (moments.n - settings.min_spp) % CHECK_EVERY == 0
-                    && moments.converged(settings.noise_threshold)
-                {
-                    return moments.n;
-                }
+            out.acc.flush(job.run);
+            job.run[alpha_slot] += alpha;
+            if adaptive
+                && moments.n >= settings.min_spp
+                && (moments.n - settings.min_spp) % CHECK_EVERY == 0
+                && moments.converged(settings.noise_threshold)
+            {
+                return moments.n;
             }
         }
         job.spp
-    }
-
-    /// The camera ray of a sample of pixel (`x`, `y`), from its filter and lens numbers.
-    fn camera_ray(&self, x: u32, y: u32, sampler: &mut impl Sampler) -> Ray {
-        let scene = self.scene;
-        let offset = scene.filter.offset(sampler.get_2d(dim::FILTER));
-        let film_pos = Vec2::new(x as f32 + 0.5, y as f32 + 0.5) + offset;
-        scene.camera.ray(film_pos, sampler.get_2d(dim::LENS))
     }
 }
 
