@@ -227,6 +227,8 @@ const _: () = assert!(SOBOL_SETS <= 64, "one bit per set in SobolPixel::valid");
 /// matrix product. 1 KB per set; a path touches its first few.
 pub struct SobolTables {
     sets: Vec<[[[u32; 4]; 16]; 4]>,
+    /// Whether the CPU has SSE4.1 (`scrambled_numbers`).
+    sse41: bool,
 }
 
 impl SobolTables {
@@ -243,6 +245,10 @@ impl SobolTables {
                     })
                 })
                 .collect(),
+            #[cfg(target_arch = "x86_64")]
+            sse41: is_x86_feature_detected!("sse4.1"),
+            #[cfg(not(target_arch = "x86_64"))]
+            sse41: false,
         })
     }
 
@@ -325,12 +331,66 @@ impl SobolSampler<'_> {
             let set = set as usize;
             let sobol = self.pixel.tables.sobol_rev(self.index_rev, set);
             let scramble = self.pixel.scramble(set);
-            self.cached = parts::owen_scramble_int4_rev(sobol, scramble)
-                .reverse_bits()
-                .to_f32_norm();
+            self.cached = scrambled_numbers(sobol, scramble, self.pixel.tables.sse41);
         }
         self.cached[(dim % 4) as usize]
     }
+}
+
+/// A set's four numbers from its Sobol point and Owen scramble: exactly
+/// `parts::owen_scramble_int4_rev(..).reverse_bits().to_f32_norm()`. The crate's x86-64
+/// build has only SSE2, where each of the scramble's four lane products takes five
+/// instructions and the bit reversal twenty; with SSE4.1 (`sse41`) they take one and
+/// six (~16 % of a render's instructions were the sampler's).
+#[inline(always)]
+fn scrambled_numbers(sobol: Int4, scramble: Int4, sse41: bool) -> [f32; 4] {
+    #[cfg(target_arch = "x86_64")]
+    if sse41 {
+        // SAFETY: `sse41` is `is_x86_feature_detected!("sse4.1")`.
+        return unsafe { scrambled_numbers_sse41(sobol.into(), scramble.into()) };
+    }
+    let _ = sse41;
+    parts::owen_scramble_int4_rev(sobol, scramble)
+        .reverse_bits()
+        .to_f32_norm()
+}
+
+/// `scrambled_numbers` with SSE4.1's lane products and SSSE3's byte shuffles: the same
+/// integer operations, so the same bits.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "sse4.1")]
+fn scrambled_numbers_sse41(sobol: [u32; 4], scramble: [u32; 4]) -> [f32; 4] {
+    use std::arch::x86_64::*;
+    // SAFETY: `[u32; 4]` and `__m128i` are the same 16 bytes; any bits are valid.
+    let (mut n, s) = unsafe {
+        (
+            std::mem::transmute::<[u32; 4], __m128i>(sobol),
+            std::mem::transmute::<[u32; 4], __m128i>(scramble),
+        )
+    };
+    // parts::owen_scramble_int4_rev.
+    n = _mm_xor_si128(n, _mm_mullo_epi32(n, _mm_set1_epi32(0x3d20_adea)));
+    n = _mm_add_epi32(n, s);
+    n = _mm_mullo_epi32(n, _mm_or_si128(_mm_srli_epi32(s, 16), _mm_set1_epi32(1)));
+    n = _mm_xor_si128(n, _mm_mullo_epi32(n, _mm_set1_epi32(0x0552_6c56)));
+    n = _mm_xor_si128(n, _mm_mullo_epi32(n, _mm_set1_epi32(0x53a2_2864)));
+    // Bits reversed: each byte's through two nibble tables, then the bytes of each lane.
+    let low_nibble = _mm_set1_epi32(0x0f0f_0f0f);
+    let rev_high = _mm_setr_epi8(0, 8, 4, 12, 2, 10, 6, 14, 1, 9, 5, 13, 3, 11, 7, 15);
+    let rev_low = _mm_slli_epi16(rev_high, 4);
+    let lo = _mm_and_si128(n, low_nibble);
+    let hi = _mm_and_si128(_mm_srli_epi16(n, 4), low_nibble);
+    n = _mm_or_si128(
+        _mm_shuffle_epi8(rev_low, lo),
+        _mm_shuffle_epi8(rev_high, hi),
+    );
+    let swap = _mm_setr_epi8(3, 2, 1, 0, 7, 6, 5, 4, 11, 10, 9, 8, 15, 14, 13, 12);
+    n = _mm_shuffle_epi8(n, swap);
+    // parts' to_f32_norm: the top 23 bits as a float in [1, 2), minus one.
+    let one_to_two = _mm_or_si128(_mm_srli_epi32(n, 9), _mm_set1_epi32(0x3f80_0000));
+    let x = _mm_sub_ps(_mm_castsi128_ps(one_to_two), _mm_set1_ps(1.0));
+    // SAFETY: as above.
+    unsafe { std::mem::transmute::<__m128, [f32; 4]>(x) }
 }
 
 impl Sampler for SobolSampler<'_> {
@@ -524,6 +584,25 @@ mod tests {
                         "seed {seed} pixel {pixel} sample {sample} dim {dim}"
                     );
                 }
+            }
+        }
+    }
+
+    /// Both ways of making a set's numbers agree bit for bit, on random points and
+    /// scrambles (the SSE4.1 one is what `sobol_tables_give_the_crates_numbers` checks
+    /// on CPUs that have it).
+    #[test]
+    fn scrambled_numbers_are_the_crates_on_every_path() {
+        let mut rng = Rng::for_sample(3, 4, 5);
+        for _ in 0..20_000 {
+            let sobol: [u32; 4] = std::array::from_fn(|_| rng.next_u32());
+            let scramble: [u32; 4] = std::array::from_fn(|_| rng.next_u32());
+            let want = parts::owen_scramble_int4_rev(sobol.into(), scramble.into())
+                .reverse_bits()
+                .to_f32_norm();
+            for sse41 in [false, SobolTables::get().sse41] {
+                let got = scrambled_numbers(sobol.into(), scramble.into(), sse41);
+                assert_eq!(got.map(f32::to_bits), want.map(f32::to_bits));
             }
         }
     }
