@@ -63,6 +63,19 @@ struct Sink<'b> {
     first_object: Option<u32>,
 }
 
+impl<'b> Sink<'b> {
+    /// A sink adding to `acc`, its counters at zero.
+    fn new(acc: &'b mut SampleAccumulator) -> Sink<'b> {
+        Sink {
+            acc,
+            rays: 0,
+            nonfinite: 0,
+            holdout: false,
+            first_object: None,
+        }
+    }
+}
+
 impl<'a> Tracer<'a> {
     fn new(scene: &'a Scene) -> Tracer<'a> {
         Tracer {
@@ -626,13 +639,7 @@ impl FrameRender<'_> {
     ) {
         let (matte, matte_row) = mattes;
         let matte_stride = self.table.map_or(0, |t| t.stride());
-        let mut out = Sink {
-            acc,
-            rays: 0,
-            nonfinite: 0,
-            holdout: false,
-            first_object: None,
-        };
+        let mut out = Sink::new(acc);
         let mut samples = 0u64;
         let y = self.window.y0 + y as u32;
         let rule = self.rule;
@@ -735,13 +742,7 @@ impl FrameRender<'_> {
     ) -> Moments {
         let (acc, run) = scratch;
         run.fill(0.0);
-        let mut out = Sink {
-            acc,
-            rays: 0,
-            nonfinite: 0,
-            holdout: false,
-            first_object: None,
-        };
+        let mut out = Sink::new(acc);
         let mut moments = Moments::default();
         let mut no_mattes = |_: &Sink| {};
         let job = PixelJob {
