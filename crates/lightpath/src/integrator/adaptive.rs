@@ -140,7 +140,10 @@ impl Rule {
             return self.spp;
         }
         let count = (wanted.ceil() as u32).max(self.pilot);
-        count.next_power_of_two().min(self.spp)
+        // Past 2³¹ there is no power of two in u32: take every sample.
+        count
+            .checked_next_power_of_two()
+            .map_or(self.spp, |c| c.min(self.spp))
     }
 }
 
@@ -249,6 +252,16 @@ mod tests {
         assert_eq!(s.predicted_count(&flat), 16, "no variance: min_spp");
         assert_eq!(rule(16, 300, 0.125).predicted_count(&m), 300, "at most spp");
         assert_eq!(rule(16, 8, 0.125).predicted_count(&m), 8);
+        // Mean 1, variance 3·10⁹·0.125²: 3·10⁹ samples wanted of at most 4·10⁹, past the
+        // largest power of two in u32.
+        let huge = rule(16, 4_000_000_000, 0.125);
+        let wanted = Moments {
+            n: 16,
+            sum: 16.0,
+            sum2: 16.0 + 15.0 * 3e9 * 0.125 * 0.125,
+        };
+        assert!(wanted.error().powi(2) / 0.125f64.powi(2) * 16.0 > 2f64.powi(31));
+        assert_eq!(huge.predicted_count(&wanted), 4_000_000_000);
     }
 
     #[test]
