@@ -492,28 +492,42 @@ fn wait_for(path: &Path, child: &mut std::process::Child) {
     }
 }
 
+/// `lightpath render cornell` at 32², quiet, checkpointing at every chance, with
+/// `sampling` flags and output `out`.
+#[cfg(unix)]
+fn signal_test_args(sampling: &[&str], out: &Path) -> Vec<String> {
+    ["render", "cornell", "--resolution", "32x32"]
+        .iter()
+        .chain(sampling)
+        .chain(&["-q", "--checkpoint-every", "0.001", "-o"])
+        .map(|s| s.to_string())
+        .chain([out.display().to_string()])
+        .collect()
+}
+
+/// Starts a render with `args`, sends it SIGINT once `checkpoint` exists, and returns
+/// what it printed after checking it exited with 130.
+#[cfg(unix)]
+fn render_then_sigint(args: Vec<String>, checkpoint: &Path) -> String {
+    let mut child = lightpath()
+        .args(args)
+        .stdout(Stdio::piped())
+        .spawn()
+        .unwrap();
+    wait_for(checkpoint, &mut child);
+    // SAFETY: signalling our own child by its id.
+    unsafe { libc::kill(child.id() as i32, libc::SIGINT) };
+    let status = child.wait_with_output().unwrap();
+    let said = String::from_utf8_lossy(&status.stdout).into_owned();
+    assert_eq!(status.status.code(), Some(130), "{said}");
+    said
+}
+
 #[cfg(unix)]
 #[test]
 fn sigint_then_resume_gives_the_uninterrupted_render_and_kill_9_leaves_the_old_output() {
     let scratch = Scratch::new("signals");
-    let args = |out: &Path| -> Vec<String> {
-        [
-            "render",
-            "cornell",
-            "--resolution",
-            "32x32",
-            "--spp",
-            "256",
-            "-q",
-            "--checkpoint-every",
-            "0.001",
-            "-o",
-        ]
-        .iter()
-        .map(|s| s.to_string())
-        .chain([out.display().to_string()])
-        .collect()
-    };
+    let args = |out: &Path| signal_test_args(&["--spp", "256"], out);
     let reference = scratch.0.join("ref.exr");
     check(
         "ok",
@@ -531,21 +545,7 @@ fn sigint_then_resume_gives_the_uninterrupted_render_and_kill_9_leaves_the_old_o
     // SIGINT: the rows done and a checkpoint; then --resume finishes it.
     let out = scratch.0.join("int.exr");
     let checkpoint = scratch.0.join("int.exr.checkpoint");
-    let mut child = lightpath()
-        .args(args(&out))
-        .stdout(Stdio::piped())
-        .spawn()
-        .unwrap();
-    wait_for(&checkpoint, &mut child);
-    // SAFETY: signalling our own child by its id.
-    unsafe { libc::kill(child.id() as i32, libc::SIGINT) };
-    let status = child.wait_with_output().unwrap();
-    assert_eq!(
-        status.status.code(),
-        Some(130),
-        "{}",
-        String::from_utf8_lossy(&status.stdout)
-    );
+    render_then_sigint(args(&out), &checkpoint);
     assert!(out.exists() && checkpoint.exists());
     let partial = lightpath::output::read_exr(&out).unwrap();
     assert!(partial
@@ -604,45 +604,22 @@ fn sigint_then_resume_gives_the_uninterrupted_render_and_kill_9_leaves_the_old_o
 #[test]
 fn sigint_then_resume_an_adaptive_render_gives_the_uninterrupted_one() {
     let scratch = Scratch::new("adaptive-signals");
-    let args = |out: &Path| -> Vec<String> {
-        [
-            "render",
-            "cornell",
-            "--resolution",
-            "32x32",
-            "--spp",
-            "512",
-            "--min-spp",
-            "16",
-            "--noise-threshold",
-            "0.02",
-            "-q",
-            "--checkpoint-every",
-            "0.001",
-            "-o",
-        ]
-        .iter()
-        .map(|s| s.to_string())
-        .chain([out.display().to_string()])
-        .collect()
-    };
+    let sampling = [
+        "--spp",
+        "512",
+        "--min-spp",
+        "16",
+        "--noise-threshold",
+        "0.02",
+    ];
+    let args = |out: &Path| signal_test_args(&sampling, out);
     let reference = scratch.0.join("ref.exr");
     let mut c = lightpath();
     c.args(args(&reference));
     check("ok", &run(c, "reference"), "reference");
     let out = scratch.0.join("int.exr");
     let checkpoint = scratch.0.join("int.exr.checkpoint");
-    let mut child = lightpath()
-        .args(args(&out))
-        .stdout(Stdio::piped())
-        .spawn()
-        .unwrap();
-    wait_for(&checkpoint, &mut child);
-    // SAFETY: signalling our own child by its id.
-    unsafe { libc::kill(child.id() as i32, libc::SIGINT) };
-    let status = child.wait_with_output().unwrap();
-    let said = String::from_utf8_lossy(&status.stdout);
-    assert_eq!(status.status.code(), Some(130), "{said}");
+    let said = render_then_sigint(args(&out), &checkpoint);
     assert!(said.contains(" pass"), "the message names the pass: {said}");
     let mut resume = lightpath();
     resume.args(args(&out)).arg("--resume");
