@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """Denoising quality on cornell-classic (issue 13): RMSE of every standard AOV before and
 after `lightpath denoise`, against Lightpath's own high-spp render and (beauty) against
-Mitsuba's stored 4096-spp reference, plus the bias floor (Lightpath's own reference
+Mitsuba's stored 65536-spp reference, plus the bias floor (Lightpath's own reference
 against Mitsuba's) and the error split into light-edge, light and other pixels.
 
     benches/denoise/measure.py LIGHTPATH [--spp 16] [--ref-spp 4096] [--dir DIR]
@@ -78,11 +78,11 @@ def main():
     rest = em == 0
     print(f"pixels: light {light.sum()}, light edge {edge.sum()}, other {rest.sum()}")
     floor = rmse(rgb(o, "beauty"), mref)
-    print(f"\nbias floor: own {a.ref_spp}-spp render vs Mitsuba 4096 spp: RMSE {floor:.5f}")
+    print(f"\nbias floor: own {a.ref_spp}-spp render vs Mitsuba 65536 spp: RMSE {floor:.5f}")
     for name, cls in (("all", None), ("light edge", edge), ("light", light), ("other", rest)):
         print(f"  {name:>10}: {rmse(rgb(o, 'beauty'), mref, cls):.5f}")
     print(f"\nbeauty, {a.spp} spp, RMSE          noisy   denoised  ratio")
-    for refname, ref in (("Mitsuba 4096 spp", mref), (f"own {a.ref_spp} spp", rgb(o, "beauty"))):
+    for refname, ref in (("Mitsuba 65536 spp", mref), (f"own {a.ref_spp} spp", rgb(o, "beauty"))):
         for name, cls in (("all", None), ("light edge", edge), ("light", light), ("other", rest)):
             x, y = rmse(rgb(n, "beauty"), ref, cls), rmse(rgb(d, "beauty"), ref, cls)
             print(f"  vs {refname:>17} {name:>10}: {x:.5f}  {y:.5f}  {y / x if x else 0:.3f}")

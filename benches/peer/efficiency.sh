@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Equal-time quality (issue 11): efficiency = 1 / (MSE x seconds) of each renderer's image
 # against a high-spp reference, on cornell-classic (Lightpath, Mitsuba 3 llvm_ad_rgb,
-# Blender Cycles; reference ref/cornell_ref.exr, Mitsuba 4096 spp) and on
+# Blender Cycles; reference ref/cornell_ref.exr, Mitsuba 65536 spp) and on
 # scenes/many-lights.toml (a key, a dim dome and 48 small lamps; Lightpath only, the
 # other renderers have no reader for it; reference rendered here by Lightpath).
 # Renderers alternate within each repetition; the summary takes medians and ratios.

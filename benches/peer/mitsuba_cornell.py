@@ -12,7 +12,7 @@ Two scene sources:
 Examples (2 threads):
   python3 mitsuba_cornell.py --variant llvm_ad_rgb --spp 64 --max-depth 8
   python3 mitsuba_cornell.py --variant scalar_rgb --spp 256 --repeat 2
-  python3 mitsuba_cornell.py --spp 4096 --pass-spp 256 --out ref/cornell_ref
+  python3 mitsuba_cornell.py --spp 65536 --pass-spp 256 --seed 1000000 --out ref/cornell_ref
   python3 mitsuba_cornell.py --spp 256 --aov --lpe-split
 
 Timing output: load time, then for each repeat the render wall time (for LLVM the

@@ -1,12 +1,12 @@
 #!/usr/bin/env bash
 # Lightpath against Mitsuba 3 on cornell-classic (256x256, max depth 8, Russian roulette
 # from depth 5, box filter, 2 threads): samples/s of each, their ratio, and the RMSE of
-# each image against the 4096-spp reference in ref/.
+# each image against the 65536-spp reference in ref/.
 #
 # Needs (installed by hand, not by CI):  pip install mitsuba==3.9.1 numpy
 #                                        apt-get install -y libllvm19   (for llvm_ad_rgb)
 # Usage: benches/peer/run.sh [SPP] [REPEATS]        (defaults 64 and 3)
-#        benches/peer/run.sh --reference            (re-render ref/ with Mitsuba, ~2 min)
+#        benches/peer/run.sh --reference            (re-render ref/ with Mitsuba, ~25 min)
 set -euo pipefail
 here="$(cd "$(dirname "$0")" && pwd)"
 root="$(cd "$here/../.." && pwd)"
@@ -14,8 +14,8 @@ out="$here/out"
 mkdir -p "$out"
 
 if [ "${1:-}" = "--reference" ]; then
-  python3 "$here/mitsuba_cornell.py" --variant llvm_ad_rgb --spp 4096 --pass-spp 256 --max-depth 8 \
-    --threads 2 --out "$here/ref/cornell_ref"
+  python3 "$here/mitsuba_cornell.py" --variant llvm_ad_rgb --spp 65536 --pass-spp 256 --max-depth 8 \
+    --threads 2 --seed 1000000 --out "$here/ref/cornell_ref"
   exit 0
 fi
 

@@ -227,7 +227,7 @@ mod filtered {
     }
 
     /// A 16-spp `cornell-classic` render with the standard AOVs, denoised, against
-    /// Mitsuba's 4096-spp reference (whose own noise is ~1/16 of the noisy render's).
+    /// Mitsuba's 65536-spp reference (whose own noise is ~1/250 of the noisy render's).
     /// Two thirds of the noisy render's squared error is the light's edge: which pixels
     /// see the light is decided by 16 samples each, and the denoiser cannot know the
     /// coverage better than its (equally sampled) albedo and normal do, so emission seen

@@ -1,4 +1,4 @@
-//! Agreement with the peer: `cornell-classic` against Mitsuba 3's 4096-spp render of the
+//! Agreement with the peer: `cornell-classic` against Mitsuba 3's 65536-spp render of the
 //! same scene (`benches/peer/ref/cornell_ref.exr`, made by `benches/peer/run.sh --reference`).
 
 use lightpath::aov;
@@ -66,7 +66,7 @@ fn cornell_classic_agrees_with_the_mitsuba_reference() {
             mse.sqrt(),
             predicted.sqrt()
         );
-        // The reference's own noise (4096 spp) adds under 1% of ours at 16 spp; allow
+        // The reference's own noise (65536 spp) adds under 0.1% of ours at 16 spp; allow
         // 15% for the spread of the variance estimate itself.
         assert!(
             mse <= 1.15 * predicted,
