@@ -233,36 +233,69 @@ struct SequenceHashes {
     scramble: Int4,
 }
 
-/// The padded sequences other than the directions one.
-#[derive(Clone, Copy, PartialEq, Eq)]
-enum Sequence {
-    Camera,
-    Vertex(u32),
-    Roulette(u32),
+/// A padded sequence other than the directions one, by number: the camera's is 0,
+/// vertex `d`'s `1 + 2d`, roulette `d`'s `2 + 2d`. The number is also its place in
+/// `SobolPixel::hashes` (when below `CACHED_SEQUENCES`).
+const CAMERA: u32 = 0;
+fn vertex_sequence(d: u32) -> u32 {
+    1 + 2 * d
+}
+fn roulette_sequence(d: u32) -> u32 {
+    2 + 2 * d
 }
 
-impl Sequence {
-    /// Its place in `SobolPixel::hashes` (or past it: not cached).
-    fn slot(self) -> usize {
-        match self {
-            Sequence::Camera => 0,
-            Sequence::Vertex(d) => 1 + 2 * d as usize,
-            Sequence::Roulette(d) => 2 + 2 * d as usize,
-        }
-    }
-
-    /// Its seed for `sobol_burley`: the camera sequence's is the pixel's (so the camera
-    /// rays of renders made before padding are unchanged), the others hash it with
-    /// their slot.
-    fn seed(self, sequence: u32) -> u32 {
-        match self {
-            Sequence::Camera => sequence,
-            _ => parts::hash(sequence ^ (self.slot() as u32).wrapping_mul(0x9e37_79b9)),
-        }
+/// A padded sequence's seed for `sobol_burley`: the camera sequence's is the pixel's
+/// (so camera rays are those of renders made before padding), the others hash it with
+/// their number.
+fn sequence_seed(number: u32, sequence: u32) -> u32 {
+    if number == CAMERA {
+        sequence
+    } else {
+        parts::hash(sequence ^ number.wrapping_mul(0x9e37_79b9))
     }
 }
 
-/// The directions sequence's seed (`Sequence::seed`'s counterpart).
+/// Where a layout dimension's number comes from (`SobolPixel`'s table).
+#[derive(Clone, Copy)]
+enum Source {
+    /// Lane `lane` of padded sequence `sequence`'s first dimension set.
+    Padded { sequence: u32, lane: u8 },
+    /// Dimension `k` of the directions sequence.
+    Direction(u32),
+}
+
+impl Source {
+    /// The table of `SobolPixel`'s documentation.
+    fn of(dim: u32) -> Source {
+        if dim < dim::bounce(0) {
+            return Source::Padded {
+                sequence: CAMERA,
+                lane: dim as u8,
+            };
+        }
+        let d = (dim - dim::bounce(0)) / dim::PER_BOUNCE;
+        let vertex = |lane| Source::Padded {
+            sequence: vertex_sequence(d),
+            lane,
+        };
+        match (dim - dim::bounce(0)) % dim::PER_BOUNCE {
+            dim::LIGHT_CHOICE => vertex(VERTEX_LIGHT_CHOICE),
+            dim::LOBE_CHOICE => vertex(VERTEX_LOBE_CHOICE),
+            dim::ROULETTE => Source::Padded {
+                sequence: roulette_sequence(d),
+                lane: 0,
+            },
+            k if k >= dim::DIRECTION => Source::Direction(2 * d + (k - dim::DIRECTION)),
+            k => vertex(VERTEX_LIGHT_POINT + (k - dim::LIGHT_POINT) as u8),
+        }
+    }
+}
+
+/// Layout dimensions whose `Source` `SobolTables` keeps (those of the first 128
+/// bounces); deeper ones are worked out on each call.
+const TABLED_DIMENSIONS: u32 = 4 + dim::PER_BOUNCE * 128;
+
+/// The directions sequence's seed (`sequence_seed`'s counterpart).
 fn directions_seed(sequence: u32) -> u32 {
     parts::hash(sequence ^ 0x5bd1_e995)
 }
@@ -273,12 +306,12 @@ const CACHED_SEQUENCES: usize = 64;
 /// The numbers of one camera sample of a [`SobolPixel`].
 pub struct SobolSampler<'p> {
     pixel: &'p mut SobolPixel,
-    /// The sample's index in its block of 2^16.
-    index: u32,
     /// Seed, pixel and sample hashed, for the dimensions past the crate's.
     hash: u64,
-    /// The sequence whose four numbers are in `cached` (`None`: none yet).
-    sequence: Option<Sequence>,
+    /// The index with its bits reversed, before any sequence's shuffle.
+    index_rev: u32,
+    /// The padded sequence whose four numbers are in `cached` (`u32::MAX`: none yet).
+    sequence: u32,
     cached: [f32; 4],
     /// The directions sequence's shuffled index, and the set in `directions` (`u32::MAX`:
     /// none yet).
@@ -296,17 +329,20 @@ const _: () = assert!(
     "one bit per set in SobolPixel::directions_valid"
 );
 
-/// The lanes of [`Sequence::Vertex`]: the light point takes the first two dimensions,
+/// The lanes of a vertex's sequence: the light point takes the first two dimensions,
 /// the (0, 2)-net.
-const VERTEX_LIGHT_POINT: usize = 0;
-const VERTEX_LIGHT_CHOICE: usize = 2;
-const VERTEX_LOBE_CHOICE: usize = 3;
+const VERTEX_LIGHT_POINT: u8 = 0;
+const VERTEX_LIGHT_CHOICE: u8 = 2;
+const VERTEX_LOBE_CHOICE: u8 = 3;
 
 /// Per dimension set, the Sobol matrix's image of each nibble of the (bit-reversed)
 /// 16-bit index: the sequence is linear over GF(2), so the XOR of four lookups is the
 /// matrix product. 1 KB per set; a path touches its first few.
 pub struct SobolTables {
     sets: Vec<[[[u32; 4]; 16]; 4]>,
+    /// Each layout dimension's source, below `TABLED_DIMENSIONS` (one load instead of
+    /// a division and a match per number).
+    sources: Vec<Source>,
     /// Whether the CPU has SSE4.1 (`scrambled_numbers`).
     sse41: bool,
 }
@@ -325,6 +361,7 @@ impl SobolTables {
                     })
                 })
                 .collect(),
+            sources: (0..TABLED_DIMENSIONS).map(Source::of).collect(),
             #[cfg(target_arch = "x86_64")]
             sse41: is_x86_feature_detected!("sse4.1"),
             #[cfg(not(target_arch = "x86_64"))]
@@ -380,17 +417,17 @@ impl SobolPixel {
         }
     }
 
-    /// A padded sequence's hashes.
+    /// Padded sequence `number`'s hashes.
     #[inline(always)]
-    fn hashes(&mut self, s: Sequence) -> SequenceHashes {
-        let slot = s.slot();
+    fn hashes(&mut self, number: u32) -> SequenceHashes {
         let make = |sequence| {
-            let seed = s.seed(sequence);
+            let seed = sequence_seed(number, sequence);
             SequenceHashes {
                 shuffle: shuffle_hash(seed),
                 scramble: scramble_hash(seed, 0),
             }
         };
+        let slot = number as usize;
         if slot >= CACHED_SEQUENCES {
             return make(self.sequence);
         }
@@ -429,14 +466,14 @@ impl PixelSampler for SobolPixel {
         }
         let index = (sample & 0xffff) as u32;
         SobolSampler {
-            index,
+            index_rev: index.reverse_bits(),
             hash: splitmix64(self.block_hash ^ sample),
             directions_index: parts::owen_scramble_rev(
                 index.reverse_bits(),
                 self.directions_shuffle,
             ),
             pixel: self,
-            sequence: None,
+            sequence: u32::MAX,
             cached: [0.0; 4],
             directions_set: u32::MAX,
             directions: [0.0; 4],
@@ -445,17 +482,17 @@ impl PixelSampler for SobolPixel {
 }
 
 impl SobolSampler<'_> {
-    /// Number `lane` (0–3) of padded sequence `s`: its first dimension set.
+    /// Number `lane` (0–3) of padded sequence `sequence`: its first dimension set.
     #[inline(always)]
-    fn padded(&mut self, s: Sequence, lane: usize) -> f32 {
-        if self.sequence != Some(s) {
-            self.sequence = Some(s);
-            let h = self.pixel.hashes(s);
-            let index_rev = parts::owen_scramble_rev(self.index.reverse_bits(), h.shuffle);
+    fn padded(&mut self, sequence: u32, lane: u8) -> f32 {
+        if self.sequence != sequence {
+            self.sequence = sequence;
+            let h = self.pixel.hashes(sequence);
+            let index_rev = parts::owen_scramble_rev(self.index_rev, h.shuffle);
             let sobol = self.pixel.tables.sobol_rev(index_rev, 0);
             self.cached = scrambled_numbers(sobol, h.scramble, self.pixel.tables.sse41);
         }
-        self.cached[lane]
+        self.cached[lane as usize]
     }
 
     /// Dimension `k` of the directions sequence.
@@ -476,23 +513,17 @@ impl SobolSampler<'_> {
         self.directions[(k % 4) as usize]
     }
 
-    /// Layout dimension `dim` (the table of the module's documentation), through the
-    /// sequence and lane `SobolPixel`'s table gives it.
+    /// Layout dimension `dim`, from the sequence and dimension `SobolPixel`'s table gives
+    /// it.
     #[inline(always)]
     fn value(&mut self, dim: u32) -> f32 {
-        if dim < dim::bounce(0) {
-            return self.padded(Sequence::Camera, dim as usize);
-        }
-        let d = (dim - dim::bounce(0)) / dim::PER_BOUNCE;
-        match (dim - dim::bounce(0)) % dim::PER_BOUNCE {
-            dim::LIGHT_CHOICE => self.padded(Sequence::Vertex(d), VERTEX_LIGHT_CHOICE),
-            dim::LOBE_CHOICE => self.padded(Sequence::Vertex(d), VERTEX_LOBE_CHOICE),
-            dim::ROULETTE => self.padded(Sequence::Roulette(d), 0),
-            k if k >= dim::DIRECTION => self.direction(2 * d + (k - dim::DIRECTION)),
-            k => self.padded(
-                Sequence::Vertex(d),
-                VERTEX_LIGHT_POINT + (k - dim::LIGHT_POINT) as usize,
-            ),
+        let source = match self.pixel.tables.sources.get(dim as usize) {
+            Some(&source) => source,
+            None => Source::of(dim),
+        };
+        match source {
+            Source::Padded { sequence, lane } => self.padded(sequence, lane),
+            Source::Direction(k) => self.direction(k),
         }
     }
 }
