@@ -54,7 +54,7 @@ pub mod dim {
 
     /// First dimension of scattering vertex `depth`.
     #[inline(always)]
-    pub fn bounce(depth: u32) -> u32 {
+    pub const fn bounce(depth: u32) -> u32 {
         4 + PER_BOUNCE * depth
     }
 }
@@ -210,11 +210,11 @@ pub struct SobolPixel {
     /// The block of 2^16 samples the sequences are for (`u64::MAX`: none).
     block: u64,
     /// The camera sequence's seed, with the block folded in, and the hash it came from;
-    /// the other sequences' seeds derive from it (`Sequence::seed`).
+    /// the other sequences' seeds derive from it (`sequence_seed`, `directions_seed`).
     sequence: u32,
     block_hash: u64,
-    /// The per-vertex sequences' hashes, by `Sequence::slot` (valid where `valid` has
-    /// its bit).
+    /// The padded sequences' hashes, by sequence number (valid where `valid` has its
+    /// bit).
     hashes: [SequenceHashes; CACHED_SEQUENCES],
     valid: u64,
     /// The directions sequence: its index shuffle, and per dimension set its scramble
@@ -293,14 +293,15 @@ impl Source {
 
 /// Layout dimensions whose `Source` `SobolTables` keeps (those of the first 128
 /// bounces); deeper ones are worked out on each call.
-const TABLED_DIMENSIONS: u32 = 4 + dim::PER_BOUNCE * 128;
+const TABLED_DIMENSIONS: u32 = dim::bounce(128);
 
 /// The directions sequence's seed (`sequence_seed`'s counterpart).
 fn directions_seed(sequence: u32) -> u32 {
     parts::hash(sequence ^ 0x5bd1_e995)
 }
 
-/// Sequences whose hashes a pixel keeps: the camera's and those of the first 31 vertices.
+/// Padded sequences whose hashes a pixel keeps: the camera's and those of the first 31
+/// vertices and roulettes (numbers below 64, one bit each in `SobolPixel::valid`).
 const CACHED_SEQUENCES: usize = 64;
 
 /// The numbers of one camera sample of a [`SobolPixel`].
