@@ -465,14 +465,11 @@ impl PixelSampler for SobolPixel {
             self.directions_valid = 0;
             self.directions_shuffle = shuffle_hash(directions_seed(self.sequence));
         }
-        let index = (sample & 0xffff) as u32;
+        let index_rev = ((sample & 0xffff) as u32).reverse_bits();
         SobolSampler {
-            index_rev: index.reverse_bits(),
+            index_rev,
             hash: splitmix64(self.block_hash ^ sample),
-            directions_index: parts::owen_scramble_rev(
-                index.reverse_bits(),
-                self.directions_shuffle,
-            ),
+            directions_index: parts::owen_scramble_rev(index_rev, self.directions_shuffle),
             pixel: self,
             sequence: u32::MAX,
             cached: [0.0; 4],
