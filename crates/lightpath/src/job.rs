@@ -334,7 +334,11 @@ impl RenderJob {
                 .position(|a| &a.name == name)
                 .ok_or_else(|| {
                     Error::Plan(format!(
-                        "--variance names '{name}', which is not an AOV of this render"
+                        "--variance names '{name}', which is not an AOV of this render{}",
+                        crate::suggest::did_you_mean(
+                            name,
+                            scene.aovs.iter().map(|a| a.name.as_str())
+                        )
                     ))
                 })?;
             let var = crate::aov::naming::variance_name(name);
@@ -538,15 +542,26 @@ impl PreparedRender {
             .sum();
         let header = exr_header(&job, &source, &scene, metadata, &film, interrupted.as_ref());
         let derived = output::derived_aovs(&film, &scene.aovs);
-        let png =
-            output::stage_png(&paths.png, &film, 0, job.preview_exposure).map_err(Error::Output)?;
+        // Unfinished rows go beside the output, never over a finished image of that name.
+        let partial = output::naming::partial_paths(&paths);
+        let written = if interrupted.is_some() {
+            partial.clone()
+        } else {
+            paths
+        };
+        let png = output::stage_png(&written.png, &film, 0, job.preview_exposure)
+            .map_err(Error::Output)?;
         let (width, height, spp) = (film.width, film.height, film.spp);
-        let exr = output::stage_film(&paths.exr, film, &scene.aovs, derived, job.exr, header)
+        let exr = output::stage_film(&written.exr, film, &scene.aovs, derived, job.exr, header)
             .map_err(Error::Output)?;
         output::atomic::commit_pair(exr, png).map_err(Error::Output)?;
         if interrupted.is_none() {
             remove_checkpoint(&checkpoint_path)?;
+            for stale in [&partial.exr, &partial.png] {
+                remove_stale(stale)?;
+            }
         }
+        let paths = written;
         // An interrupted render's rows are unfinished: it is denoised once it is resumed.
         let denoised = match job.denoise {
             Some(d) if interrupted.is_none() => {
@@ -630,9 +645,18 @@ fn exr_header(
 
 /// A finished render's checkpoint is stale: removed (none there is fine).
 fn remove_checkpoint(path: &std::path::Path) -> Result<(), Error> {
+    remove_if_there(path, "the finished render's checkpoint")
+}
+
+/// An interrupted render's `.partial` image, out of date once the render has finished.
+fn remove_stale(path: &std::path::Path) -> Result<(), Error> {
+    remove_if_there(path, "the interrupted render's partial image")
+}
+
+fn remove_if_there(path: &std::path::Path, what: &str) -> Result<(), Error> {
     match std::fs::remove_file(path) {
         Err(e) if e.kind() != std::io::ErrorKind::NotFound => Err(Error::Output(format!(
-            "cannot remove the finished render's checkpoint {}: {e}",
+            "cannot remove {what} {}: {e}",
             path.display()
         ))),
         _ => Ok(()),

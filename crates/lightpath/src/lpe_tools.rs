@@ -29,6 +29,7 @@ pub fn check(definitions: &[String]) -> Report {
     let mut compiler = lpe::Compiler::new();
     let mut ok = true;
     for d in definitions {
+        let d = crate::aov::resolve_definition(d);
         if let Err(e) = compiler.add(d) {
             ok = false;
             r.stderr.push_str(&e.render(d));
@@ -94,6 +95,7 @@ pub fn explain(definitions: &[String]) -> Report {
     let mut compiler = lpe::Compiler::new();
     let mut ok = true;
     for d in definitions {
+        let d = crate::aov::resolve_definition(d);
         match lpe::Rule::parse(d) {
             Ok(rule) => {
                 let name = rule

@@ -5,7 +5,7 @@ pub mod naming;
 pub mod plan;
 
 use lpe::STANDARD_NAMES;
-use naming::{bounce_name, bounce_plus_name, BEAUTY, DEPTH, NORMAL};
+use naming::{bounce_definition, bounce_name, bounce_plus_name, BEAUTY, DEPTH, NORMAL};
 
 /// An AOV to render: its channel name and its LPE definition.
 #[derive(Clone, Debug, PartialEq, Eq)]
@@ -69,6 +69,17 @@ pub const STANDARD_DATA: [(&str, &str); 2] = [
     ),
 ];
 
+/// A definition with Lightpath's own standard names resolved: `lpe:normal` and
+/// `lpe:depth` name the renderer's data AOVs, which the language (and so the `lpe` crate)
+/// does not know; every other definition is returned as written.
+pub fn resolve_definition(definition: &str) -> &str {
+    let word = definition.trim().strip_prefix("lpe:").unwrap_or("");
+    STANDARD_DATA
+        .iter()
+        .find(|(n, _)| n.eq_ignore_ascii_case(word))
+        .map_or(definition, |(_, d)| d)
+}
+
 /// The standard AOVs of LPE.md §7 other than beauty, then `normal` and `depth`.
 pub fn standard() -> Vec<AovSpec> {
     STANDARD_NAMES
@@ -96,11 +107,12 @@ pub fn assemble(extra: impl IntoIterator<Item = AovSpec>) -> Vec<AovSpec> {
 /// (exactly i scattering events) up to `bounce<k-1>`, and `bounce<k>plus`.
 pub fn bounces(k: u32) -> Vec<AovSpec> {
     let k = k.clamp(1, 63);
-    let mut out = vec![AovSpec::new(bounce_name(0), "C[<L.>O]")];
-    out.extend((1..k).map(|i| AovSpec::new(bounce_name(i), format!("C[DS]{{{i}}}[<L.>O]"))));
+    let mut out: Vec<AovSpec> = (0..k)
+        .map(|i| AovSpec::new(bounce_name(i), bounce_definition(i, false)))
+        .collect();
     out.push(AovSpec::new(
         bounce_plus_name(k),
-        format!("C[DS]{{{k},}}[<L.>O]"),
+        bounce_definition(k, true),
     ));
     out
 }
@@ -154,6 +166,20 @@ mod tests {
             AovSpec::new("directDiffuse", "lpe:directDiffuse")
         );
         assert!(AovSpec::parse("C<RD>L").is_err());
+    }
+
+    #[test]
+    fn the_renderers_own_standard_names_resolve() {
+        assert_eq!(resolve_definition("lpe:normal"), STANDARD_DATA[0].1);
+        assert_eq!(resolve_definition(" lpe:depth"), STANDARD_DATA[1].1);
+        assert_eq!(resolve_definition("lpe:diffuse"), "lpe:diffuse");
+        assert_eq!(resolve_definition("normal"), "normal");
+        let mut compiler = lpe::Compiler::new().profile(crate::events::profile());
+        for (name, _) in STANDARD_DATA {
+            compiler
+                .add(resolve_definition(&format!("lpe:{name}")))
+                .unwrap();
+        }
     }
 
     #[test]

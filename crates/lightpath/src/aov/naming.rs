@@ -35,8 +35,14 @@ pub const NORMAL: &str = "normal";
 pub const DEPTH: &str = "depth";
 /// The group of lights without a group, as a split's suffix and an attribute value.
 pub const DEFAULT_GROUP: &str = "__default";
-/// How `--gain` names the default group (`_default`: `beauty` + `_` + `_default`).
+/// `--gain` names the default group as channels and the viewer do, `__default`; the
+/// older spelling `_default` (`beauty` + `_` + `_default`) is still accepted.
 pub const DEFAULT_GROUP_ARG: &str = "_default";
+
+/// Whether a `--gain GROUP=…` names the default group (either spelling).
+pub fn is_default_group(group: &str) -> bool {
+    group == DEFAULT_GROUP || group == DEFAULT_GROUP_ARG
+}
 
 /// Header attribute prefixes.
 pub const AOV_ATTRIBUTE_PREFIX: &str = "lightpath/aov/";
@@ -254,7 +260,7 @@ pub fn split_definition(definition: &str, group: Option<&str>) -> String {
 
 /// The part named by `--gain GROUP=…` for split AOV `base`.
 pub fn gain_part(base: &str, group: &str) -> String {
-    if group == DEFAULT_GROUP_ARG {
+    if is_default_group(group) {
         split_name(base, None)
     } else {
         split_name(base, Some(group))
@@ -269,6 +275,25 @@ pub fn bounce_name(i: u32) -> String {
 /// The last bounce AOV, `bounce<k>plus`: k or more scattering events.
 pub fn bounce_plus_name(k: u32) -> String {
     format!("bounce{k}plus")
+}
+
+/// The definition the renderer gives bounce AOV `bounce<i>` (`plus`: `bounce<i>plus`):
+/// `bounce0` is emission seen directly, `bounce<i>` exactly i scattering events.
+pub fn bounce_definition(i: u32, plus: bool) -> String {
+    match (i, plus) {
+        (0, false) => "C[<L.>O]".to_string(),
+        (i, false) => format!("C[DS]{{{i}}}[<L.>O]"),
+        (k, true) => format!("C[DS]{{{k},}}[<L.>O]"),
+    }
+}
+
+/// Whether an AOV's definition is what its name means to the renderer: `lpe:<name>` for a
+/// standard name, the generated rule for a bounce name. A user's own definition under such
+/// a name (`--aov "directDiffuse=C<RD>L"`, a USD render var named `diffuse`) is not, so the
+/// header does not claim the partition that name belongs to.
+pub fn is_own_definition(name: &str, definition: &str) -> bool {
+    definition.strip_prefix("lpe:") == Some(name)
+        || parse_bounce(name).is_some_and(|(i, plus)| definition == bounce_definition(i, plus))
 }
 
 /// A bounce AOV's name parsed back: `(i, false)` for `bounce<i>`, `(k, true)` for
@@ -290,18 +315,23 @@ pub fn aov_attribute(name: &str) -> String {
     format!("{AOV_ATTRIBUTE_PREFIX}{name}")
 }
 
-/// An AOV as the partition attributes see it: its name and, for a light-group part, the
-/// AOV it is a part of.
+/// An AOV as the partition attributes see it: its name, its definition and, for a
+/// light-group part, the AOV it is a part of.
 pub struct PartInfo<'a> {
     pub name: &'a str,
+    pub definition: &'a str,
     pub split_of: Option<&'a str>,
 }
 
 /// The structured partition attributes for a render's AOVs: light-group parts always;
-/// the standard set and the bounce AOVs when all their members are present (as
-/// `check_partitions` needs every part to sum them).
+/// the standard set and the bounce AOVs when all their members are present with the
+/// renderer's own definitions (as `check_partitions` needs every part to sum them, and a
+/// redefined name is the user's, no longer a part).
 pub fn partition_attributes(aovs: &[PartInfo]) -> Vec<(String, String)> {
-    let has = |n: &str| aovs.iter().any(|a| a.name == n);
+    let has = |n: &str| {
+        aovs.iter()
+            .any(|a| a.name == n && is_own_definition(a.name, a.definition))
+    };
     let mut out = Vec::new();
     let mut mark = |name: &str, whole: &str, kind: PartitionKind, group: Option<&str>| {
         out.push((format!("{PART_ATTRIBUTE_PREFIX}{name}"), whole.to_string()));
@@ -414,6 +444,7 @@ mod tests {
         assert_eq!(split_group("beauty", "diffuse_key"), None);
         assert_eq!(split_group("beauty", "beauty_"), None);
         assert_eq!(gain_part("beauty", "_default"), "beauty__default");
+        assert_eq!(gain_part("beauty", "__default"), "beauty__default");
         assert_eq!(gain_part("beauty", "key"), "beauty_key");
     }
 
@@ -425,29 +456,23 @@ mod tests {
         assert_eq!(parse_bounce("bounce1x"), None);
     }
 
+    fn info<'a>(name: &'a str, definition: &'a str, split_of: Option<&'a str>) -> PartInfo<'a> {
+        PartInfo {
+            name,
+            definition,
+            split_of,
+        }
+    }
+
     #[test]
     fn partition_attributes_round_trip() {
+        let (b0, b1) = (bounce_definition(0, false), bounce_definition(1, true));
         let aovs = [
-            PartInfo {
-                name: "beauty",
-                split_of: None,
-            },
-            PartInfo {
-                name: "bounce0",
-                split_of: None,
-            },
-            PartInfo {
-                name: "bounce1plus",
-                split_of: None,
-            },
-            PartInfo {
-                name: "beauty_key",
-                split_of: Some("beauty"),
-            },
-            PartInfo {
-                name: "beauty__default",
-                split_of: Some("beauty"),
-            },
+            info("beauty", "lpe:beauty", None),
+            info("bounce0", &b0, None),
+            info("bounce1plus", &b1, None),
+            info("beauty_key", "lpe:beauty", Some("beauty")),
+            info("beauty__default", "lpe:beauty", Some("beauty")),
         ];
         let attrs = partition_attributes(&aovs);
         let parts = parts_from_attributes(&attrs);
@@ -459,5 +484,35 @@ mod tests {
         assert_eq!(parts.len(), 4);
         // Without beauty's full standard set, no standard partition is claimed.
         assert!(parts.iter().all(|p| p.kind != PartitionKind::Standard));
+    }
+
+    #[test]
+    fn a_redefined_name_is_not_claimed_as_a_part() {
+        let standard: Vec<String> = lpe::BEAUTY_PARTITION
+            .iter()
+            .map(|n| format!("lpe:{n}"))
+            .collect();
+        let mut aovs: Vec<PartInfo> = lpe::BEAUTY_PARTITION
+            .iter()
+            .zip(&standard)
+            .map(|(n, d)| info(n, d, None))
+            .collect();
+        aovs.push(info(BEAUTY, "lpe:beauty", None));
+        let claimed = |aovs: &[PartInfo]| {
+            parts_from_attributes(&partition_attributes(aovs))
+                .iter()
+                .filter(|p| p.kind == PartitionKind::Standard)
+                .count()
+        };
+        assert_eq!(claimed(&aovs), lpe::BEAUTY_PARTITION.len());
+        aovs[0].definition = "C<RD>L";
+        assert_eq!(claimed(&aovs), 0, "{} was redefined", aovs[0].name);
+        let (b0, b1) = (bounce_definition(0, false), "C.+L");
+        let bounces = [
+            info("beauty", "lpe:beauty", None),
+            info("bounce0", &b0, None),
+            info("bounce1plus", b1, None),
+        ];
+        assert!(parts_from_attributes(&partition_attributes(&bounces)).is_empty());
     }
 }

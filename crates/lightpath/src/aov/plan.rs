@@ -49,6 +49,8 @@ pub enum PlanError {
     UnknownSplit(String),
     /// `--bounces K` outside 1 ..= 63 (a quantifier bound of LPE.md §5 is at most 64).
     Bounces(u32),
+    /// Two `--aov`s of one name: which one was meant cannot be guessed.
+    DuplicateAov(String),
 }
 
 impl fmt::Display for PlanError {
@@ -58,6 +60,11 @@ impl fmt::Display for PlanError {
             PlanError::UnknownSplit(name) => write!(
                 f,
                 "--light-group-aovs names '{name}', which is not an AOV of this render"
+            ),
+            PlanError::DuplicateAov(name) => write!(
+                f,
+                "--aov {name} is given twice: name each AOV once (an --aov replaces an AOV \
+                 of the scene or the standard set of that name)"
             ),
             PlanError::Bounces(k) => write!(
                 f,
@@ -94,6 +101,11 @@ impl AovPlan {
                 .iter()
                 .map(|(n, d)| AovSpec::new(n.clone(), d.clone())),
         );
+        for (i, a) in req.extra.iter().enumerate() {
+            if req.extra[..i].iter().any(|b| b.name == a.name) {
+                return Err(PlanError::DuplicateAov(a.name.clone()));
+            }
+        }
         specs.extend(req.extra.iter().cloned());
         if let Some(k) = req.bounces {
             if !(1..=MAX_BOUNCES).contains(&k) {
@@ -156,6 +168,32 @@ mod tests {
         assert_eq!(plan.specs[1].definition, "CO");
         assert!(plan.specs[0].split_light_groups);
         assert!(plan.warnings.is_empty());
+    }
+
+    #[test]
+    fn two_aovs_of_one_name_are_refused() {
+        let req = PlanRequest {
+            extra: vec![AovSpec::new("key", "C<RD>L"), AovSpec::new("key", "C<RS>L")],
+            ..Default::default()
+        };
+        assert_eq!(
+            AovPlan::build(&req).unwrap_err(),
+            PlanError::DuplicateAov("key".into())
+        );
+        // One --aov replacing a standard AOV is the user's definition, not a duplicate.
+        let req = PlanRequest {
+            standard: true,
+            extra: vec![AovSpec::new("directDiffuse", "C<RD>L")],
+            ..Default::default()
+        };
+        let plan = AovPlan::build(&req).unwrap();
+        let dd: Vec<_> = plan
+            .specs
+            .iter()
+            .filter(|s| s.name == "directDiffuse")
+            .collect();
+        assert_eq!(dd.len(), 1);
+        assert_eq!(dd[0].definition, "C<RD>L");
     }
 
     #[test]

@@ -65,8 +65,11 @@ pub fn film(scene: &Scene) -> Result<(), String> {
 /// The EXR and its preview can be written where asked, without destroying the scene.
 pub fn outputs(paths: &OutputPaths, scene: &str) -> Result<(), String> {
     target::check_exr_name(&paths.exr, Some(&paths.png))?;
-    target::check(&paths.exr, &[Path::new(scene)])?;
-    target::check(&paths.png, &[Path::new(scene)])
+    let partial = crate::output::naming::partial_paths(paths);
+    for path in [&paths.exr, &paths.png, &partial.exr, &partial.png] {
+        target::check(path, &[Path::new(scene)])?;
+    }
+    Ok(())
 }
 
 /// Things worth a word before rendering: an LPE label that no object or light carries
@@ -89,9 +92,11 @@ pub fn scene_warnings(scene: &Scene) -> Vec<String> {
         for label in quoted_labels(&aov.definition) {
             if !labels.contains(label) {
                 out.push(format!(
-                    "AOV '{}' ({}): no object or light has the label '{label}', so that part \
-                     of the expression never matches",
-                    aov.name, aov.definition
+                    "AOV '{}' ({}): no object or light has the label '{label}'{}, so that \
+                     part of the expression never matches",
+                    aov.name,
+                    aov.definition,
+                    crate::suggest::did_you_mean(label, labels.iter().copied())
                 ));
             }
         }

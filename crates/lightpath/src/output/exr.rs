@@ -235,6 +235,7 @@ pub fn aov_attributes(aovs: &[Aov]) -> Vec<(String, String)> {
         .iter()
         .map(|a| naming::PartInfo {
             name: &a.name,
+            definition: &a.definition,
             split_of: a
                 .part_of
                 .and_then(|k| aovs.get(k as usize))

@@ -37,10 +37,22 @@ pub fn output_paths(scene: &str, output: Option<&Path>) -> OutputPaths {
     }
 }
 
-/// The PNG preview beside a render's EXR: the EXR's name without its last extension, and
-/// without one more (`a.b.exr` → `a.png`), as renders always named it.
+/// The PNG preview beside a render's EXR: the EXR's name with `.png` for its last
+/// extension, so frame numbers stay (`shot.0001.exr` → `shot.0001.png`; two frames once
+/// wrote the same `shot.png`).
 pub fn preview_path(exr: &Path) -> PathBuf {
-    exr.with_extension("").with_extension("png")
+    exr.with_extension("png")
+}
+
+/// Where an interrupted render writes its rows done: beside the output, as
+/// `<stem>.partial.exr` and `<stem>.partial.png`, so a finished image under the output's
+/// own name is never replaced by an unfinished one.
+pub fn partial_paths(paths: &OutputPaths) -> OutputPaths {
+    let exr = paths.exr.with_extension("partial.exr");
+    OutputPaths {
+        png: preview_path(&exr),
+        exr,
+    }
 }
 
 /// What a render's header records about how it was made.
@@ -204,8 +216,11 @@ mod tests {
         let p = output_paths("scenes/cornell.toml", None);
         assert_eq!(p.exr, PathBuf::from("cornell.exr"));
         assert_eq!(p.png, PathBuf::from("cornell.png"));
-        let p = output_paths("x.toml", Some(Path::new("out/a.b.exr")));
-        assert_eq!(p.png, PathBuf::from("out/a.png"));
+        let p = output_paths("x.toml", Some(Path::new("out/shot.0001.exr")));
+        assert_eq!(p.png, PathBuf::from("out/shot.0001.png"));
+        let partial = partial_paths(&p);
+        assert_eq!(partial.exr, PathBuf::from("out/shot.0001.partial.exr"));
+        assert_eq!(partial.png, PathBuf::from("out/shot.0001.partial.png"));
     }
 
     #[test]

@@ -149,8 +149,13 @@ pub fn aov_planes<'a>(exr: &'a ExrContents, aov: &str) -> Result<[&'a [f32]; 3],
     let mut out: [&[f32]; 3] = [&[], &[], &[]];
     for (slot, name) in out.iter_mut().zip(&names) {
         *slot = exr.channel(name).ok_or_else(|| {
-            let known: Vec<String> = exr.aovs().into_iter().map(|(n, _)| n).collect();
-            format!("the EXR has no AOV '{aov}' (channel {name}); it has {known:?}")
+            let mut known: Vec<String> = exr.aovs().into_iter().map(|(n, _)| n).collect();
+            known.sort();
+            format!(
+                "the EXR has no AOV '{aov}' (channel {name}){}; it has {}",
+                crate::suggest::did_you_mean(aov, known.iter().map(String::as_str)),
+                known.join(", ")
+            )
         })?;
     }
     Ok(out)
@@ -189,21 +194,24 @@ pub fn gain_terms(
         aov: base.to_string(),
     }];
     for (group, gain) in gains {
-        let wanted = (group != naming::DEFAULT_GROUP_ARG).then_some(group.as_str());
+        let wanted = (!naming::is_default_group(group)).then_some(group.as_str());
         let part = parts
             .iter()
             .find(|p| p.group.as_ref().map(|g| g.as_deref()) == Some(wanted))
             .ok_or_else(|| {
-                let known: Vec<String> = parts
+                let mut known: Vec<String> = parts
                     .iter()
                     .map(|p| match &p.group {
                         Some(Some(g)) => g.clone(),
-                        _ => naming::DEFAULT_GROUP_ARG.to_string(),
+                        _ => naming::DEFAULT_GROUP.to_string(),
                     })
                     .collect();
+                known.sort();
                 format!(
-                    "the EXR has no light-group part of '{base}' for group '{group}' \
-                     (its light groups of '{base}': {known:?})"
+                    "the EXR has no light-group part of '{base}' for group '{group}'{} \
+                     (its light groups of '{base}': {})",
+                    crate::suggest::did_you_mean(group, known.iter().map(String::as_str)),
+                    known.join(", ")
                 )
             })?;
         terms.push(Term {
@@ -255,9 +263,7 @@ pub fn warnings(job: &CompJob) -> Vec<String> {
 /// Runs a comp: writes the output EXR (R, G, B and the input's A) and a PNG beside it,
 /// whose path it returns.
 pub fn run(job: &CompJob) -> Result<PathBuf, String> {
-    // Beside the output, its extension replaced (unlike a render's preview, see
-    // `output::naming::preview_path`).
-    let png = job.output.with_extension("png");
+    let png = crate::output::naming::preview_path(&job.output);
     crate::output::target::check_exr_name(&job.output, Some(&png))?;
     for out in [&job.output, &png] {
         crate::output::target::check(out, &[&job.exr])?;

@@ -817,15 +817,17 @@ mod tests {
         }
         let mut channels = Vec::new();
         let mut attributes = Vec::new();
+        let definitions: Vec<String> = aovs.iter().map(|a| format!("lpe:{}", a.0)).collect();
         let mut infos = Vec::new();
-        for (name, planes, kind) in &aovs {
+        for ((name, planes, kind), definition) in aovs.iter().zip(&definitions) {
             for (ch, v) in channel_names(name).into_iter().zip(planes.clone()) {
                 channels.push((ch, v));
             }
-            attributes.push((naming::aov_attribute(name), format!("def of {name}")));
+            attributes.push((naming::aov_attribute(name), definition.clone()));
             attributes.push((naming::kind_attribute(name), kind.as_str().to_string()));
             infos.push(naming::PartInfo {
                 name,
+                definition,
                 split_of: name.starts_with("beauty_").then_some("beauty"),
             });
         }
@@ -998,6 +1000,7 @@ mod tests {
             .iter()
             .map(|n| naming::PartInfo {
                 name: n,
+                definition: "lpe:directDiffuse",
                 split_of: n.starts_with("directDiffuse_").then_some("directDiffuse"),
             })
             .collect();

@@ -155,7 +155,7 @@ impl ViewData {
                             json!({
                                 "part": p.name,
                                 "group": group.clone().unwrap_or_else(|| naming::DEFAULT_GROUP.into()),
-                                "arg": group.unwrap_or_else(|| naming::DEFAULT_GROUP_ARG.into()),
+                                "arg": group.unwrap_or_else(|| naming::DEFAULT_GROUP.into()),
                             })
                         })
                         .collect();

@@ -150,7 +150,7 @@ pub(crate) struct CompArgs {
     #[arg(short, long)]
     pub(crate) output: PathBuf,
     /// Rebalance a light group of the split --base AOV: GROUP=GAIN or GROUP=R,G,B
-    /// (repeatable; `_default` for lights without a group).
+    /// (repeatable; `__default` for lights without a group).
     #[arg(long = "gain")]
     pub(crate) gains: Vec<String>,
     /// The light-group-split AOV that --gain applies to.

@@ -325,17 +325,19 @@ fn compile_aovs(
         .profile(crate::events::profile())
         .default_alphabet(false);
     for spec in aovs {
-        compiler.add(&spec.definition).map_err(|e| {
-            let origin = desc
-                .aovs
-                .get(&spec.name)
-                .map_or_else(|| Origin::file(&desc.source), |a| a.origin.clone());
-            origin.error(format!(
-                "AOV '{}': {}",
-                spec.name,
-                e.render(&spec.definition).trim_end()
-            ))
-        })?;
+        compiler
+            .add(crate::aov::resolve_definition(&spec.definition))
+            .map_err(|e| {
+                let origin = desc
+                    .aovs
+                    .get(&spec.name)
+                    .map_or_else(|| Origin::file(&desc.source), |a| a.origin.clone());
+                origin.error(format!(
+                    "AOV '{}': {}",
+                    spec.name,
+                    e.render(&spec.definition).trim_end()
+                ))
+            })?;
     }
     compiler.vocabulary(vocabulary.events().iter().cloned());
     compiler.compile().map_err(|e| {

@@ -59,7 +59,7 @@ pub fn load_scene(path: &Path, at: &Origin) -> Result<SceneDesc, SceneError> {
         .map_err(|e| at.error(format!("cannot read glTF file {file}: {e}")))?;
     let dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
     // The checks above the `gltf` crate cover the panics its readers were found to have
-    // (tests/mutation.rs); a panic still left in it becomes an error naming the file.
+    // (tests/it/mutation.rs); a panic still left in it becomes an error naming the file.
     let load = std::panic::catch_unwind(|| Loader::new(&file, dir, &bytes)?.scene());
     load.unwrap_or_else(|panic| {
         let why = panic

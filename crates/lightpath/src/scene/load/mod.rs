@@ -137,6 +137,14 @@ impl Source {
 pub fn source(name_or_path: &str) -> Result<Source, SceneError> {
     match builtin::source(name_or_path) {
         Some(src) => Ok(src),
+        None if !Path::new(name_or_path).exists() => {
+            let names = builtin::BUILTIN.map(|(n, _)| n);
+            Err(Origin::file(name_or_path).error(format!(
+                "no such file, and no built-in scene of that name{} (the built-in scenes: {})",
+                crate::suggest::did_you_mean(name_or_path, names),
+                names.join(", ")
+            )))
+        }
         None => Source::from_file(Path::new(name_or_path)),
     }
 }

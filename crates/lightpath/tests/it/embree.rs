@@ -2,7 +2,7 @@
 //! to float rounding, so the same images; without the feature, an error that says how to
 //! get it. CI runs this file with the feature where `libembree-dev` installs (`.ci/run`).
 
-mod common;
+use crate::common;
 
 use std::process::Command;
 

@@ -203,7 +203,7 @@ fn guide_examples_select_what_they_say() {
     );
 }
 
-const TWO_ROOMS: &str = include_str!("../../../scenes/two-rooms.toml");
+const TWO_ROOMS: &str = include_str!("../../../../scenes/two-rooms.toml");
 
 #[test]
 fn a_light_group_is_zero_where_only_the_other_light_reaches() {

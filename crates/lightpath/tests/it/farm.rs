@@ -5,7 +5,7 @@ use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
-mod common;
+use crate::common;
 use common::Scratch;
 
 fn lightpath() -> Command {
@@ -503,7 +503,7 @@ fn merges_that_should_fail_fail_naming_the_reason() {
     let aov = part("aov.exr", &["--first-sample", "4", "--aov", "x=C<RD>L"]);
     let other = {
         let scene = dir.join("other.toml");
-        let text = include_str!("../../../scenes/cornell.toml").replace("0.8", "0.7");
+        let text = include_str!("../../../../scenes/cornell.toml").replace("0.8", "0.7");
         std::fs::write(&scene, text).unwrap();
         render(
             scene.to_str().unwrap(),

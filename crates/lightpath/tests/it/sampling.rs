@@ -12,7 +12,7 @@ use lightpath::sampler::SamplerKind;
 use lightpath::scene::desc::SceneDesc;
 use lightpath::{render, RenderOptions, Scene};
 
-const MANY_LIGHTS: &str = include_str!("../../../scenes/many-lights.toml");
+const MANY_LIGHTS: &str = include_str!("../../../../scenes/many-lights.toml");
 
 fn many_lights() -> lightpath::Source {
     lightpath::Source {
@@ -112,7 +112,7 @@ fn light_selection_is_unbiased_against_uniform() {
 }
 
 /// Relighting from light-group AOVs: with uniform selection it is exact (see
-/// tests/workflow.rs); with the tree, making the key 1.5× brighter changes which lights
+/// tests/it/workflow.rs); with the tree, making the key 1.5× brighter changes which lights
 /// are sampled, so relit and re-rendered images agree within their noise.
 #[test]
 fn relighting_with_the_tree_matches_a_re_render_within_noise() {

@@ -542,12 +542,25 @@ fn sigint_then_resume_gives_the_uninterrupted_render_and_kill_9_leaves_the_old_o
         "reference",
     );
 
-    // SIGINT: the rows done and a checkpoint; then --resume finishes it.
+    // SIGINT during a re-render: the rows done go beside the output, as int.partial.exr
+    // and .png, with a checkpoint; the finished pair already there is left as it was.
+    // Then --resume finishes it and removes the partial pair.
     let out = scratch.0.join("int.exr");
     let checkpoint = scratch.0.join("int.exr.checkpoint");
+    let (partial_exr, partial_png) = (
+        scratch.0.join("int.partial.exr"),
+        scratch.0.join("int.partial.png"),
+    );
+    std::fs::write(&out, b"finished exr").unwrap();
+    std::fs::write(scratch.0.join("int.png"), b"finished png").unwrap();
     render_then_sigint(args(&out), &checkpoint);
-    assert!(out.exists() && checkpoint.exists());
-    let partial = lightpath::output::read_exr(&out).unwrap();
+    assert!(partial_exr.exists() && partial_png.exists() && checkpoint.exists());
+    assert_eq!(std::fs::read(&out).unwrap(), b"finished exr");
+    assert_eq!(
+        std::fs::read(scratch.0.join("int.png")).unwrap(),
+        b"finished png"
+    );
+    let partial = lightpath::output::read_exr(&partial_exr).unwrap();
     assert!(partial
         .attributes
         .iter()
@@ -562,6 +575,10 @@ fn sigint_then_resume_gives_the_uninterrupted_render_and_kill_9_leaves_the_old_o
     assert!(
         !checkpoint.exists(),
         "a finished render removes its checkpoint"
+    );
+    assert!(
+        !partial_exr.exists() && !partial_png.exists(),
+        "a finished render removes the partial image"
     );
 
     // kill -9: the previous pair intact, no temporary file; --resume still finishes.

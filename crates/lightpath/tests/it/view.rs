@@ -11,7 +11,7 @@ use std::io::{Read, Write};
 use std::net::{SocketAddr, TcpStream};
 use std::path::Path;
 
-mod common;
+use crate::common;
 use common::Scratch;
 
 const W: usize = 6;
@@ -53,14 +53,17 @@ fn synthetic(path: &Path) {
     attributes.extend(naming::partition_attributes(&[
         PartInfo {
             name: "beauty",
+            definition: "lpe:beauty",
             split_of: None,
         },
         PartInfo {
             name: "beauty_key",
+            definition: "lpe:beauty",
             split_of: Some("beauty"),
         },
         PartInfo {
             name: "beauty__default",
+            definition: "lpe:beauty",
             split_of: Some("beauty"),
         },
     ]));
@@ -203,7 +206,7 @@ fn info_lists_every_aov_with_partitions_mixers_cryptomatte_and_noisy_twins() {
     let groups = &info["mixers"][0]["groups"];
     assert_eq!(info["mixers"][0]["base"], "beauty");
     assert_eq!(groups[0]["arg"], "key");
-    assert_eq!(groups[1]["arg"], naming::DEFAULT_GROUP_ARG);
+    assert_eq!(groups[1]["arg"], naming::DEFAULT_GROUP);
     assert_eq!(groups[1]["part"], "beauty__default");
     assert_eq!(
         info["noisy"],

@@ -6,7 +6,7 @@ use lightpath::job::RenderJob;
 use lightpath::output::read_exr;
 use lightpath::progress::Silent;
 
-mod common;
+use crate::common;
 use common::Scratch;
 
 /// Renders `cornell-classic` at `res`² and `spp` with the standard AOVs, light groups

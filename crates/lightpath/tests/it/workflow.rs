@@ -57,7 +57,7 @@ fn sum(film: &Film, k: usize) -> Vec3A {
     )
 }
 
-const TWO_ROOMS: &str = include_str!("../../../scenes/two-rooms.toml");
+const TWO_ROOMS: &str = include_str!("../../../../scenes/two-rooms.toml");
 
 type Pixels = Vec<(u32, u32)>;
 
@@ -296,7 +296,7 @@ fn overwritten_split_aovs_still_sum() {
 }
 
 /// Exact under uniform light selection, where no sampling decision depends on a light's
-/// colour (with the default light tree the two agree within noise: tests/sampling.rs).
+/// colour (with the default light tree the two agree within noise: tests/it/sampling.rs).
 #[test]
 fn relighting_from_aovs_equals_re_rendering() {
     let src = lightpath::load_source("cornell").unwrap();

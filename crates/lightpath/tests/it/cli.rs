@@ -4,7 +4,7 @@ use serde_json::Value;
 use std::io::Write;
 use std::process::{Command, Stdio};
 
-mod common;
+use crate::common;
 use common::Scratch;
 
 fn lightpath() -> Command {
@@ -31,7 +31,7 @@ fn refuse(cmd: &mut Command) -> String {
 
 #[test]
 fn every_conformance_vector_passes_through_lpe_match_jsonl() {
-    let vectors = include_str!("../../lpe/tests/vectors/conformance.jsonl");
+    let vectors = include_str!("../../../lpe/tests/vectors/conformance.jsonl");
     let mut child = lightpath()
         .args(["lpe", "match", "--jsonl"])
         .stdin(Stdio::piped())
@@ -392,7 +392,7 @@ fn a_scene_can_ask_for_light_group_splits() {
     let dir = Scratch::new("lg");
     let scene = format!(
         "light_groups = true\nlight_group_aovs = [\"directDiffuse\"]\n{}",
-        include_str!("../../../scenes/cornell.toml")
+        include_str!("../../../../scenes/cornell.toml")
     );
     std::fs::write(dir.join("s.toml"), scene).unwrap();
     succeed(

@@ -1,0 +1,20 @@
+//! Lightpath's integration tests, one module per subject, in one test binary: fifteen
+//! binaries took most of `cargo test --workspace`'s time to compile and link (issue 25's
+//! quick start). Run one subject with `cargo test -p lightpath --test it <module>::`.
+
+mod common;
+
+mod cli;
+mod denoise;
+mod embree;
+mod farm;
+mod gltf;
+mod hostile;
+mod meshes;
+mod mutation;
+mod newcomer;
+mod peer;
+mod render;
+mod sampling;
+mod view;
+mod workflow;
