@@ -121,7 +121,10 @@ pub struct PreparedRender {
 pub struct RenderSummary {
     pub width: u32,
     pub height: u32,
+    /// Samples per pixel asked for: with adaptive sampling, the most a pixel took.
     pub spp: u32,
+    /// Adaptive sampling: pixels took from `min_spp` to `spp` samples each.
+    pub adaptive: bool,
     pub aovs: usize,
     pub stats: RenderStats,
     /// Accumulated values that overflowed to infinity (finite contributions too large to
@@ -180,11 +183,20 @@ impl RenderSummary {
                 self.overflowed
             );
         }
+        let spp = if self.adaptive {
+            let pixels = (self.width as u64 * self.height as u64).max(1);
+            format!(
+                "{:.1} spp on average (adaptive, at most {})",
+                s.samples as f64 / pixels as f64,
+                self.spp
+            )
+        } else {
+            format!("{} spp", self.spp)
+        };
         format!(
-            "{}x{} at {} spp, {} AOVs: {:.2} s, {:.2} M samples/s, {:.2} M rays/s{dropped}",
+            "{}x{} at {spp}, {} AOVs: {:.2} s, {:.2} M samples/s, {:.2} M rays/s{dropped}",
             self.width,
             self.height,
-            self.spp,
             self.aovs,
             s.seconds,
             s.samples as f64 / s.seconds / 1e6,
@@ -573,6 +585,7 @@ impl PreparedRender {
             width,
             height,
             spp,
+            adaptive: scene.settings.noise_threshold > 0.0,
             aovs: scene.aovs.len(),
             stats,
             overflowed,
@@ -690,23 +703,13 @@ fn denoise_in_place(
     request: DenoiseRequest,
     exposure: f32,
 ) -> Result<String, Error> {
-    use crate::aov::naming::{channel_names, BEAUTY};
     let job = crate::post::denoise::DenoiseJob {
         input: paths.exr.clone(),
         output: paths.exr.clone(),
         keep_noisy: request.keep_noisy,
         quality: request.quality,
+        preview_exposure: exposure,
     };
     let summary = crate::post::denoise::run(&job).map_err(Error::Output)?;
-    let exr = output::read_exr(&paths.exr).map_err(Error::Output)?;
-    let rgb = channel_names(BEAUTY).map(|c| exr.channel(&c).unwrap_or_default().to_vec());
-    output::write_png_rgb(
-        &paths.png,
-        exr.width as u32,
-        exr.height as u32,
-        &rgb,
-        exposure,
-    )
-    .map_err(Error::Output)?;
     Ok(summary.line())
 }

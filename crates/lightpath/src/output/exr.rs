@@ -302,7 +302,7 @@ pub fn write_image(
 }
 
 /// [`write_image`] up to the rename.
-fn stage_image(
+pub fn stage_image(
     path: &Path,
     width: usize,
     height: usize,

@@ -12,8 +12,8 @@ pub mod target;
 
 pub use self::exr::{
     aov_attributes, check_exr_file, derived_aovs, read_exr, shadow_matte, software, stage_film,
-    write_channels, write_exr, write_film, write_image, DerivedAov, ExrCompression, ExrContents,
-    ExrHeader, ExrOptions,
+    stage_image, write_channels, write_exr, write_film, write_image, DerivedAov, ExrCompression,
+    ExrContents, ExrHeader, ExrOptions,
 };
-pub use self::png::{stage_png, write_png, write_png_rgb};
+pub use self::png::{stage_png, stage_png_rgb, write_png, write_png_rgb};
 pub use crate::aov::naming::{channel_names, AOV_ATTRIBUTE_PREFIX};

@@ -46,7 +46,8 @@ pub fn write_png_rgb(
     stage_png_rgb(path, width, height, rgb, exposure)?.commit()
 }
 
-fn stage_png_rgb(
+/// [`write_png_rgb`] up to the rename.
+pub fn stage_png_rgb(
     path: &Path,
     width: u32,
     height: u32,

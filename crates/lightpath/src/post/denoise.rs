@@ -29,13 +29,13 @@
 //!   beauty when every gain is 1.
 
 use crate::aov::naming::{self, channel_names, AovKind};
-use crate::output::{read_exr, write_image, ExrContents, ExrOptions};
+use crate::output::{read_exr, stage_image, ExrContents, ExrOptions};
 use std::collections::HashMap;
 use std::path::PathBuf;
 
 /// What a build without the `denoise` feature says when asked to denoise.
 pub const UNAVAILABLE: &str = "this lightpath was built without denoising (cargo feature \
-`denoise`, Intel Open Image Denoise). To get it: `pip install pyoidn==2.5.1.0`, then \
+`denoise`, Intel Open Image Denoise). To get it: `pip install --no-deps pyoidn==2.5.1.0`, then \
 `export OIDN_DIR=\"$(python3 -c 'import importlib.util, os; \
 print(os.path.dirname(importlib.util.find_spec(\"pyoidn\").origin))')/oidn\"` and \
 `cargo install --path crates/lightpath --features denoise` (or `cargo run --release \
@@ -88,6 +88,9 @@ pub struct DenoiseJob {
     /// Keep each filtered AOV's input as `<aov>_noisy`.
     pub keep_noisy: bool,
     pub quality: Quality,
+    /// Exposure of the PNG preview of the denoised beauty written beside the output, in
+    /// stops.
+    pub preview_exposure: f32,
 }
 
 /// How one AOV is treated.
@@ -646,7 +649,22 @@ pub fn run(job: &DenoiseJob) -> Result<DenoiseSummary, String> {
     .map_err(|e| format!("cannot denoise {}: {e}", job.input.display()))?;
     // The input's header with the denoiser's attributes: a crop stays a crop of its frame.
     let header = exr.derived_header(attributes);
-    write_image(
+    let png_path = crate::output::naming::preview_path(&job.output);
+    crate::output::target::check(&png_path, &[&job.input])?;
+    let beauty = channel_names(naming::BEAUTY).map(|c| {
+        channels
+            .iter()
+            .find(|(n, _)| *n == c)
+            .map_or_else(Vec::new, |(_, v)| v.clone())
+    });
+    let png = crate::output::stage_png_rgb(
+        &png_path,
+        exr.width as u32,
+        exr.height as u32,
+        &beauty,
+        job.preview_exposure,
+    )?;
+    let image = stage_image(
         &job.output,
         exr.width,
         exr.height,
@@ -654,6 +672,7 @@ pub fn run(job: &DenoiseJob) -> Result<DenoiseSummary, String> {
         &header,
         ExrOptions::default(),
     )?;
+    crate::output::atomic::commit_pair(image, png)?;
     summary.seconds = start.elapsed().as_secs_f64();
     Ok(summary)
 }

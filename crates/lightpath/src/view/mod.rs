@@ -134,12 +134,16 @@ impl Viewer {
 /// could be started, which is no error: the URL is printed anyway.
 pub fn open_browser(url: &str) -> bool {
     ["xdg-open", "open"].iter().any(|cmd| {
-        std::process::Command::new(cmd)
+        let child = std::process::Command::new(cmd)
             .arg(url)
             .stdin(std::process::Stdio::null())
             .stdout(std::process::Stdio::null())
             .stderr(std::process::Stdio::null())
-            .spawn()
+            .spawn();
+        // Reaped when it exits (at once on a headless machine), so no defunct opener
+        // lingers beside the server.
+        child
+            .map(|mut c| std::thread::spawn(move || c.wait()))
             .is_ok()
     })
 }

@@ -246,6 +246,7 @@ mod filtered {
             output: out.clone(),
             keep_noisy: false,
             quality: Quality::High,
+            preview_exposure: 0.0,
         })
         .unwrap();
         let path = concat!(
@@ -253,6 +254,10 @@ mod filtered {
             "/../../benches/peer/ref/cornell_ref.exr"
         );
         let reference = read_exr(std::path::Path::new(path)).unwrap();
+        assert!(
+            dir.join("d.png").exists(),
+            "denoise writes the PNG preview beside its EXR"
+        );
         let (n, d) = (read_exr(&noisy).unwrap(), read_exr(&out).unwrap());
         // Squared errors over all pixels and away from the light (no emission seen).
         let emission = n.channel("emission.R").unwrap();
@@ -297,6 +302,7 @@ mod filtered {
             output: out.clone(),
             keep_noisy: true,
             quality: Quality::High,
+            preview_exposure: 0.0,
         })
         .unwrap();
         assert!(summary.albedo && summary.normal);

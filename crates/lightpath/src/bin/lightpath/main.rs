@@ -122,11 +122,16 @@ fn main() -> ExitCode {
                 output,
                 keep_noisy,
                 quality,
+                preview_exposure: 0.0,
             };
             match lightpath::post::denoise::run(&job) {
                 Ok(summary) => {
                     say!("{}", summary.line());
-                    say!("wrote {}", job.output.display());
+                    say!(
+                        "wrote {} and {}",
+                        job.output.display(),
+                        lightpath::output::naming::preview_path(&job.output).display()
+                    );
                     ExitCode::SUCCESS
                 }
                 Err(e) => {
