@@ -6,7 +6,7 @@
 # against the single-process render (to float rounding for sample ranges, bit for bit for
 # tiles), and stops every daemon it started.
 #
-#   sudo benches/farm/slurm-local.sh                 # builds target/release/lightpath
+#   sudo benches/farm/slurm-local.sh                 # builds target/dist/lightpath
 #   LIGHTPATH=path/to/lightpath benches/farm/slurm-local.sh
 #
 # Environment: LIGHTPATH (binary), WORK (scratch folder, default a new temp dir; kept),
@@ -31,7 +31,7 @@ if ! command -v sbatch >/dev/null || ! command -v munged >/dev/null; then
 fi
 if [ -z "${LIGHTPATH:-}" ]; then
     echo "== building lightpath (release)"
-    (cd "$here" && cargo build --release -q)
+    (cd "$here" && cargo build --profile dist -q)
     LIGHTPATH=${CARGO_TARGET_DIR:-$here/target}/release/lightpath
 fi
 LIGHTPATH=$(realpath "$LIGHTPATH")

@@ -28,7 +28,7 @@ repeats="${2:-3}"
 if [ -n "${LIGHTPATH:-}" ]; then
   lightpath="$LIGHTPATH"
 else
-  cargo build --release --manifest-path "$root/Cargo.toml" >/dev/null
+  cargo build --profile dist --manifest-path "$root/Cargo.toml" >/dev/null
   lightpath="${CARGO_TARGET_DIR:-$root/target}/release/lightpath"
 fi
 many="$root/scenes/many-lights.toml"

@@ -21,7 +21,7 @@ fi
 
 spp="${1:-64}"
 repeats="${2:-3}"
-cargo build --release --manifest-path "$root/Cargo.toml" >/dev/null
+cargo build --profile dist --manifest-path "$root/Cargo.toml" >/dev/null
 lightpath="${CARGO_TARGET_DIR:-$root/target}/release/lightpath"
 
 for i in $(seq 1 "$repeats"); do

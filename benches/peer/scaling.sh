@@ -10,7 +10,7 @@ root="$(cd "$here/../.." && pwd)"
 out="$here/out"
 mkdir -p "$out"
 repeats="${1:-3}"
-cargo build --release --manifest-path "$root/Cargo.toml" >/dev/null
+cargo build --profile dist --manifest-path "$root/Cargo.toml" >/dev/null
 lightpath="${CARGO_TARGET_DIR:-$root/target}/release/lightpath"
 aovs=(--light-groups --bounces 3 --light-group-aovs
   emission,diffuse,specular,directDiffuse,indirectDiffuse,directSpecular,indirectSpecular,subsurface,transmissive,albedo)

@@ -17,7 +17,7 @@ mkdir -p "$out"
 seeds="${1:-3}"
 shift || true
 if [ -z "${LIGHTPATH:-}" ]; then
-  cargo build --release --manifest-path "$root/Cargo.toml" >/dev/null
+  cargo build --profile dist --manifest-path "$root/Cargo.toml" >/dev/null
   LIGHTPATH="${CARGO_TARGET_DIR:-$root/target}/release/lightpath"
 fi
 for seed in $(seq 0 $((seeds - 1))); do
