@@ -49,7 +49,8 @@ comp "$work/cornell.exr" red_caustics "beauty - caustics + (1,0.3,0.3)*caustics"
 echo "== docs/lpe.md: the examples on the built-in cornell, 160x160, 256 spp"
 mkdir -p docs/images/lpe
 # name|definition: each example of docs/lpe.md#examples, in its order.
-examples='beauty|lpe:beauty
+cat > "$work/examples.txt" <<'EXAMPLES'
+beauty|lpe:beauty
 directDiffuse|C<RD>[<L.>O]
 indirectDiffuse|C<RD>[DS]+[<L.>O]
 emissive|C[<L.>O]
@@ -70,34 +71,28 @@ secondBounce|C<.>{2}[<L.>O]
 upToTwo|C<.>{,2}[<L.>O]
 throughGlass|C<TS8>+<RD>[<L.>O]
 albedo|lpe:albedo
-secondAlbedo|nothruput;overwrite;C<RD><RU2>L'
-set -- render cornell --spp 256 --resolution 160x160 -q --aovs none -o "$work/lpe.exr"
+secondAlbedo|nothruput;overwrite;C<RD><RU2>L
+EXAMPLES
 # shellcheck disable=SC2086
-set -- "$@" $threads
-old_ifs=$IFS
-IFS='
-'
-for line in $examples; do
+set -- render cornell --spp 256 --resolution 160x160 -q --aovs none $threads -o "$work/lpe.exr"
+while IFS= read -r line; do
     set -- "$@" --aov "${line%%|*}=${line#*|}"
-done
-IFS=$old_ifs
+done < "$work/examples.txt"
 lp "$@"
-IFS='
-'
-for line in $examples; do
-    IFS=$old_ifs
+while IFS= read -r line; do
     name=${line%%|*}
-    lp comp "$work/lpe.exr" "$name" -o "$work/out.exr" > /dev/null
+    exposure=0
+    case $name in caustics | glassReflection) exposure=2 ;; esac  # dim: 2 stops brighter
+    lp comp "$work/lpe.exr" "$name" -o "$work/out.exr" --exposure $exposure > /dev/null
     mv "$work/out.png" "docs/images/lpe/$name.png"
-done
-IFS=$old_ifs
+done < "$work/examples.txt"
 
-echo "== docs/lpe.md: a holdout (the metal ball of cornell as a matte), 160x160, 256 spp"
-sed '/^name = "metalBall"/a holdout = true' scenes/cornell.toml > "$work/holdout.toml"
+echo "== docs/lpe.md: a holdout (the floor of cornell as a shadow catcher), 160x160, 256 spp"
+sed '/^name = "floor"/a holdout = true' scenes/cornell.toml > "$work/holdout.toml"
 # shellcheck disable=SC2086
 lp render "$work/holdout.toml" --spp 256 --resolution 160x160 -q --aovs none $threads \
-    --aov "occluded=holdouts;C[DS]+[<L.>O]" \
-    --aov "unoccluded=holdouts;unoccluded;C[DS]+[<L.>O]" -o "$work/holdout.exr"
+    --aov "occluded=holdouts;C<RD>[<L.>O]" \
+    --aov "unoccluded=holdouts;unoccluded;C<RD>[<L.>O]" -o "$work/holdout.exr"
 for aov in beauty occluded unoccluded shadow; do
     lp comp "$work/holdout.exr" "$aov" -o "$work/out.exr" > /dev/null
     mv "$work/out.png" "docs/images/lpe/holdout_$aov.png"
