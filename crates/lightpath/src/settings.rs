@@ -364,14 +364,19 @@ pub fn find(section: Section, key: &str) -> Option<&'static Setting> {
         .find(|s| s.section == section && s.key == key)
 }
 
-/// The keys a TOML section accepts, for messages: `spp, max_depth, …`.
-pub fn keys(section: Section) -> String {
+/// Why `key` is no key of `section`: the keys it has, and the one meant if it is a typo.
+pub fn unknown_key(section: Section, key: &str) -> String {
     let keys: Vec<&str> = SETTINGS
         .iter()
         .filter(|s| s.section == section)
         .map(|s| s.key)
         .collect();
-    keys.join(", ")
+    format!(
+        "unknown key '{key}' in [{}]: expected one of {}{}",
+        section.name(),
+        keys.join(", "),
+        crate::suggest::did_you_mean(key, keys.iter().copied())
+    )
 }
 
 /// Every setting in range, and the settings agreeing with each other.
@@ -467,8 +472,9 @@ fn from_toml<T: Value>(key: &str, range: Range, value: &toml::Value) -> Result<T
 fn unreadable<T: Value>(key: &str, range: Range, expected: &str, written: &str) -> String {
     if !T::CHOICES.is_empty() {
         return format!(
-            "unknown {key} '{written}': expected {}",
-            T::CHOICES.join(" or ")
+            "unknown {key} '{written}': expected {}{}",
+            T::CHOICES.join(" or "),
+            crate::suggest::did_you_mean(written, T::CHOICES.iter().copied())
         );
     }
     match range {

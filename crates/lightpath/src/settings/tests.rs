@@ -142,6 +142,10 @@ fn ranges_refuse_what_the_issue_named() {
         flag_with(setting("sampler"), "halton").unwrap_err(),
         "unknown sampler 'halton': expected sobol or independent"
     );
+    assert_eq!(
+        flag_with(setting("sampler"), "sobl").unwrap_err(),
+        "unknown sampler 'sobl': expected sobol or independent (did you mean 'sobol'?)"
+    );
 }
 
 #[test]
@@ -253,6 +257,7 @@ fn unknown_keys_name_the_section_and_its_keys() {
             .starts_with("unknown key 'max_deph' in [render]: expected one of spp, max_depth,"),
         "{e}"
     );
+    assert!(e.message.ends_with(" (did you mean 'max_depth'?)"), "{e}");
 }
 
 #[test]
