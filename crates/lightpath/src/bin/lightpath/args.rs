@@ -295,6 +295,9 @@ impl clap::Args for SettingArgs {
                 clap::Arg::new(setting.key)
                     .long(setting.flag)
                     .value_name(setting.value_name)
+                    // `--clamp-direct -1` is a value to refuse with the setting's message,
+                    // not an unknown option.
+                    .allow_negative_numbers(true)
                     .help(setting.help_line())
                     .value_parser(check),
             )
