@@ -15,9 +15,6 @@ use crate::sampler::SamplerKind;
 /// otherwise (fewer if `spp` is fewer).
 pub const DEFAULT_MIN_SPP: u32 = 16;
 
-/// The most pixels a film may have along either side.
-pub const MAX_FILM_SIDE: u32 = 32768;
-
 /// Declares the settings: the `RenderDesc` struct and its defaults, the command line's
 /// `SettingOverrides`, and the table `SETTINGS` that every reader walks.
 macro_rules! settings {
@@ -209,7 +206,8 @@ settings! {
     resolution: [u32; 2] = [256, 256], {
         section: Film,
         flag: "resolution",
-        range: Range::Between(1.0, MAX_FILM_SIDE as f64),
+        // How many pixels a film may have is `limits.rs`'s (LIGHTPATH_MAX_PIXELS).
+        range: Range::AtLeast(1.0),
         role: Identity,
         header: Header::Setting,
         help: "Film size in pixels, WIDTHxHEIGHT ([width, height] in a scene file).",
