@@ -484,7 +484,10 @@ fn unreadable<T: Value>(key: &str, range: Range, expected: &str, written: &str) 
 fn check_value<T: Value>(key: &str, range: Range, value: &T) -> Result<(), String> {
     let numbers = value.numbers();
     if numbers.iter().any(|x| !x.is_finite()) {
-        return Err(format!("{key} must be a finite number, got {}", value.show()));
+        return Err(format!(
+            "{key} must be a finite number, got {}",
+            value.show()
+        ));
     }
     if numbers.iter().all(|&x| range.contains(x)) {
         Ok(())

@@ -3,11 +3,11 @@
 //! `Origin` that errors about it point at (see `docs/scene-format.md`).
 
 use crate::camera::FovAxis;
+pub use crate::settings::RenderDesc;
 use glam::Affine3A;
 use std::collections::BTreeMap;
 use std::fmt;
 use std::path::PathBuf;
-pub use crate::settings::RenderDesc;
 
 /// Where an entity was written: file, 1-based line and column (line 0: the whole file).
 #[derive(Clone, Debug, Default, PartialEq, Eq)]

@@ -31,8 +31,16 @@ const EXAMPLES: &[Example] = &[
     ex("clamp_direct", ("2.5", "2.5"), ("-1", "-1")),
     ex("clamp_indirect", ("10", "10"), ("-0.5", "-0.5")),
     ex("seed", ("7", "7"), ("-7", "-7")),
-    ex("sampler", ("independent", "\"independent\""), ("halton", "\"halton\"")),
-    ex("light_selection", ("uniform", "\"uniform\""), ("random", "\"random\"")),
+    ex(
+        "sampler",
+        ("independent", "\"independent\""),
+        ("halton", "\"halton\""),
+    ),
+    ex(
+        "light_selection",
+        ("uniform", "\"uniform\""),
+        ("random", "\"random\""),
+    ),
     ex("noise_threshold", ("0.1", "0.1"), ("-1", "-1")),
     ex("min_spp", ("8", "8"), ("0", "0")),
     ex("regularize", ("0.3", "0.3"), ("5", "5")),
@@ -90,7 +98,12 @@ fn every_setting_reads_the_same_from_a_flag_and_from_toml() {
         let from_flag = flag_with(s, e.valid.0).unwrap();
         let from_toml = toml_with(s, e.valid.1).unwrap();
         assert_eq!(from_flag, from_toml, "{}", e.key);
-        assert_ne!((s.show)(&from_flag), default, "{}: an example, not the default", e.key);
+        assert_ne!(
+            (s.show)(&from_flag),
+            default,
+            "{}: an example, not the default",
+            e.key
+        );
         assert_eq!(check(&from_flag), Ok(()), "{}", e.key);
         // An invalid one: refused both ways, with the same message naming the setting.
         let flag_error = flag_with(s, e.invalid.0).unwrap_err();
@@ -220,7 +233,13 @@ fn identity_holds_what_changes_the_converged_image_and_not_the_parts_split() {
         .into_iter()
         .map(|(k, _)| k)
         .collect();
-    for key in ["max_depth", "clamp_direct", "regularize", "resolution", "filter"] {
+    for key in [
+        "max_depth",
+        "clamp_direct",
+        "regularize",
+        "resolution",
+        "filter",
+    ] {
         assert!(keys.contains(&key), "{key}");
     }
     for key in ["spp", "seed", "sampler", "min_spp"] {
@@ -264,6 +283,11 @@ fn unknown_keys_name_the_section_and_its_keys() {
 fn every_setting_is_documented() {
     let doc = include_str!("../../../../docs/scene-format.md");
     for s in SETTINGS {
-        assert!(doc.contains(&format!("{} = ", s.key)), "[{}] {}", s.section.name(), s.key);
+        assert!(
+            doc.contains(&format!("{} = ", s.key)),
+            "[{}] {}",
+            s.section.name(),
+            s.key
+        );
     }
 }

@@ -73,11 +73,17 @@ fn every_flag_refuses_what_the_scene_file_refuses_with_the_same_message() {
 fn regularize_5_and_max_depth_0_are_errors() {
     let scratch = Scratch::new("settings-issue");
     let e = refused(&["--regularize", "5"], &scratch);
-    assert!(e.contains("regularize must be between 0 and 1, got 5"), "{e}");
+    assert!(
+        e.contains("regularize must be between 0 and 1, got 5"),
+        "{e}"
+    );
     let e = refused(&["--max-depth", "0"], &scratch);
     assert!(e.contains("max_depth must be at least 1, got 0"), "{e}");
     let e = refused(&["--clamp-indirect", "-1"], &scratch);
-    assert!(e.contains("clamp_indirect must be at least 0, got -1"), "{e}");
+    assert!(
+        e.contains("clamp_indirect must be at least 0, got -1"),
+        "{e}"
+    );
 }
 
 #[test]
@@ -100,7 +106,15 @@ fn the_default_pilot_fits_any_spp() {
     let scratch = Scratch::new("settings-default-pilot");
     let out = scratch.join("small.exr");
     let status = lightpath()
-        .args(["render", "--spp", "2", "--noise-threshold", "0.1", "--resolution", "4x4"])
+        .args([
+            "render",
+            "--spp",
+            "2",
+            "--noise-threshold",
+            "0.1",
+            "--resolution",
+            "4x4",
+        ])
         .arg("-q")
         .arg("-o")
         .arg(&out)

@@ -125,8 +125,9 @@ fn settings(src: &Source, file: &SceneFile) -> Result<d::RenderDesc, SceneError>
     let mut render = d::RenderDesc::default();
     for (section, values) in [(Section::Film, &file.film), (Section::Render, &file.render)] {
         for (key, value) in values {
-            let setting = settings::find(section, key)
-                .ok_or_else(|| src.error(Some(value.span()), settings::unknown_key(section, key)))?;
+            let setting = settings::find(section, key).ok_or_else(|| {
+                src.error(Some(value.span()), settings::unknown_key(section, key))
+            })?;
             (setting.read_toml)(value.get_ref(), &mut render)
                 .map_err(|e| src.error(Some(value.span()), e))?;
         }
