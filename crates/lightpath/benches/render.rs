@@ -15,7 +15,7 @@ use lightpath::{render, RenderOptions, Scene};
 fn classic(aovs: Vec<AovSpec>, res: u32) -> Scene {
     let src = lightpath::load_source("cornell-classic").unwrap();
     let mut desc = src.parse().unwrap();
-    desc.film.resolution = [res, res];
+    desc.render.resolution = [res, res];
     with_backend(Scene::build(&desc, &aov::assemble(aovs)).unwrap())
 }
 
@@ -109,7 +109,7 @@ fn bumpy_sphere(levels: u32) -> MeshData {
 fn classic_with_mesh(levels: u32) -> SceneDesc {
     let src = lightpath::load_source("cornell-classic").unwrap();
     let mut desc = src.parse().unwrap();
-    desc.film.resolution = [64, 64];
+    desc.render.resolution = [64, 64];
     let mut object = desc.objects[0].clone();
     object.name = Some("mesh".into());
     object.shape = ShapeDesc::Mesh {

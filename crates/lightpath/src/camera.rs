@@ -25,7 +25,43 @@ pub enum PixelFilter {
     Gaussian { stddev: f32 },
 }
 
+/// The pixel filter a scene names (`[film] filter`); a Gaussian's width is a setting of
+/// its own (`filter_stddev`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum FilterKind {
+    #[default]
+    Box,
+    Gaussian,
+}
+
+impl FilterKind {
+    pub const NAMES: [&'static str; 2] = ["box", "gaussian"];
+
+    pub fn parse(s: &str) -> Option<FilterKind> {
+        match s {
+            "box" => Some(FilterKind::Box),
+            "gaussian" => Some(FilterKind::Gaussian),
+            _ => None,
+        }
+    }
+
+    pub fn name(self) -> &'static str {
+        match self {
+            FilterKind::Box => "box",
+            FilterKind::Gaussian => "gaussian",
+        }
+    }
+}
+
 impl PixelFilter {
+    /// The filter of a kind, with the Gaussian's standard deviation in pixels.
+    pub fn new(kind: FilterKind, stddev: f32) -> PixelFilter {
+        match kind {
+            FilterKind::Box => PixelFilter::Box,
+            FilterKind::Gaussian => PixelFilter::Gaussian { stddev },
+        }
+    }
+
     /// Offset from the pixel centre for two uniform numbers.
     pub fn offset(&self, u: Vec2) -> Vec2 {
         match *self {

@@ -67,21 +67,7 @@ pub struct DenoiseRequest {
     pub quality: crate::post::denoise::Quality,
 }
 
-/// Render settings the command line overrides; `None` keeps the scene's value.
-#[derive(Clone, Debug, Default)]
-pub struct SettingOverrides {
-    pub spp: Option<u32>,
-    pub max_depth: Option<u32>,
-    pub resolution: Option<[u32; 2]>,
-    pub seed: Option<u64>,
-    pub sampler: Option<crate::sampler::SamplerKind>,
-    pub light_selection: Option<crate::light::select::LightSelection>,
-    pub noise_threshold: Option<f32>,
-    pub min_spp: Option<u32>,
-    pub clamp_indirect: Option<f32>,
-    pub clamp_direct: Option<f32>,
-    pub regularize: Option<f32>,
-}
+pub use crate::settings::SettingOverrides;
 
 /// Which AOVs the command line asks for, besides the scene's own.
 #[derive(Clone, Debug, Default)]
@@ -249,7 +235,7 @@ impl RenderJob {
         if let Some(name) = &self.camera {
             desc.use_camera(name)?;
         }
-        self.overrides.apply(&mut desc);
+        self.overrides.apply(&mut desc.render);
         let paths = output::naming::output_paths(&self.scene, self.output.as_deref());
         checks::outputs(&paths, &self.scene).map_err(Error::Output)?;
         checks::settings(&desc, self.first_sample)
@@ -425,45 +411,6 @@ fn matte_table(desc: &SceneDesc, scene: &Scene, ranks: u32) -> MatteTable {
     )
 }
 
-impl SettingOverrides {
-    fn apply(&self, desc: &mut SceneDesc) {
-        if let Some(spp) = self.spp {
-            desc.render.spp = spp;
-        }
-        if let Some(d) = self.max_depth {
-            desc.render.max_depth = d;
-        }
-        if let Some(r) = self.resolution {
-            desc.film.resolution = r;
-        }
-        if let Some(s) = self.seed {
-            desc.render.seed = s;
-        }
-        let r = &mut desc.render;
-        if let Some(s) = self.sampler {
-            r.sampler = s;
-        }
-        if let Some(s) = self.light_selection {
-            r.light_selection = s;
-        }
-        if let Some(t) = self.noise_threshold {
-            r.noise_threshold = t;
-        }
-        if let Some(n) = self.min_spp {
-            r.min_spp = n;
-        }
-        if let Some(c) = self.clamp_indirect {
-            r.clamp_indirect = c;
-        }
-        if let Some(c) = self.clamp_direct {
-            r.clamp_direct = c;
-        }
-        if let Some(g) = self.regularize {
-            r.regularize = g;
-        }
-    }
-}
-
 impl PreparedRender {
     /// Renders (the rows a resumed checkpoint does not hold), then writes the EXR and its
     /// PNG preview together. A render stopped through `cancel` writes the rows done and a
@@ -610,7 +557,6 @@ fn exr_header(
         scene: source.name.clone(),
         spp: scene.settings.spp,
         first_sample: job.first_sample,
-        seed: scene.settings.seed,
     }
     .attributes();
     text.extend(metadata);
@@ -680,9 +626,13 @@ fn remove_if_there(path: &std::path::Path, what: &str) -> Result<(), Error> {
 /// scene text, the settings after overrides, the film and window, the sample range, the
 /// AOVs).
 fn fingerprint(source: &Source, scene: &Scene, first_sample: u32, window: PixelWindow) -> u64 {
+    let settings: String = crate::settings::all_pairs(&scene.settings)
+        .iter()
+        .map(|(k, v)| format!("{k}={v}\n"))
+        .collect();
     let settings = format!(
-        "{:?} {}x{} first {first_sample} window {:?}",
-        scene.settings, scene.camera.width, scene.camera.height, window
+        "{settings}{}x{} first {first_sample} window {:?}",
+        scene.camera.width, scene.camera.height, window
     );
     let aovs: String = scene
         .aovs

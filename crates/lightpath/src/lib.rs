@@ -25,6 +25,7 @@ pub mod progress;
 pub mod sampler;
 pub mod sampling;
 pub mod scene;
+pub mod settings;
 pub mod suggest;
 pub mod view;
 

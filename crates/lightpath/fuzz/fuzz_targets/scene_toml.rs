@@ -12,7 +12,7 @@ fuzz_target!(|data: &[u8]| {
         dir: std::env::temp_dir(),
     };
     if let Ok(mut desc) = source.parse() {
-        desc.film.resolution = [4, 4];
+        desc.render.resolution = [4, 4];
         let mut specs = vec![lightpath::aov::AovSpec::new("beauty", "lpe:beauty")];
         specs.extend(
             desc.aovs

@@ -39,7 +39,7 @@
 //! exactly.
 
 use crate::film::PixelWindow;
-use crate::scene::RenderSettings;
+use crate::settings::{RenderDesc, DEFAULT_MIN_SPP};
 
 /// How far a pixel looks for the neighbours whose predictions set its count: 1, the
 /// eight pixels around it (Cycles' adaptive sampling looks as far).
@@ -113,9 +113,9 @@ pub(super) struct Rule {
 
 impl Rule {
     /// The rule of a render of `spp` samples per pixel with these settings.
-    pub fn new(settings: &RenderSettings, spp: u32) -> Rule {
+    pub fn new(settings: &RenderDesc, spp: u32) -> Rule {
         Rule {
-            pilot: settings.min_spp.min(spp),
+            pilot: settings.min_spp.unwrap_or(DEFAULT_MIN_SPP).min(spp),
             spp,
             threshold: settings.noise_threshold,
         }
@@ -226,10 +226,12 @@ mod tests {
     }
 
     fn rule(min_spp: u32, spp: u32, threshold: f32) -> Rule {
-        let mut desc = crate::scene::desc::SceneDesc::default();
-        desc.render.min_spp = min_spp;
-        desc.render.noise_threshold = threshold;
-        Rule::new(&crate::scene::build::camera::settings(&desc), spp)
+        let settings = RenderDesc {
+            min_spp: Some(min_spp),
+            noise_threshold: threshold,
+            ..RenderDesc::default()
+        };
+        Rule::new(&settings, spp)
     }
 
     #[test]

@@ -240,13 +240,19 @@ impl Tracer<'_> {
         match v.bsdf.lobes()[bs.lobe].scatter.class {
             ScatterClass::Diffuse => {
                 path.diffuse += 1;
-                if path.diffuse > settings.max_diffuse_depth {
+                if settings
+                    .max_diffuse_depth
+                    .is_some_and(|max| path.diffuse > max)
+                {
                     return None;
                 }
             }
             _ => {
                 path.specular += 1;
-                if path.specular > settings.max_specular_depth {
+                if settings
+                    .max_specular_depth
+                    .is_some_and(|max| path.specular > max)
+                {
                     return None;
                 }
             }

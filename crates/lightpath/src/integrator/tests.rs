@@ -46,7 +46,7 @@ const PIXEL_WIDE: f32 = 0.02;
 /// An adaptive render (a threshold of 0: every pixel takes `spp`) with this radius.
 fn render_with(scene: &mut Scene, spp: u32, threshold: f32, radius: u32) -> Rendered {
     scene.settings.noise_threshold = threshold;
-    scene.settings.min_spp = MIN_SPP;
+    scene.settings.min_spp = Some(MIN_SPP);
     let options = RenderOptions {
         spp,
         first_sample: 0,

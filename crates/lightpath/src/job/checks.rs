@@ -12,12 +12,11 @@ use crate::scene::Scene;
 use std::collections::BTreeSet;
 use std::path::Path;
 
-/// `spp`, the sample range and the film size, as the scene and the overrides set them.
+/// The settings (`settings.rs`), the sample range and the film size, as the scene and
+/// the overrides set them.
 pub fn settings(desc: &SceneDesc, first_sample: u32) -> Result<(), String> {
+    crate::settings::check(&desc.render)?;
     let spp = desc.render.spp;
-    if spp == 0 {
-        return Err("spp is 0 (from --spp or [render] spp): expected at least 1 sample".into());
-    }
     if first_sample.checked_add(spp).is_none() {
         return Err(format!(
             "--first-sample {first_sample} with {spp} spp runs past sample index {}: \
@@ -25,7 +24,7 @@ pub fn settings(desc: &SceneDesc, first_sample: u32) -> Result<(), String> {
             u32::MAX
         ));
     }
-    let [w, h] = desc.film.resolution;
+    let [w, h] = desc.render.resolution;
     let pixels = w as u64 * h as u64;
     let limits = Limits::current();
     limits.check_pixels(pixels, &format!("a {w}x{h} film"))?;

@@ -2,10 +2,9 @@
 //! answer, so the binary only passes its arguments through.
 
 use crate::aov::naming::{
-    format_ranges, setting_attribute, CROP_ATTRIBUTE, FIRST_SAMPLE_ATTRIBUTE, SAMPLES_ATTRIBUTE,
-    SCENE_ATTRIBUTE, SCENE_HASH_ATTRIBUTE, SEED_ATTRIBUTE, SPP_ATTRIBUTE,
+    format_ranges, CROP_ATTRIBUTE, FIRST_SAMPLE_ATTRIBUTE, SAMPLES_ATTRIBUTE, SCENE_ATTRIBUTE,
+    SCENE_HASH_ATTRIBUTE,
 };
-use crate::camera::PixelFilter;
 use crate::film::PixelWindow;
 use crate::scene::desc::{LightKind, SceneDesc};
 use crate::scene::Scene;
@@ -55,28 +54,25 @@ pub fn partial_paths(paths: &OutputPaths) -> OutputPaths {
     }
 }
 
-/// What a render's header records about how it was made.
+/// What a render's header records about which part of a frame it is (its settings,
+/// `spp` and `seed` included, are [`settings_attributes`]').
 #[derive(Clone, Debug)]
 pub struct RenderMetadata {
     pub scene: String,
     pub spp: u32,
     pub first_sample: u32,
-    pub seed: u64,
 }
 
 impl RenderMetadata {
-    /// The header attributes (`lightpath/scene`, `spp`, `first_sample`, `seed`, and the
-    /// sample range).
+    /// The header attributes (`lightpath/scene`, `first_sample`, and the sample range).
     pub fn attributes(&self) -> Vec<(String, String)> {
         let first = self.first_sample as u64;
         vec![
             (SCENE_ATTRIBUTE.to_string(), self.scene.clone()),
-            (SPP_ATTRIBUTE.to_string(), self.spp.to_string()),
             (
                 FIRST_SAMPLE_ATTRIBUTE.to_string(),
                 self.first_sample.to_string(),
             ),
-            (SEED_ATTRIBUTE.to_string(), self.seed.to_string()),
             (
                 SAMPLES_ATTRIBUTE.to_string(),
                 format_ranges(&[(first, first + self.spp as u64)]),
@@ -85,47 +81,14 @@ impl RenderMetadata {
     }
 }
 
-/// Every setting of a render that the parts of one frame must share, as
-/// `lightpath/setting/<name>` attributes, plus the scene's hash and the crop.
+/// Every render setting (`settings.rs`: `lightpath/spp`, `lightpath/seed` and
+/// `lightpath/setting/<name>`), plus the scene's hash and the crop.
 pub fn settings_attributes(
     scene: &Scene,
     scene_hash: u64,
     crop: PixelWindow,
 ) -> Vec<(String, String)> {
-    let s = &scene.settings;
-    let limit = |v: u32| {
-        if v == u32::MAX {
-            "none".to_string()
-        } else {
-            v.to_string()
-        }
-    };
-    let filter = match scene.filter {
-        PixelFilter::Box => "box".to_string(),
-        PixelFilter::Gaussian { stddev } => format!("gaussian {stddev}"),
-    };
-    let settings = [
-        ("clamp_direct", s.clamp_direct.to_string()),
-        ("clamp_indirect", s.clamp_indirect.to_string()),
-        ("filter", filter),
-        ("max_depth", s.max_depth.to_string()),
-        ("max_diffuse_depth", limit(s.max_diffuse_depth)),
-        ("max_specular_depth", limit(s.max_specular_depth)),
-        (
-            "resolution",
-            format!("{}x{}", scene.camera.width, scene.camera.height),
-        ),
-        ("rr_depth", s.rr_depth.to_string()),
-        ("sampler", s.sampler.name().to_string()),
-        ("light_selection", s.light_selection.name().to_string()),
-        ("noise_threshold", s.noise_threshold.to_string()),
-        ("min_spp", s.min_spp.to_string()),
-        ("regularize", s.regularize.to_string()),
-    ];
-    let mut out: Vec<(String, String)> = settings
-        .into_iter()
-        .map(|(k, v)| (setting_attribute(k), v))
-        .collect();
+    let mut out = crate::settings::header_attributes(&scene.settings);
     out.push((SCENE_HASH_ATTRIBUTE.into(), format!("{scene_hash:016x}")));
     out.push((CROP_ATTRIBUTE.into(), crop.to_string()));
     out

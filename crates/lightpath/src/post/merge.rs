@@ -26,14 +26,18 @@ use crate::post::cryptomatte;
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
-/// Attributes that differ from part to part of one frame by design.
-const PER_PART: [&str; 5] = [
-    SPP_ATTRIBUTE,
-    FIRST_SAMPLE_ATTRIBUTE,
-    SAMPLES_ATTRIBUTE,
-    CROP_ATTRIBUTE,
-    SCENE_ATTRIBUTE,
-];
+/// Attributes that differ from part to part of one frame by design: the settings the
+/// table (`settings.rs`) says so of, and the part's own sample range, window and path.
+fn per_part(attribute: &str) -> bool {
+    [
+        FIRST_SAMPLE_ATTRIBUTE,
+        SAMPLES_ATTRIBUTE,
+        CROP_ATTRIBUTE,
+        SCENE_ATTRIBUTE,
+    ]
+    .contains(&attribute)
+        || crate::settings::per_part_attributes().any(|a| a == attribute)
+}
 
 /// What `merge` wrote.
 #[derive(Clone, Debug, PartialEq, Eq)]
@@ -197,7 +201,7 @@ fn same_frame(a: &Part, b: &Part) -> Result<(), String> {
     }
     let keys: std::collections::BTreeSet<&String> = a.text.keys().chain(b.text.keys()).collect();
     for k in keys {
-        if PER_PART.contains(&k.as_str()) {
+        if per_part(k) {
             continue;
         }
         let (va, vb) = (a.text.get(k), b.text.get(k));
@@ -277,7 +281,7 @@ pub fn merge(inputs: &[PathBuf], output: &Path) -> Result<Merged, String> {
     let mut text: Vec<(String, String)> = first
         .text
         .iter()
-        .filter(|(k, _)| !PER_PART.contains(&k.as_str()) || k.as_str() == SCENE_ATTRIBUTE)
+        .filter(|(k, _)| !per_part(k) || k.as_str() == SCENE_ATTRIBUTE)
         .map(|(k, v)| (k.clone(), v.clone()))
         .collect();
     text.push((SPP_ATTRIBUTE.into(), spp.to_string()));

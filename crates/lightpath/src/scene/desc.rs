@@ -3,6 +3,7 @@
 //! `Origin` that errors about it point at (see `docs/scene-format.md`).
 
 use crate::camera::FovAxis;
+pub use crate::settings::RenderDesc;
 use glam::Affine3A;
 use std::collections::BTreeMap;
 use std::fmt;
@@ -50,7 +51,7 @@ pub struct SceneDesc {
     pub source: String,
     /// None: the default camera.
     pub camera: Option<CameraDesc>,
-    pub film: FilmDesc,
+    /// The render settings (`[render]` and `[film]`; `settings.rs` declares them).
     pub render: RenderDesc,
     pub materials: BTreeMap<String, MaterialDesc>,
     pub objects: Vec<ObjectDesc>,
@@ -81,7 +82,7 @@ impl SceneDesc {
         };
         self.camera = Some(c.camera.clone());
         if let Some(r) = c.resolution {
-            self.film.resolution = r;
+            self.render.resolution = r;
         }
         Ok(())
     }
@@ -124,79 +125,6 @@ impl Default for CameraDesc {
             aperture_radius: 0.0,
             focus_distance: None,
             origin: Origin::default(),
-        }
-    }
-}
-
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub enum FilterDesc {
-    Box,
-    /// Standard deviation in pixels.
-    Gaussian {
-        stddev: f32,
-    },
-}
-
-#[derive(Clone, Debug)]
-pub struct FilmDesc {
-    pub resolution: [u32; 2],
-    pub filter: FilterDesc,
-}
-
-impl Default for FilmDesc {
-    fn default() -> Self {
-        FilmDesc {
-            resolution: [256, 256],
-            filter: FilterDesc::Box,
-        }
-    }
-}
-
-#[derive(Clone, Debug)]
-pub struct RenderDesc {
-    pub spp: u32,
-    /// Path segments, as Mitsuba counts them: 1 = emitters seen directly.
-    pub max_depth: u32,
-    pub max_diffuse_depth: Option<u32>,
-    pub max_specular_depth: Option<u32>,
-    pub rr_depth: u32,
-    /// Maximum luminance of one contribution (0: off), for direct and indirect light.
-    pub clamp_direct: f32,
-    pub clamp_indirect: f32,
-    pub seed: u64,
-    /// Which numbers drive the samples (`sampler.rs`).
-    pub sampler: crate::sampler::SamplerKind,
-    /// How lights are chosen for light sampling (`light/select.rs`).
-    pub light_selection: crate::light::select::LightSelection,
-    /// Adaptive sampling: the standard error of a pixel's beauty to aim for, over the
-    /// square root of its brightness (0: off, every pixel takes `spp` samples).
-    pub noise_threshold: f32,
-    /// Adaptive sampling: samples every pixel takes before it may stop.
-    pub min_spp: u32,
-    /// Path regularisation: after a diffuse bounce, specular lobes are at least this
-    /// rough (0: off).
-    pub regularize: f32,
-}
-
-/// Samples a pixel takes before adaptive sampling may stop it, unless told.
-pub const DEFAULT_MIN_SPP: u32 = 16;
-
-impl Default for RenderDesc {
-    fn default() -> Self {
-        RenderDesc {
-            spp: 16,
-            max_depth: 8,
-            max_diffuse_depth: None,
-            max_specular_depth: None,
-            rr_depth: 5,
-            clamp_direct: 0.0,
-            clamp_indirect: 0.0,
-            seed: 0,
-            sampler: Default::default(),
-            light_selection: Default::default(),
-            noise_threshold: 0.0,
-            min_spp: DEFAULT_MIN_SPP,
-            regularize: 0.0,
         }
     }
 }

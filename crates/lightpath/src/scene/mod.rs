@@ -53,26 +53,6 @@ pub struct Object {
     pub glow_light: Option<u32>,
 }
 
-#[derive(Clone, Debug)]
-pub struct RenderSettings {
-    pub spp: u32,
-    pub max_depth: u32,
-    pub max_diffuse_depth: u32,
-    pub max_specular_depth: u32,
-    pub rr_depth: u32,
-    pub clamp_direct: f32,
-    pub clamp_indirect: f32,
-    pub seed: u64,
-    pub sampler: crate::sampler::SamplerKind,
-    pub light_selection: crate::light::select::LightSelection,
-    /// Adaptive sampling's error over √brightness (0: off) and its pilot's samples.
-    pub noise_threshold: f32,
-    pub min_spp: u32,
-    /// Path regularisation: the roughness specular lobes get after a diffuse bounce
-    /// (0: off).
-    pub regularize: f32,
-}
-
 /// One output AOV: its name, definition and rule flags (its rule id is its index).
 #[derive(Clone, Debug)]
 pub struct Aov {
@@ -107,7 +87,8 @@ pub struct Scene {
     pub escape_lights: Vec<u32>,
     pub camera: Camera,
     pub filter: PixelFilter,
-    pub settings: RenderSettings,
+    /// The render settings, checked (`settings.rs`).
+    pub settings: crate::settings::RenderDesc,
     pub automaton: Automaton,
     pub aovs: Vec<Aov>,
     pub camera_class: ClassId,

@@ -181,7 +181,7 @@ fn load(path: &Path) -> SceneDesc {
 
 fn render_desc(desc: &SceneDesc, res: u32, spp: u32, extra: Vec<AovSpec>) -> (Scene, Film) {
     let mut desc = desc.clone();
-    desc.film.resolution = [res, res];
+    desc.render.resolution = [res, res];
     desc.render.spp = spp;
     desc.render.max_depth = 2;
     let scene = Scene::build(&desc, &aov::assemble(extra)).unwrap();
@@ -333,7 +333,7 @@ fn cameras_frame_as_the_file_says_and_are_picked_by_name() {
     assert!((Vec3::from(c.look_at) - Vec3::new(0.0, 0.0, 4.0)).length() < 1e-6);
     assert!((c.fov - 1.0f32.to_degrees()).abs() < 1e-4);
     assert_eq!(c.fov_axis, lightpath::camera::FovAxis::Y);
-    assert_eq!(desc.film.resolution, [512, 256]);
+    assert_eq!(desc.render.resolution, [512, 256]);
     // A camera turned 90° about +y looks down −x.
     desc.use_camera("side").unwrap();
     let c = desc.camera.clone().unwrap();
@@ -350,7 +350,7 @@ fn cameras_frame_as_the_file_says_and_are_picked_by_name() {
     // The card (half-height 1 at distance 5) fills tan⁻¹(1/5) / (yfov / 2) of the frame's
     // half-height: the rendered silhouette's rows say so.
     desc.use_camera("wide").unwrap();
-    desc.film.resolution = [64, 64];
+    desc.render.resolution = [64, 64];
     desc.render.spp = 1;
     desc.render.max_depth = 1;
     let scene = Scene::build(&desc, &aov::assemble(vec![])).unwrap();

@@ -403,7 +403,7 @@ fn a_cancelled_render_resumed_from_its_checkpoint_equals_the_uninterrupted_one_b
     use lightpath::{render_resumable, RenderOptions, Resumable};
     use std::sync::atomic::{AtomicBool, Ordering};
     let mut desc = lightpath::load_scene("cornell").unwrap();
-    desc.film.resolution = [24, 40];
+    desc.render.resolution = [24, 40];
     let specs = lightpath::aov::plan::AovPlan::build(&lightpath::aov::plan::PlanRequest {
         standard: true,
         ..Default::default()

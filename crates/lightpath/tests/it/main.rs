@@ -16,5 +16,6 @@ mod newcomer;
 mod peer;
 mod render;
 mod sampling;
+mod settings;
 mod view;
 mod workflow;

@@ -112,7 +112,7 @@ fn render_desc(
     seed: u64,
     extra: Vec<AovSpec>,
 ) -> (Scene, Film) {
-    desc.film.resolution = [res, res];
+    desc.render.resolution = [res, res];
     desc.render.spp = spp;
     desc.render.max_depth = 4;
     desc.render.seed = seed;

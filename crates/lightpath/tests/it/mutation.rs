@@ -125,9 +125,9 @@ fn load_and_build(text: &str, dir: &std::path::Path) -> Result<(), String> {
     };
     let mut desc: SceneDesc = source.parse().map_err(|e| e.to_string())?;
     // The film is never allocated here; keep a mutant's resolution from mattering.
-    desc.film.resolution = [
-        desc.film.resolution[0].clamp(1, 64),
-        desc.film.resolution[1].clamp(1, 64),
+    desc.render.resolution = [
+        desc.render.resolution[0].clamp(1, 64),
+        desc.render.resolution[1].clamp(1, 64),
     ];
     let specs = vec![lightpath::aov::AovSpec::new("beauty", "lpe:beauty")];
     let specs: Vec<_> = specs

@@ -24,7 +24,7 @@ fn render_aovs(
     extra: Vec<AovSpec>,
 ) -> (Scene, Film) {
     let mut desc = src.parse().unwrap();
-    desc.film.resolution = [res, res];
+    desc.render.resolution = [res, res];
     desc.render.spp = spp;
     if let Some(d) = max_depth {
         desc.render.max_depth = d;
@@ -265,7 +265,7 @@ fn renders_are_bit_identical_for_any_thread_count() {
 fn sample_ranges_merge_into_the_whole_render() {
     let src = cornell();
     let mut desc = src.parse().unwrap();
-    desc.film.resolution = [16, 16];
+    desc.render.resolution = [16, 16];
     let scene = Scene::build(&desc, &aov::assemble(vec![])).unwrap();
     let (whole, _) = render(
         &scene,

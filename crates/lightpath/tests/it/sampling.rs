@@ -94,7 +94,7 @@ fn light_selection_is_unbiased_against_uniform() {
         let (_, film) = run(
             &src,
             |d| {
-                d.film.resolution = [48, 48];
+                d.render.resolution = [48, 48];
                 d.render.spp = 24;
                 d.render.seed = seed;
                 d.render.light_selection = selection;
@@ -119,7 +119,7 @@ fn relighting_with_the_tree_matches_a_re_render_within_noise() {
     let src = lightpath::load_source("cornell").unwrap();
     let aovs = || vec![AovSpec::new("beauty", "lpe:beauty").split()];
     let small = |d: &mut SceneDesc| {
-        d.film.resolution = [40, 40];
+        d.render.resolution = [40, 40];
         d.render.spp = 16;
         d.render.clamp_indirect = 0.0;
     };
@@ -145,10 +145,10 @@ fn relighting_with_the_tree_matches_a_re_render_within_noise() {
 
 fn adaptive(threshold: f32, spp: u32) -> impl Fn(&mut SceneDesc) {
     move |d: &mut SceneDesc| {
-        d.film.resolution = [32, 32];
+        d.render.resolution = [32, 32];
         d.render.spp = spp;
         d.render.noise_threshold = threshold;
-        d.render.min_spp = 8;
+        d.render.min_spp = Some(8);
     }
 }
 
@@ -244,7 +244,7 @@ fn an_interrupted_adaptive_render_resumes_bit_for_bit() {
     let src = lightpath::load_source("cornell").unwrap();
     let mut desc = src.parse().unwrap();
     adaptive(0.05, 48)(&mut desc);
-    desc.film.resolution = [24, 40];
+    desc.render.resolution = [24, 40];
     let scene = Scene::build(&desc, &aov::assemble(aov::standard())).unwrap();
     let options = RenderOptions {
         spp: 48,
@@ -327,7 +327,7 @@ fn adaptive_tiles_equal_the_whole_frame() {
     let src = lightpath::load_source("cornell").unwrap();
     let mut desc = src.parse().unwrap();
     adaptive(0.2, 256)(&mut desc);
-    desc.film.resolution = [20, 16];
+    desc.render.resolution = [20, 16];
     let scene = Scene::build(&desc, &aov::assemble(vec![])).unwrap();
     let options = RenderOptions {
         spp: 256,
@@ -382,7 +382,7 @@ fn a_lower_noise_threshold_takes_more_samples() {
     let (_, b) = run(
         &src,
         |d| {
-            d.film.resolution = [32, 32];
+            d.render.resolution = [32, 32];
             d.render.spp = 64;
             d.render.seed = 3;
         },
@@ -435,7 +435,7 @@ fn adaptive_ranges_merge_by_per_pixel_counts() {
 fn sobol_ranges_merge_into_the_whole_render() {
     let src = lightpath::load_source("cornell").unwrap();
     let mut desc = src.parse().unwrap();
-    desc.film.resolution = [16, 16];
+    desc.render.resolution = [16, 16];
     assert_eq!(desc.render.sampler, SamplerKind::Sobol);
     let scene = Scene::build(&desc, &aov::assemble(vec![])).unwrap();
     let range = |spp, first_sample| render(&scene, &RenderOptions { spp, first_sample }).0;
@@ -505,7 +505,7 @@ fn a_glowing_object_is_light_sampled_under_its_own_events() {
         run(
             src,
             |d| {
-                d.film.resolution = [res as u32, res as u32];
+                d.render.resolution = [res as u32, res as u32];
                 d.render.spp = spp;
                 d.render.seed = seed;
             },

@@ -36,7 +36,7 @@ fn run(
 
 fn small(res: u32, spp: u32) -> impl FnOnce(&mut SceneDesc) {
     move |d: &mut SceneDesc| {
-        d.film.resolution = [res, res];
+        d.render.resolution = [res, res];
         d.render.spp = spp;
     }
 }
@@ -199,7 +199,7 @@ fn holdouts_make_a_matte_and_collect_its_shadows() {
         AovSpec::new("floorSeen", "holdouts;nothruput;overwrite;C<RU2'floor'>L"),
     ];
     let floor_holdout = |d: &mut SceneDesc| {
-        d.film.resolution = [32, 32];
+        d.render.resolution = [32, 32];
         d.render.spp = 16;
         for o in &mut d.objects {
             if o.name.as_deref() == Some("floor") {
@@ -309,7 +309,7 @@ fn relighting_from_aovs_equals_re_rendering() {
     };
     let (scene, film, _) = run(&src, uniform, aovs());
     let brighter = |d: &mut SceneDesc| {
-        d.film.resolution = [20, 20];
+        d.render.resolution = [20, 20];
         d.render.spp = 3;
         d.render.light_selection = lightpath::light::select::LightSelection::Uniform;
         d.render.clamp_indirect = 0.0;

@@ -2,6 +2,7 @@
 
 use clap::{Parser, Subcommand};
 use lightpath::output;
+use lightpath::settings::{SettingOverrides, SETTINGS};
 use std::path::PathBuf;
 
 #[derive(Parser)]
@@ -168,14 +169,8 @@ pub(crate) struct RenderArgs {
     /// Output EXR; the PNG preview goes beside it. Default: <scene>.exr in this directory.
     #[arg(short, long)]
     pub(crate) output: Option<PathBuf>,
-    #[arg(long)]
-    pub(crate) spp: Option<u32>,
-    /// Path segments, as Mitsuba counts them (1: emitters seen directly, 2: + direct light).
-    #[arg(long)]
-    pub(crate) max_depth: Option<u32>,
-    /// WIDTHxHEIGHT
-    #[arg(long, value_parser = parse_resolution)]
-    pub(crate) resolution: Option<[u32; 2]>,
+    #[command(flatten)]
+    pub(crate) settings: SettingArgs,
     /// An extra AOV, NAME=DEFINITION (repeatable).
     #[arg(long = "aov")]
     pub(crate) aovs: Vec<String>,
@@ -199,8 +194,6 @@ pub(crate) struct RenderArgs {
     /// Worker threads (1 to 1024; default: one per core).
     #[arg(long, value_parser = clap::value_parser!(u32).range(1..=MAX_THREADS))]
     pub(crate) threads: Option<u32>,
-    #[arg(long)]
-    pub(crate) seed: Option<u64>,
     /// Write half-float channels instead of float32.
     #[arg(long)]
     pub(crate) half: bool,
@@ -226,32 +219,6 @@ pub(crate) struct RenderArgs {
     pub(crate) preview: bool,
     #[command(flatten)]
     pub(crate) serve: ServeArgs,
-    /// Sample numbers: sobol (Owen-scrambled Sobol points, the default) or independent.
-    #[arg(long, value_parser = ["sobol", "independent"])]
-    pub(crate) sampler: Option<String>,
-    /// How lights are chosen for light sampling: tree (power, distance and orientation;
-    /// the default), power, or uniform (relighting from AOVs then equals re-rendering
-    /// bit for bit).
-    #[arg(long, value_parser = ["tree", "power", "uniform"])]
-    pub(crate) light_selection: Option<String>,
-    /// Adaptive sampling: after a pilot pass of --min-spp samples, a pixel takes the most
-    /// samples its eight neighbours predict for a standard error of its beauty of this
-    /// times the square root of its brightness (e.g. 0.1); --spp is then the most.
-    #[arg(long)]
-    pub(crate) noise_threshold: Option<f32>,
-    /// Adaptive sampling: samples every pixel takes first (the pilot pass).
-    #[arg(long)]
-    pub(crate) min_spp: Option<u32>,
-    /// Largest luminance of one contribution of indirect light (0: off).
-    #[arg(long)]
-    pub(crate) clamp_indirect: Option<f32>,
-    /// Largest luminance of one contribution of direct light (0: off).
-    #[arg(long)]
-    pub(crate) clamp_direct: Option<f32>,
-    /// Path regularisation: after a diffuse bounce, specular lobes are at least this
-    /// rough (0 to 1; e.g. 0.3). Tames caustic fireflies at the cost of sharp caustics.
-    #[arg(long)]
-    pub(crate) regularize: Option<f32>,
     /// Render only the window X0,Y0,X1,Y1 of the frame (pixels, end exclusive), with
     /// the frame's own sample numbers: the EXR's data window, inside the whole frame's
     /// display window. `lightpath merge` stitches tiles into the frame.
@@ -291,6 +258,57 @@ pub(crate) struct RenderArgs {
     pub(crate) accel: lightpath::geometry::Backend,
 }
 
+/// The render settings' options, one per entry of the settings table (`--spp`,
+/// `--max-depth`, …): each value is read and checked by its entry, so the command line
+/// accepts exactly what a scene file accepts.
+#[derive(Clone, Debug, Default)]
+pub(crate) struct SettingArgs(pub(crate) SettingOverrides);
+
+impl clap::FromArgMatches for SettingArgs {
+    fn from_arg_matches(matches: &clap::ArgMatches) -> Result<Self, clap::Error> {
+        let mut args = SettingArgs::default();
+        args.update_from_arg_matches(matches)?;
+        Ok(args)
+    }
+
+    fn update_from_arg_matches(&mut self, matches: &clap::ArgMatches) -> Result<(), clap::Error> {
+        for setting in SETTINGS {
+            if let Some(text) = matches.get_one::<String>(setting.key) {
+                (setting.read_flag)(text, &mut self.0)
+                    .map_err(|e| clap::Error::raw(clap::error::ErrorKind::ValueValidation, e))?;
+            }
+        }
+        Ok(())
+    }
+}
+
+impl clap::Args for SettingArgs {
+    fn augment_args(cmd: clap::Command) -> clap::Command {
+        SETTINGS.iter().fold(cmd, |cmd, setting| {
+            // The value is checked while parsing, so clap reports it as it reports any
+            // invalid value; `update_from_arg_matches` then reads it again.
+            let check = move |text: &str| -> Result<String, String> {
+                (setting.read_flag)(text, &mut SettingOverrides::default())?;
+                Ok(text.to_string())
+            };
+            cmd.arg(
+                clap::Arg::new(setting.key)
+                    .long(setting.flag)
+                    .value_name(setting.value_name)
+                    // `--clamp-direct -1` is a value to refuse with the setting's message,
+                    // not an unknown option.
+                    .allow_negative_numbers(true)
+                    .help(setting.help_line())
+                    .value_parser(check),
+            )
+        })
+    }
+
+    fn augment_args_for_update(cmd: clap::Command) -> clap::Command {
+        Self::augment_args(cmd)
+    }
+}
+
 pub(crate) fn parse_seconds(s: &str) -> Result<f64, String> {
     match s.trim().parse::<f64>() {
         Ok(v) if v > 0.0 && v.is_finite() && v < 1e9 => Ok(v),
@@ -319,18 +337,6 @@ pub(crate) fn hyphen_expression_hint(args: impl Iterator<Item = String>) -> Opti
 
 /// `--threads` above this is refused: a pool of 100000 threads could not start.
 pub(crate) const MAX_THREADS: i64 = 1024;
-
-pub(crate) fn parse_resolution(s: &str) -> Result<[u32; 2], String> {
-    let (w, h) = s
-        .split_once(['x', 'X'])
-        .ok_or("expected WIDTHxHEIGHT, e.g. 640x480")?;
-    let w: u32 = w.trim().parse().map_err(|_| format!("bad width '{w}'"))?;
-    let h: u32 = h.trim().parse().map_err(|_| format!("bad height '{h}'"))?;
-    if w == 0 || h == 0 || w > 32768 || h > 32768 {
-        return Err("resolution must be between 1 and 32768 in each direction".into());
-    }
-    Ok([w, h])
-}
 
 #[derive(Subcommand)]
 pub(crate) enum LpeCommand {

@@ -44,8 +44,9 @@ pub(crate) fn farm_command(cmd: FarmCommand) -> Result<String, String> {
         );
     }
     let desc = lightpath::load_scene(&farm.scene).map_err(|e| e.to_string())?;
-    let spp = parsed.spp.unwrap_or(desc.render.spp).max(1);
-    let resolution = parsed.resolution.unwrap_or(desc.film.resolution);
+    let mut settings = desc.render;
+    parsed.settings.0.apply(&mut settings);
+    let (spp, resolution) = (settings.spp, settings.resolution);
     let parts = split(farm.by, farm.tasks, spp, resolution)?;
     // The parts render noisy; only the merged frame is denoised.
     let (render, denoise) = lightpath::farm::split_denoise(

@@ -3,11 +3,9 @@
 use args::*;
 use clap::Parser;
 use lightpath::interrupt::EXIT_INTERRUPTED;
-use lightpath::job::{AovRequest, DenoiseRequest, RenderJob, SettingOverrides};
-use lightpath::light::select::LightSelection;
+use lightpath::job::{AovRequest, DenoiseRequest, RenderJob};
 use lightpath::lpe_tools;
 use lightpath::output;
-use lightpath::sampler::SamplerKind;
 use std::io::{BufRead, IsTerminal, Write};
 use std::process::ExitCode;
 use std::sync::atomic::AtomicBool;
@@ -199,22 +197,7 @@ fn render(args: RenderArgs) -> ExitCode {
     let job = RenderJob {
         scene: args.scene,
         output: args.output,
-        overrides: SettingOverrides {
-            spp: args.spp,
-            max_depth: args.max_depth,
-            resolution: args.resolution,
-            seed: args.seed,
-            sampler: args.sampler.as_deref().and_then(SamplerKind::parse),
-            light_selection: args
-                .light_selection
-                .as_deref()
-                .and_then(LightSelection::parse),
-            noise_threshold: args.noise_threshold,
-            min_spp: args.min_spp,
-            clamp_indirect: args.clamp_indirect,
-            clamp_direct: args.clamp_direct,
-            regularize: args.regularize,
-        },
+        overrides: args.settings.0.clone(),
         aovs: AovRequest {
             standard: args.aov_set == "standard",
             extra: args.aovs,

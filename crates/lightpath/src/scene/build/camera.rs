@@ -1,15 +1,13 @@
 //! The camera, pixel filter and render settings.
 
 use crate::camera::{Camera, PixelFilter};
-use crate::scene::desc::{CameraDesc, FilterDesc, Origin, SceneDesc};
-use crate::scene::{RenderSettings, SceneError};
+use crate::scene::desc::{CameraDesc, Origin, SceneDesc};
+use crate::scene::SceneError;
+use crate::settings::RenderDesc;
 use glam::Vec3A;
 
 pub fn camera(desc: &SceneDesc) -> Result<Camera, SceneError> {
-    let [w, h] = desc.film.resolution;
-    if w == 0 || h == 0 {
-        return Err(Origin::file(&desc.source).error("film resolution must be at least 1x1"));
-    }
+    let [w, h] = desc.render.resolution;
     let default_camera = CameraDesc {
         origin: Origin::file(&desc.source),
         ..CameraDesc::default()
@@ -27,13 +25,6 @@ pub fn camera(desc: &SceneDesc) -> Result<Camera, SceneError> {
             "[camera]: position, look_at, up, aperture_radius and focus_distance must be \
              finite (and the aperture not negative)",
         ));
-    }
-    if let FilterDesc::Gaussian { stddev } = desc.film.filter {
-        if !(stddev > 0.0 && stddev.is_finite()) {
-            return Err(Origin::file(&desc.source).error(format!(
-                "[film]: filter_stddev must be a positive number, got {stddev}"
-            )));
-        }
     }
     let position = v3(c.position);
     let look_at = v3(c.look_at);
@@ -68,27 +59,12 @@ pub fn camera(desc: &SceneDesc) -> Result<Camera, SceneError> {
 }
 
 pub fn filter(desc: &SceneDesc) -> PixelFilter {
-    match desc.film.filter {
-        FilterDesc::Box => PixelFilter::Box,
-        FilterDesc::Gaussian { stddev } => PixelFilter::Gaussian { stddev },
-    }
+    PixelFilter::new(desc.render.filter, desc.render.filter_stddev)
 }
 
-pub fn settings(desc: &SceneDesc) -> RenderSettings {
-    let r = &desc.render;
-    RenderSettings {
-        spp: r.spp.max(1),
-        max_depth: r.max_depth,
-        max_diffuse_depth: r.max_diffuse_depth.unwrap_or(u32::MAX),
-        max_specular_depth: r.max_specular_depth.unwrap_or(u32::MAX),
-        rr_depth: r.rr_depth,
-        clamp_direct: r.clamp_direct,
-        clamp_indirect: r.clamp_indirect,
-        seed: r.seed,
-        sampler: r.sampler,
-        light_selection: r.light_selection,
-        noise_threshold: r.noise_threshold.max(0.0),
-        min_spp: r.min_spp.max(1),
-        regularize: r.regularize.clamp(0.0, 1.0),
-    }
+/// The settings, checked: a description built by code rather than read from a file
+/// meets the same ranges (`settings.rs`) as one read from a file.
+pub fn settings(desc: &SceneDesc) -> Result<RenderDesc, SceneError> {
+    crate::settings::check(&desc.render).map_err(|e| Origin::file(&desc.source).error(e))?;
+    Ok(desc.render.clone())
 }

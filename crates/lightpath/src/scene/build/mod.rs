@@ -23,6 +23,7 @@ use std::ops::Range;
 impl Scene {
     /// Builds a scene from its description and the AOVs to render (beauty first).
     pub fn build(desc: &SceneDesc, aovs: &[AovSpec]) -> Result<Scene, SceneError> {
+        let settings = camera::settings(desc)?;
         let (materials, material_ids) = materials::build(desc)?;
         let mut geometry = GeometryBuilder::default();
         let (mut objects, object_prims) = add_objects(desc, &material_ids, &mut geometry)?;
@@ -80,7 +81,7 @@ impl Scene {
             lights,
             camera,
             filter: camera::filter(desc),
-            settings: camera::settings(desc),
+            settings,
             camera_class: classes.camera,
             data_light_class: classes.data_light,
             automaton,

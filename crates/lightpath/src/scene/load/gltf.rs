@@ -711,7 +711,7 @@ impl Loader {
         if self.desc.camera.is_none() {
             self.desc.camera = Some(desc.clone());
             if let Some(r) = resolution {
-                self.desc.film.resolution = r;
+                self.desc.render.resolution = r;
             }
         }
         self.desc.cameras.push(NamedCamera {

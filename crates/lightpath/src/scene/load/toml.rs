@@ -18,10 +18,11 @@ use toml::Spanned;
 struct SceneFile {
     #[serde(default)]
     camera: Option<Spanned<CameraDesc>>,
+    /// `[film]` and `[render]`: keys of settings (`settings.rs`), read through its table.
     #[serde(default)]
-    film: FilmDesc,
+    film: BTreeMap<String, Spanned<toml::Value>>,
     #[serde(default)]
-    render: RenderDesc,
+    render: BTreeMap<String, Spanned<toml::Value>>,
     #[serde(default)]
     materials: BTreeMap<String, Spanned<MaterialDesc>>,
     #[serde(default)]
@@ -117,147 +118,22 @@ impl Default for CameraDesc {
     }
 }
 
-#[derive(Debug, Deserialize)]
-#[serde(deny_unknown_fields)]
-struct FilmDesc {
-    #[serde(default = "default_resolution")]
-    resolution: [u32; 2],
-    /// `box` or `gaussian`.
-    #[serde(default)]
-    filter: Option<Spanned<String>>,
-    /// Standard deviation of the Gaussian filter, in pixels.
-    #[serde(default = "default_stddev")]
-    filter_stddev: f32,
-}
-
-fn default_resolution() -> [u32; 2] {
-    [256, 256]
-}
-fn default_stddev() -> f32 {
-    0.5
-}
-
-impl Default for FilmDesc {
-    fn default() -> Self {
-        FilmDesc {
-            resolution: default_resolution(),
-            filter: None,
-            filter_stddev: default_stddev(),
+/// The `[film]` and `[render]` settings, each read and checked by its entry in the
+/// settings table; the settings not written keep their defaults.
+fn settings(src: &Source, file: &SceneFile) -> Result<d::RenderDesc, SceneError> {
+    use crate::settings::{self, Section};
+    let mut render = d::RenderDesc::default();
+    for (section, values) in [(Section::Film, &file.film), (Section::Render, &file.render)] {
+        for (key, value) in values {
+            let setting = settings::find(section, key).ok_or_else(|| {
+                src.error(Some(value.span()), settings::unknown_key(section, key))
+            })?;
+            (setting.read_toml)(value.get_ref(), &mut render)
+                .map_err(|e| src.error(Some(value.span()), e))?;
         }
     }
-}
-
-#[derive(Debug, Deserialize)]
-#[serde(deny_unknown_fields)]
-struct RenderDesc {
-    #[serde(default = "default_spp")]
-    spp: u32,
-    /// Path segments, as Mitsuba counts them: 1 = emitters seen directly.
-    #[serde(default = "default_max_depth")]
-    max_depth: u32,
-    #[serde(default)]
-    max_diffuse_depth: Option<u32>,
-    #[serde(default)]
-    max_specular_depth: Option<u32>,
-    #[serde(default = "default_rr_depth")]
-    rr_depth: u32,
-    /// Maximum luminance of one contribution (0: off), for direct and indirect light.
-    #[serde(default)]
-    clamp_direct: f32,
-    #[serde(default)]
-    clamp_indirect: f32,
-    #[serde(default)]
-    seed: u64,
-    /// `sobol` or `independent`.
-    #[serde(default)]
-    sampler: Option<Spanned<String>>,
-    /// `tree`, `power` or `uniform`.
-    #[serde(default)]
-    light_selection: Option<Spanned<String>>,
-    /// Adaptive sampling's error over √brightness (0: off) and its pilot's samples.
-    #[serde(default)]
-    noise_threshold: Option<Spanned<f32>>,
-    #[serde(default)]
-    min_spp: Option<u32>,
-    /// Path regularisation: specular lobes' roughness after a diffuse bounce (0: off).
-    #[serde(default)]
-    regularize: Option<Spanned<f32>>,
-}
-
-fn default_spp() -> u32 {
-    16
-}
-fn default_max_depth() -> u32 {
-    8
-}
-fn default_rr_depth() -> u32 {
-    5
-}
-
-impl Default for RenderDesc {
-    fn default() -> Self {
-        RenderDesc {
-            spp: default_spp(),
-            max_depth: default_max_depth(),
-            max_diffuse_depth: None,
-            max_specular_depth: None,
-            rr_depth: default_rr_depth(),
-            clamp_direct: 0.0,
-            clamp_indirect: 0.0,
-            seed: 0,
-            sampler: None,
-            light_selection: None,
-            noise_threshold: None,
-            min_spp: None,
-            regularize: None,
-        }
-    }
-}
-
-/// `[render]`'s named choice `field`, or the default when absent.
-fn choice<T: Default>(
-    src: &Source,
-    field: &str,
-    value: &Option<Spanned<String>>,
-    parse: impl Fn(&str) -> Option<T>,
-    names: &[&str],
-) -> Result<T, SceneError> {
-    match value {
-        None => Ok(T::default()),
-        Some(v) => parse(v.get_ref()).ok_or_else(|| {
-            src.error(
-                Some(v.span()),
-                format!(
-                    "unknown {field} '{}': expected {}",
-                    v.get_ref(),
-                    names.join(" or ")
-                ),
-            )
-        }),
-    }
-}
-
-/// `[render]`'s number `field` in `range`, or `default` when absent.
-fn bounded(
-    src: &Source,
-    field: &str,
-    value: &Option<Spanned<f32>>,
-    range: std::ops::RangeInclusive<f32>,
-    default: f32,
-) -> Result<f32, SceneError> {
-    match value {
-        None => Ok(default),
-        Some(v) if range.contains(v.get_ref()) => Ok(*v.get_ref()),
-        Some(v) => Err(src.error(
-            Some(v.span()),
-            format!(
-                "{field} must be between {} and {}, got {}",
-                range.start(),
-                range.end(),
-                v.get_ref()
-            ),
-        )),
-    }
+    settings::check_together(&render).map_err(|e| src.error(None, e))?;
+    Ok(render)
 }
 
 #[derive(Debug, Deserialize, Clone)]
@@ -466,6 +342,7 @@ pub fn load(src: &Source) -> Result<d::SceneDesc, SceneError> {
         };
         src.error(e.span(), message)
     })?;
+    let render = settings(src, &file)?;
     let at = |span: Range<usize>| src.origin(Some(span));
     // Included files first: their materials are renamed where this file's take a name.
     let mut scene = d::SceneDesc::default();
@@ -502,53 +379,10 @@ pub fn load(src: &Source) -> Result<d::SceneDesc, SceneError> {
         Some(c) => Some(camera(src, c)?),
         None => included_camera,
     };
-    let filter = match file.film.filter.as_ref().map(|s| s.get_ref().as_str()) {
-        None | Some("box") => d::FilterDesc::Box,
-        Some("gaussian") => d::FilterDesc::Gaussian {
-            stddev: file.film.filter_stddev,
-        },
-        Some(other) => {
-            return Err(src.error(
-                file.film.filter.as_ref().map(|s| s.span()),
-                format!("unknown filter '{other}': expected box or gaussian"),
-            ))
-        }
-    };
-    let r = file.render;
     Ok(d::SceneDesc {
         source: src.name.clone(),
         camera,
-        film: d::FilmDesc {
-            resolution: file.film.resolution,
-            filter,
-        },
-        render: d::RenderDesc {
-            spp: r.spp,
-            max_depth: r.max_depth,
-            max_diffuse_depth: r.max_diffuse_depth,
-            max_specular_depth: r.max_specular_depth,
-            rr_depth: r.rr_depth,
-            clamp_direct: r.clamp_direct,
-            clamp_indirect: r.clamp_indirect,
-            seed: r.seed,
-            sampler: choice(
-                src,
-                "sampler",
-                &r.sampler,
-                crate::sampler::SamplerKind::parse,
-                &crate::sampler::SamplerKind::NAMES,
-            )?,
-            light_selection: choice(
-                src,
-                "light_selection",
-                &r.light_selection,
-                crate::light::select::LightSelection::parse,
-                &crate::light::select::LightSelection::NAMES,
-            )?,
-            noise_threshold: bounded(src, "noise_threshold", &r.noise_threshold, 0.0..=1e6, 0.0)?,
-            min_spp: r.min_spp.unwrap_or(d::DEFAULT_MIN_SPP),
-            regularize: bounded(src, "regularize", &r.regularize, 0.0..=1.0, 0.0)?,
-        },
+        render,
         materials,
         objects,
         lights,
