@@ -2,13 +2,11 @@
 //! answer, so the binary only passes its arguments through.
 
 use crate::aov::naming::{
-    format_ranges, setting_attribute, CROP_ATTRIBUTE, FIRST_SAMPLE_ATTRIBUTE, SAMPLES_ATTRIBUTE,
-    SCENE_ATTRIBUTE, SCENE_HASH_ATTRIBUTE, SEED_ATTRIBUTE, SPP_ATTRIBUTE,
+    format_ranges, CROP_ATTRIBUTE, FIRST_SAMPLE_ATTRIBUTE, IDENTITY_ATTRIBUTE, INPUTS_ATTRIBUTE,
+    SAMPLES_ATTRIBUTE, SCENE_ATTRIBUTE, SPP_ATTRIBUTE,
 };
-use crate::camera::PixelFilter;
 use crate::film::PixelWindow;
-use crate::scene::desc::{LightKind, SceneDesc};
-use crate::scene::Scene;
+use crate::identity::Identity;
 use std::path::{Path, PathBuf};
 
 /// The files one render writes.
@@ -55,18 +53,18 @@ pub fn partial_paths(paths: &OutputPaths) -> OutputPaths {
     }
 }
 
-/// What a render's header records about how it was made.
+/// What a render's header records about which part of a frame it is (the seed and
+/// other settings come with its identity: [`settings_attributes`]).
 #[derive(Clone, Debug)]
 pub struct RenderMetadata {
     pub scene: String,
     pub spp: u32,
     pub first_sample: u32,
-    pub seed: u64,
 }
 
 impl RenderMetadata {
-    /// The header attributes (`lightpath/scene`, `spp`, `first_sample`, `seed`, and the
-    /// sample range).
+    /// The header attributes (`lightpath/scene`, `spp`, `first_sample`, and the sample
+    /// range).
     pub fn attributes(&self) -> Vec<(String, String)> {
         let first = self.first_sample as u64;
         vec![
@@ -76,7 +74,6 @@ impl RenderMetadata {
                 FIRST_SAMPLE_ATTRIBUTE.to_string(),
                 self.first_sample.to_string(),
             ),
-            (SEED_ATTRIBUTE.to_string(), self.seed.to_string()),
             (
                 SAMPLES_ATTRIBUTE.to_string(),
                 format_ranges(&[(first, first + self.spp as u64)]),
@@ -85,104 +82,19 @@ impl RenderMetadata {
     }
 }
 
-/// Every setting of a render that the parts of one frame must share, as
-/// `lightpath/setting/<name>` attributes, plus the scene's hash and the crop.
-pub fn settings_attributes(
-    scene: &Scene,
-    scene_hash: u64,
-    crop: PixelWindow,
-) -> Vec<(String, String)> {
-    let s = &scene.settings;
-    let limit = |v: u32| {
-        if v == u32::MAX {
-            "none".to_string()
-        } else {
-            v.to_string()
-        }
-    };
-    let filter = match scene.filter {
-        PixelFilter::Box => "box".to_string(),
-        PixelFilter::Gaussian { stddev } => format!("gaussian {stddev}"),
-    };
-    let settings = [
-        ("clamp_direct", s.clamp_direct.to_string()),
-        ("clamp_indirect", s.clamp_indirect.to_string()),
-        ("filter", filter),
-        ("max_depth", s.max_depth.to_string()),
-        ("max_diffuse_depth", limit(s.max_diffuse_depth)),
-        ("max_specular_depth", limit(s.max_specular_depth)),
-        (
-            "resolution",
-            format!("{}x{}", scene.camera.width, scene.camera.height),
-        ),
-        ("rr_depth", s.rr_depth.to_string()),
-        ("sampler", s.sampler.name().to_string()),
-        ("light_selection", s.light_selection.name().to_string()),
-        ("noise_threshold", s.noise_threshold.to_string()),
-        ("min_spp", s.min_spp.to_string()),
-        ("regularize", s.regularize.to_string()),
-    ];
-    let mut out: Vec<(String, String)> = settings
-        .into_iter()
-        .map(|(k, v)| (setting_attribute(k), v))
+/// The render's identity (`identity.rs`) as header attributes: each identity setting
+/// (`lightpath/setting/<name>`, the seed as `lightpath/seed`), the identity's hash and
+/// its manifest of inputs; and the crop.
+pub fn settings_attributes(identity: &Identity, crop: PixelWindow) -> Vec<(String, String)> {
+    let mut out: Vec<(String, String)> = identity
+        .settings
+        .iter()
+        .map(|(k, v)| (crate::identity::setting_attribute(k), v.clone()))
         .collect();
-    out.push((SCENE_HASH_ATTRIBUTE.into(), format!("{scene_hash:016x}")));
+    out.push((IDENTITY_ATTRIBUTE.into(), identity.hash_text()));
+    out.push((INPUTS_ATTRIBUTE.into(), identity.manifest()));
     out.push((CROP_ATTRIBUTE.into(), crop.to_string()));
     out
-}
-
-/// FNV-1a, 64 bits: the scene hash (stable across machines and versions, unlike
-/// `std`'s hasher).
-#[derive(Clone, Copy, Debug)]
-pub struct Fnv64(pub u64);
-
-impl Default for Fnv64 {
-    fn default() -> Self {
-        Fnv64(0xcbf2_9ce4_8422_2325)
-    }
-}
-
-impl Fnv64 {
-    pub fn write(&mut self, bytes: &[u8]) {
-        for &b in bytes {
-            self.0 ^= b as u64;
-            self.0 = self.0.wrapping_mul(0x0100_0000_01b3);
-        }
-    }
-}
-
-/// The hash of a scene's content: its text, every mesh's data (OBJ files included, as
-/// loaded) and the bytes of every map it reads. Two parts of a farm render compare it
-/// to know they rendered the same scene, wherever the file lay.
-pub fn scene_hash(text: &str, desc: &SceneDesc) -> Result<u64, String> {
-    let mut h = Fnv64::default();
-    h.write(text.as_bytes());
-    for o in &desc.objects {
-        if let Some(parts) = o.shape.mesh_parts() {
-            for m in parts {
-                for p in &m.positions {
-                    p.iter().for_each(|v| h.write(&v.to_le_bytes()));
-                }
-                for t in &m.indices {
-                    t.iter().for_each(|v| h.write(&v.to_le_bytes()));
-                }
-                for n in m.normals.iter().flatten() {
-                    n.iter().for_each(|v| h.write(&v.to_le_bytes()));
-                }
-            }
-        }
-    }
-    for l in &desc.lights {
-        if let LightKind::Dome {
-            map: Some((path, origin)),
-        } = &l.kind
-        {
-            let bytes = std::fs::read(path)
-                .map_err(|e| format!("{origin}: cannot read {}: {e}", path.display()))?;
-            h.write(&bytes);
-        }
-    }
-    Ok(h.0)
 }
 
 /// A UTC date as `capDate` writes it (`YYYY:MM:DD hh:mm:ss`), from seconds since 1970.
@@ -228,17 +140,5 @@ mod tests {
         assert_eq!(capture_date(0), "1970:01:01 00:00:00");
         assert_eq!(capture_date(951_782_400), "2000:02:29 00:00:00");
         assert_eq!(capture_date(1_798_761_599), "2026:12:31 23:59:59");
-    }
-
-    #[test]
-    fn fnv_matches_its_reference_values() {
-        let mut h = Fnv64::default();
-        h.write(b"");
-        assert_eq!(h.0, 0xcbf2_9ce4_8422_2325);
-        h.write(b"a");
-        assert_eq!(h.0, 0xaf63_dc4c_8601_ec8c);
-        let mut h = Fnv64::default();
-        h.write(b"foobar");
-        assert_eq!(h.0, 0x8594_4171_f739_67e8);
     }
 }
