@@ -463,6 +463,42 @@ mod tests {
     }
 
     #[test]
+    fn a_texture_declaring_more_pixels_than_the_limit_is_refused_before_decoding() {
+        // A PNG signature, a header (IHDR) of 65535 × 65535 RGBA8 texels and no
+        // pixel data: 17 GB, were it allocated.
+        let mut png = b"\x89PNG\r\n\x1a\n\0\0\0\x0dIHDR".to_vec();
+        png.extend(65535u32.to_be_bytes());
+        png.extend(65535u32.to_be_bytes());
+        png.extend([8, 6, 0, 0, 0]);
+        let crc = png_crc(&png[12..]);
+        png.extend(crc.to_be_bytes());
+        // An empty IDAT chunk: the header is read up to the first one.
+        png.extend(b"\0\0\0\0IDAT");
+        png.extend(png_crc(b"IDAT").to_be_bytes());
+        let e = MipMap::decode(&png, ColorSpace::Srgb).unwrap_err();
+        assert!(
+            e.contains("65535x65535 texture") && e.contains("LIGHTPATH_MAX_"),
+            "{e}"
+        );
+    }
+
+    /// The CRC-32 PNG chunks end with (ISO 3309).
+    fn png_crc(bytes: &[u8]) -> u32 {
+        let mut c = !0u32;
+        for &b in bytes {
+            c ^= b as u32;
+            for _ in 0..8 {
+                c = if c & 1 == 1 {
+                    0xedb8_8320 ^ (c >> 1)
+                } else {
+                    c >> 1
+                };
+            }
+        }
+        !c
+    }
+
+    #[test]
     fn jpeg_and_exr_textures_decode() {
         let w = [Wrap::Clamp; 2];
         // A flat 8×8 JPEG of sRGB 128: lossy, but a flat block decodes within a level.
