@@ -162,7 +162,11 @@ fn same_frame(a: &Part, b: &Part) -> Result<(), String> {
     }
     changed_inputs(a, b)?;
     let keys: std::collections::BTreeSet<&String> = a.text.keys().chain(b.text.keys()).collect();
-    for k in keys {
+    // The identity last: a setting that differs is named by its own attribute.
+    let (identity, others): (Vec<&String>, Vec<&String>) = keys
+        .into_iter()
+        .partition(|k| [IDENTITY_ATTRIBUTE, INPUTS_ATTRIBUTE].contains(&k.as_str()));
+    for k in others.into_iter().chain(identity) {
         if PER_PART.contains(&k.as_str()) {
             continue;
         }
