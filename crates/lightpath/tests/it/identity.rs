@@ -111,6 +111,9 @@ fn merge(a: &Path, b: &Path, out: &Path) -> Option<String> {
     (!result.status.success()).then(|| String::from_utf8_lossy(&result.stderr).into_owned())
 }
 
+/// An edit of the scene: what it changes, the file the refusal must name, and how.
+type Edit = (&'static str, &'static str, fn(&Path));
+
 #[test]
 fn merge_refuses_parts_across_an_edit_of_the_gltf_its_light_or_its_texture_naming_the_file() {
     let dir = Scratch::new("identity-merge");
@@ -124,7 +127,7 @@ fn merge_refuses_parts_across_an_edit_of_the_gltf_its_light_or_its_texture_namin
     assert_eq!(same, None);
 
     // Each edit, made between the two parts, then undone.
-    let edits: [(&str, &str, fn(&Path)); 3] = [
+    let edits: [Edit; 3] = [
         ("material colour", "scene.gltf changed", |d| {
             write_scene(d, 0.5, 50.0);
         }),
