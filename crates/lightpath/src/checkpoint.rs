@@ -9,21 +9,30 @@
 //! are computed: a resumed render computes the same targets and continues each pixel
 //! from the same sums.
 //!
-//! The format (little-endian): `LPCKPT02`, the job's fingerprint (u64), width, height,
-//! planes, spp (u32 each), the pass (u8: 0 not adaptive, 1 the pilot, 2 the second pass),
-//! one byte per row (1: finished in that pass), every plane's `width × height` f32 sums;
-//! if adaptive, each pixel's sample count (u32) and then its pilot's sum and sum of
-//! squares (f64 each); then an FNV-1a checksum (u64) of all that precedes it. Version
-//! `LPCKPT01` (no pass byte, no adaptive renders) is refused with a message.
+//! A checkpoint is resumed only by the render that wrote it: the same scene (its
+//! identity, `identity.rs`: every file read and the identity settings) and the same job
+//! (the job's fingerprint: sample range, window, AOVs). When the scene changed, the error
+//! names the file or setting that did, and the job may start over instead
+//! (`--restart-if-changed`).
+//!
+//! The format (little-endian): `LPCKPT03`, the identity's hash and the job's fingerprint
+//! (u64 each), the identity as text (its length as u32, then UTF-8: `Identity::to_text`),
+//! width, height, planes, spp (u32 each), the pass (u8: 0 not adaptive, 1 the pilot, 2
+//! the second pass), one byte per row (1: finished in that pass), every plane's
+//! `width × height` f32 sums; if adaptive, each pixel's sample count (u32) and then its
+//! pilot's sum and sum of squares (f64 each); then an FNV-1a checksum (u64) of all that
+//! precedes it. Earlier versions (`LPCKPT01`, `02`: no identity) are refused with a
+//! message.
 
 use crate::film::Film;
+use crate::identity::{Fnv64, Identity};
 use crate::integrator::adaptive::Pilot;
 use crate::integrator::Snapshot;
 use crate::output::atomic;
 use std::io::{BufWriter, Write};
 use std::path::{Path, PathBuf};
 
-const MAGIC: &[u8; 8] = b"LPCKPT02";
+const MAGIC: &[u8; 8] = b"LPCKPT03";
 
 /// What every version's magic starts with.
 const MAGIC_FAMILY: &[u8; 6] = b"LPCKPT";
@@ -54,37 +63,58 @@ pub fn path_for(exr: &Path) -> PathBuf {
     PathBuf::from(name)
 }
 
-/// FNV-1a over byte strings, each followed by its length (stable across builds and
-/// machines, unlike `DefaultHasher`).
+/// The job's fingerprint: a hash of byte strings, each delimited by its length.
 pub fn fingerprint(parts: &[&[u8]]) -> u64 {
-    let mut h = Fnv::default();
+    let mut h = Fnv64::default();
     for p in parts {
-        h.write(p);
-        h.write(&(p.len() as u64).to_le_bytes());
+        h.write_field(p);
     }
-    h.0
+    h.finish()
 }
 
-struct Fnv(u64);
-
-impl Default for Fnv {
-    fn default() -> Fnv {
-        Fnv(0xcbf2_9ce4_8422_2325)
-    }
+/// Which render a checkpoint belongs to.
+#[derive(Clone, Copy, Debug)]
+pub struct Stamp<'a> {
+    /// What the render read and the settings that decide its pixels.
+    pub identity: &'a Identity,
+    /// The rest of the job: sample range, window, AOVs (`job.rs`).
+    pub fingerprint: u64,
 }
 
-impl Fnv {
-    fn write(&mut self, bytes: &[u8]) {
-        for b in bytes {
-            self.0 ^= *b as u64;
-            self.0 = self.0.wrapping_mul(0x0000_0100_0000_01b3);
+/// Why a checkpoint cannot be resumed.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub enum CheckpointError {
+    /// It was written by a render of the scene before an edit: what changed, one phrase
+    /// per file or setting.
+    SceneChanged { path: PathBuf, changes: Vec<String> },
+    /// Another job, another version, damage: the message says which.
+    Unusable(String),
+}
+
+impl std::fmt::Display for CheckpointError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            CheckpointError::SceneChanged { path, changes } => {
+                let what = match changes.is_empty() {
+                    true => "its identity differs (written by another version?)".to_string(),
+                    false => changes.join("; "),
+                };
+                write!(
+                    f,
+                    "checkpoint {}: the scene changed since it was written: {what}; render \
+                     without --resume to start over (or add --restart-if-changed to start \
+                     over whenever the scene changed)",
+                    path.display()
+                )
+            }
+            CheckpointError::Unusable(why) => f.write_str(why),
         }
     }
 }
 
 /// Writes the checkpoint of `snapshot` atomically (synced before it replaces the previous
 /// one).
-pub fn write(path: &Path, fingerprint: u64, snapshot: &Snapshot) -> Result<(), String> {
+pub fn write(path: &Path, stamp: Stamp, snapshot: &Snapshot) -> Result<(), String> {
     let Snapshot {
         film,
         rows_done,
@@ -93,11 +123,15 @@ pub fn write(path: &Path, fingerprint: u64, snapshot: &Snapshot) -> Result<(), S
     atomic::atomically(path, |file| {
         let mut out = Summed {
             out: BufWriter::with_capacity(1 << 20, file),
-            sum: Fnv::default(),
+            sum: Fnv64::default(),
         };
         let io = (|| -> std::io::Result<()> {
             out.put(MAGIC)?;
-            out.put(&fingerprint.to_le_bytes())?;
+            out.put(&stamp.identity.hash.to_le_bytes())?;
+            out.put(&stamp.fingerprint.to_le_bytes())?;
+            let identity = stamp.identity.to_text();
+            out.put(&(identity.len() as u32).to_le_bytes())?;
+            out.put(identity.as_bytes())?;
             for v in [film.width, film.height, film.planes.len() as u32, film.spp] {
                 out.put(&v.to_le_bytes())?;
             }
@@ -124,7 +158,7 @@ pub fn write(path: &Path, fingerprint: u64, snapshot: &Snapshot) -> Result<(), S
                     out.put(&chunk)?;
                 }
             }
-            let total = out.sum.0;
+            let total = out.sum.finish();
             out.out.write_all(&total.to_le_bytes())?;
             out.out.flush()
         })();
@@ -135,7 +169,7 @@ pub fn write(path: &Path, fingerprint: u64, snapshot: &Snapshot) -> Result<(), S
 /// A writer that checksums what goes through it.
 struct Summed<W: Write> {
     out: W,
-    sum: Fnv,
+    sum: Fnv64,
 }
 
 impl<W: Write> Summed<W> {
@@ -157,24 +191,13 @@ pub struct FilmShape {
     pub adaptive: bool,
 }
 
-/// Reads a checkpoint for a render whose film is `shape`, made by a job with this
-/// `fingerprint`; anything else is an error naming the difference.
-pub fn read(path: &Path, fingerprint: u64, shape: FilmShape) -> Result<Checkpoint, String> {
-    let FilmShape {
-        width,
-        height,
-        aovs,
-        spp,
-        squared,
-        adaptive,
-    } = shape;
-    let bad = |what: &str| format!("checkpoint {}: {what}", path.display());
+/// Reads a checkpoint for a render whose film is `shape`, stamped `stamp`; anything else
+/// is an error naming the difference (for another scene, each file or setting that
+/// changed).
+pub fn read(path: &Path, stamp: Stamp, shape: FilmShape) -> Result<Checkpoint, CheckpointError> {
+    let bad =
+        |what: &str| CheckpointError::Unusable(format!("checkpoint {}: {what}", path.display()));
     let bytes = crate::limits::read_input(path).map_err(|e| bad(&e))?;
-    let planes = Film::stride_with(aovs, squared.len());
-    let pixels = width as usize * height as usize;
-    let header = 8 + 8 + 16 + 1;
-    let adaptive_bytes = if adaptive { pixels * (4 + 16) } else { 0 };
-    let expected = header + height as usize + planes * pixels * 4 + adaptive_bytes + 8;
     if bytes.len() >= 8 && bytes[..6] == MAGIC_FAMILY[..] && bytes[..8] != MAGIC[..] {
         return Err(bad(&format!(
             "it was written by another version of Lightpath (format {}; this one reads {}): \
@@ -183,44 +206,90 @@ pub fn read(path: &Path, fingerprint: u64, shape: FilmShape) -> Result<Checkpoin
             String::from_utf8_lossy(MAGIC)
         )));
     }
-    if bytes.len() < header || &bytes[..8] != MAGIC {
+    if bytes.len() < IDENTITY_TEXT + 8 || &bytes[..8] != MAGIC {
         return Err(bad("not a Lightpath checkpoint"));
     }
-    let u32_at =
-        |at: usize| u32::from_le_bytes([bytes[at], bytes[at + 1], bytes[at + 2], bytes[at + 3]]);
-    let mut fp = [0u8; 8];
-    fp.copy_from_slice(&bytes[8..16]);
-    if u64::from_le_bytes(fp) != fingerprint {
-        return Err(bad(
-            "it was made by a different render (another scene, resolution, spp, seed, sample \
-             range or AOV set): run the command that was interrupted, with --resume",
-        ));
-    }
-    let found = (u32_at(16), u32_at(20), u32_at(24) as usize, u32_at(28));
-    let pass = bytes[32];
-    if found != (width, height, planes, spp)
-        || bytes.len() != expected
-        || (pass != 0) != adaptive
-        || pass > 2
-    {
-        return Err(bad(
-            "its size does not match this render (truncated or from another version)",
-        ));
-    }
-    let body = &bytes[..expected - 8];
-    let mut sum = Fnv::default();
+    // The checksum first: nothing below reads a damaged file.
+    let (body, stored) = bytes.split_at(bytes.len() - 8);
+    let mut sum = Fnv64::default();
     sum.write(body);
-    let mut stored = [0u8; 8];
-    stored.copy_from_slice(&bytes[expected - 8..]);
-    if u64::from_le_bytes(stored) != sum.0 {
+    if u64_at(stored, 0) != sum.finish() {
         return Err(bad("its checksum does not match: the file is damaged"));
     }
-    let rows_done = body[header..header + height as usize]
+    let text_end = IDENTITY_TEXT
+        .checked_add(u32_at(body, IDENTITY_TEXT - 4) as usize)
+        .filter(|&end| end <= body.len())
+        .ok_or_else(|| bad("its identity overruns the file"))?;
+    let identity = u64_at(body, 8);
+    if identity != stamp.identity.hash {
+        let earlier = std::str::from_utf8(&body[IDENTITY_TEXT..text_end])
+            .ok()
+            .and_then(|text| Identity::from_text(identity, text));
+        return Err(CheckpointError::SceneChanged {
+            path: path.to_path_buf(),
+            changes: earlier.map_or_else(Vec::new, |e| stamp.identity.changes_since(&e)),
+        });
+    }
+    if u64_at(body, 16) != stamp.fingerprint {
+        return Err(bad(
+            "it was made by a different render of this scene (another spp, sample range, crop \
+             or AOV set): run the command that was interrupted, with --resume",
+        ));
+    }
+    film_of(&body[text_end..], shape).ok_or_else(|| {
+        bad("its size does not match this render (truncated or from another version)")
+    })
+}
+
+/// Where the identity's text starts: after the magic, the identity's hash, the job's
+/// fingerprint and the text's length.
+const IDENTITY_TEXT: usize = 8 + 8 + 8 + 4;
+
+fn u32_at(bytes: &[u8], at: usize) -> u32 {
+    u32::from_le_bytes([bytes[at], bytes[at + 1], bytes[at + 2], bytes[at + 3]])
+}
+
+fn u64_at(bytes: &[u8], at: usize) -> u64 {
+    let mut v = [0u8; 8];
+    v.copy_from_slice(&bytes[at..at + 8]);
+    u64::from_le_bytes(v)
+}
+
+/// The film, rows and pilot a checkpoint's data holds (after its identity, before its
+/// checksum); `None` if they are not of `shape`.
+fn film_of(data: &[u8], shape: FilmShape) -> Option<Checkpoint> {
+    let FilmShape {
+        width,
+        height,
+        aovs,
+        spp,
+        squared,
+        adaptive,
+    } = shape;
+    let planes = Film::stride_with(aovs, squared.len());
+    let pixels = width as usize * height as usize;
+    let header = 16 + 1;
+    let adaptive_bytes = if adaptive { pixels * (4 + 16) } else { 0 };
+    let expected = header + height as usize + planes * pixels * 4 + adaptive_bytes;
+    if data.len() != expected {
+        return None;
+    }
+    let found = (
+        u32_at(data, 0),
+        u32_at(data, 4),
+        u32_at(data, 8) as usize,
+        u32_at(data, 12),
+    );
+    let pass = data[16];
+    if found != (width, height, planes, spp) || (pass != 0) != adaptive || pass > 2 {
+        return None;
+    }
+    let rows_done = data[header..header + height as usize]
         .iter()
         .map(|&b| b == 1)
         .collect();
     let mut film = Film::with_squares(width, height, aovs, spp, squared);
-    let values = &body[header + height as usize..];
+    let values = &data[header + height as usize..];
     let (values, adaptive_values) = values.split_at(planes * pixels * 4);
     for (plane, bytes) in film.planes.iter_mut().zip(values.chunks_exact(pixels * 4)) {
         for (v, b) in plane.iter_mut().zip(bytes.chunks_exact(4)) {
@@ -229,17 +298,8 @@ pub fn read(path: &Path, fingerprint: u64, shape: FilmShape) -> Result<Checkpoin
     }
     let pilot = adaptive.then(|| {
         let (counts, sums) = adaptive_values.split_at(pixels * 4);
-        film.sample_counts = Some(
-            counts
-                .chunks_exact(4)
-                .map(|b| u32::from_le_bytes([b[0], b[1], b[2], b[3]]))
-                .collect(),
-        );
-        let f64_at = |b: &[u8]| {
-            let mut v = [0u8; 8];
-            v.copy_from_slice(b);
-            f64::from_le_bytes(v)
-        };
+        film.sample_counts = Some(counts.chunks_exact(4).map(|b| u32_at(b, 0)).collect());
+        let f64_at = |b: &[u8]| f64::from_bits(u64_at(b, 0));
         Pilot {
             complete: pass == 2,
             sums: sums
@@ -248,7 +308,7 @@ pub fn read(path: &Path, fingerprint: u64, shape: FilmShape) -> Result<Checkpoin
                 .collect(),
         }
     });
-    Ok(Checkpoint {
+    Some(Checkpoint {
         film,
         rows_done,
         pilot,
@@ -258,6 +318,29 @@ pub fn read(path: &Path, fingerprint: u64, shape: FilmShape) -> Result<Checkpoin
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    fn stamp(identity: &Identity, fingerprint: u64) -> Stamp<'_> {
+        Stamp {
+            identity,
+            fingerprint,
+        }
+    }
+
+    /// A scene of two files, the second with `texture` as its bytes.
+    fn identity(texture: &[u8]) -> Identity {
+        use crate::identity::{hash, FileRead};
+        let reads = [
+            FileRead {
+                path: "shot/a.gltf".into(),
+                hash: hash(b"{}"),
+            },
+            FileRead {
+                path: "shot/wood.png".into(),
+                hash: hash(texture),
+            },
+        ];
+        Identity::new(Path::new("shot"), &reads, vec![("seed".into(), "0".into())])
+    }
 
     fn snapshot<'s>(
         film: &'s Film,
@@ -276,6 +359,7 @@ mod tests {
         let dir = std::env::temp_dir().join(format!("lightpath-ckpt-{}", std::process::id()));
         std::fs::create_dir_all(&dir).unwrap();
         let path = dir.join("a.exr.checkpoint");
+        let id = identity(b"png");
         let shape = |aovs: usize, squared: Vec<u32>| FilmShape {
             width: 3,
             height: 2,
@@ -290,35 +374,55 @@ mod tests {
                 *v = (i * 10 + j) as f32 * 0.1 + f32::EPSILON;
             }
         }
-        write(&path, 42, &snapshot(&film, &[true, false], None)).unwrap();
-        let back = read(&path, 42, shape(1, vec![0])).unwrap();
+        write(
+            &path,
+            stamp(&id, 42),
+            &snapshot(&film, &[true, false], None),
+        )
+        .unwrap();
+        let back = read(&path, stamp(&id, 42), shape(1, vec![0])).unwrap();
         assert_eq!(back.rows_done, vec![true, false]);
         for (a, b) in back.film.planes.iter().zip(&film.planes) {
             assert!(a.iter().zip(b).all(|(x, y)| x.to_bits() == y.to_bits()));
         }
-        assert!(read(&path, 43, shape(1, vec![0]))
+        assert!(read(&path, stamp(&id, 43), shape(1, vec![0]))
             .unwrap_err()
+            .to_string()
             .contains("different render"));
+        // The same job after the texture was edited: the error names the file.
+        let edited = identity(b"png, edited");
+        match read(&path, stamp(&edited, 42), shape(1, vec![0])).unwrap_err() {
+            CheckpointError::SceneChanged { changes, .. } => {
+                assert_eq!(changes.len(), 1, "{changes:?}");
+                assert!(changes[0].starts_with("wood.png changed"), "{changes:?}");
+            }
+            other => panic!("{other}"),
+        }
         assert_eq!(back.film.squared, vec![0]);
-        assert!(read(&path, 42, shape(2, vec![0]))
+        assert!(read(&path, stamp(&id, 42), shape(2, vec![0]))
             .unwrap_err()
+            .to_string()
             .contains("size"));
         // The same film without the variance planes is another film.
-        assert!(read(&path, 42, shape(1, vec![]))
+        assert!(read(&path, stamp(&id, 42), shape(1, vec![]))
             .unwrap_err()
+            .to_string()
             .contains("size"));
         let mut bytes = std::fs::read(&path).unwrap();
         let n = bytes.len();
         bytes[n - 20] ^= 1;
         std::fs::write(&path, &bytes).unwrap();
-        assert!(read(&path, 42, shape(1, vec![0]))
+        assert!(read(&path, stamp(&id, 42), shape(1, vec![0]))
             .unwrap_err()
+            .to_string()
             .contains("damaged"));
         std::fs::write(&path, &bytes[..n / 2]).unwrap();
-        assert!(read(&path, 42, shape(1, vec![0])).is_err());
+        assert!(read(&path, stamp(&id, 42), shape(1, vec![0])).is_err());
         bytes[..8].copy_from_slice(b"LPCKPT01");
         std::fs::write(&path, &bytes).unwrap();
-        let old = read(&path, 42, shape(1, vec![0])).unwrap_err();
+        let old = read(&path, stamp(&id, 42), shape(1, vec![0]))
+            .unwrap_err()
+            .to_string();
         assert!(
             old.contains("another version") && old.contains("without --resume"),
             "{old}"
@@ -332,25 +436,38 @@ mod tests {
                 .map(|i| [i as f64 / 3.0, f64::MIN_POSITIVE * i as f64])
                 .collect(),
         };
-        write(&path, 42, &snapshot(&film, &[false, true], Some(&pilot))).unwrap();
+        write(
+            &path,
+            stamp(&id, 42),
+            &snapshot(&film, &[false, true], Some(&pilot)),
+        )
+        .unwrap();
         let adaptive = FilmShape {
             adaptive: true,
             ..shape(1, vec![0])
         };
-        let back = read(&path, 42, adaptive.clone()).unwrap();
+        let back = read(&path, stamp(&id, 42), adaptive.clone()).unwrap();
         assert_eq!(back.rows_done, vec![false, true]);
         assert_eq!(back.film.sample_counts, film.sample_counts);
         assert_eq!(back.pilot.as_ref(), Some(&pilot));
         assert!(
-            read(&path, 42, shape(1, vec![0])).is_err(),
+            read(&path, stamp(&id, 42), shape(1, vec![0])).is_err(),
             "not an adaptive render's"
         );
         let pilot = Pilot {
             complete: false,
             ..pilot
         };
-        write(&path, 42, &snapshot(&film, &[true, false], Some(&pilot))).unwrap();
-        assert_eq!(read(&path, 42, adaptive).unwrap().pilot, Some(pilot));
+        write(
+            &path,
+            stamp(&id, 42),
+            &snapshot(&film, &[true, false], Some(&pilot)),
+        )
+        .unwrap();
+        assert_eq!(
+            read(&path, stamp(&id, 42), adaptive).unwrap().pilot,
+            Some(pilot)
+        );
         std::fs::remove_dir_all(&dir).unwrap();
     }
 }

@@ -5,8 +5,9 @@
 //! render as `lightpath render`.
 
 use crate::aov::{self, AovSpec};
-use crate::checkpoint::{self, Checkpoint};
+use crate::checkpoint::{self, Checkpoint, CheckpointError};
 use crate::film::{Film, PixelWindow};
+use crate::identity::{Identity, Recording};
 use crate::integrator::{FrameRequest, Snapshot};
 use crate::output;
 use crate::post::cryptomatte::MatteTable;
@@ -48,6 +49,10 @@ pub struct RenderJob {
     /// Continue from the checkpoint beside the output (`--resume`): the same command
     /// that was interrupted, plus this flag.
     pub resume: bool,
+    /// With `resume`: when the checkpoint is of the scene before an edit (a file it read
+    /// or an identity setting changed), start over instead of refusing
+    /// (`--restart-if-changed`).
+    pub restart_if_changed: bool,
     /// Write a checkpoint this often while rendering (`--checkpoint-every`).
     pub checkpoint_every: Option<std::time::Duration>,
     /// Set (by a SIGINT/SIGTERM handler) to stop after the rows in flight: the outputs
@@ -98,6 +103,8 @@ pub struct PreparedRender {
     pub frame: FrameRequest,
     /// The header attributes describing the scene and settings.
     pub metadata: Vec<(String, String)>,
+    /// Everything the render read and the settings that decide its pixels.
+    pub identity: Identity,
     /// The checkpoint `--resume` continues from.
     pub resume: Option<Checkpoint>,
 }
@@ -210,6 +217,7 @@ impl RenderJob {
             cryptomatte: None,
             timestamp: false,
             resume: false,
+            restart_if_changed: false,
             checkpoint_every: None,
             cancel: None,
             denoise: None,
@@ -230,6 +238,8 @@ impl RenderJob {
                 crate::geometry::Backend::EMBREE_UNAVAILABLE.into(),
             ));
         }
+        // Every file read from here to the built scene is an input of its identity.
+        let recording = Recording::start();
         let source = crate::load_source(&self.scene)?;
         let mut desc = source.parse()?;
         if let Some(name) = &self.camera {
@@ -247,6 +257,11 @@ impl RenderJob {
             .check_aovs(specs.len() as u64, "this render's AOV plan")
             .map_err(Error::Setting)?;
         let mut scene = Scene::build(&desc, &specs)?;
+        let identity = Identity::new(
+            &source.dir,
+            &recording.finish(),
+            crate::identity::settings(&desc, self.camera.as_deref()),
+        );
         scene
             .accel
             .use_backend(self.accel)
@@ -264,51 +279,18 @@ impl RenderJob {
         let (width, height) = (scene.camera.width, scene.camera.height);
         let window = self.crop.unwrap_or(PixelWindow::full(width, height));
         window.check(width, height).map_err(Error::Plan)?;
-        let hash = output::naming::scene_hash(&source.text, &desc).map_err(Error::Plan)?;
-        let metadata = output::naming::settings_attributes(&scene, hash, window);
+        let metadata = output::naming::settings_attributes(&scene, &identity, window);
         let mattes = self
             .cryptomatte
             .map(|ranks| matte_table(&desc, &scene, ranks));
         let checkpoint_path = checkpoint::path_for(&paths.exr);
-        let resume = if self.resume {
-            if mattes.is_some() {
-                return Err(Error::Setting(
-                    "--resume with --cryptomatte: a checkpoint does not hold Cryptomatte \
-                     layers; render again without --resume"
-                        .into(),
-                ));
-            }
-            if !checkpoint_path.exists() {
-                return Err(Error::Setting(format!(
-                    "--resume: there is no checkpoint {} (it is written when a render is \
-                     interrupted, or with --checkpoint-every)",
-                    checkpoint_path.display()
-                )));
-            }
-            let checkpoint = checkpoint::read(
-                &checkpoint_path,
-                fingerprint(&source, &scene, self.first_sample, window),
-                checkpoint::FilmShape {
-                    width: window.width(),
-                    height: window.height(),
-                    aovs: scene.aovs.len(),
-                    spp: scene.settings.spp,
-                    squared: scene.variance_aovs.clone(),
-                    adaptive: scene.settings.noise_threshold > 0.0,
-                },
-            )
-            .map_err(Error::Setting)?;
-            Some(checkpoint)
-        } else {
-            if checkpoint_path.exists() {
-                warnings.push(format!(
-                    "{} is there from an interrupted render: this render starts afresh and \
-                     replaces it (add --resume to continue it instead)",
-                    checkpoint_path.display()
-                ));
-            }
-            None
-        };
+        let resume = self.checkpoint(
+            &checkpoint_path,
+            (&scene, &identity),
+            window,
+            mattes.is_some(),
+            &mut warnings,
+        )?;
         Ok(PreparedRender {
             job: self,
             source,
@@ -317,8 +299,66 @@ impl RenderJob {
             warnings,
             frame: FrameRequest { window, mattes },
             metadata,
+            identity,
             resume,
         })
+    }
+
+    /// The checkpoint `--resume` continues from: refused when it is not of this render,
+    /// unless the scene changed and the job may start over (`restart_if_changed`). Without
+    /// `--resume`, a checkpoint there is a warning: this render replaces it.
+    fn checkpoint(
+        &self,
+        checkpoint_path: &std::path::Path,
+        (scene, identity): (&Scene, &Identity),
+        window: PixelWindow,
+        mattes: bool,
+        warnings: &mut Vec<String>,
+    ) -> Result<Option<Checkpoint>, Error> {
+        if !self.resume {
+            if checkpoint_path.exists() {
+                warnings.push(format!(
+                    "{} is there from an interrupted render: this render starts afresh and \
+                     replaces it (add --resume to continue it instead)",
+                    checkpoint_path.display()
+                ));
+            }
+            return Ok(None);
+        }
+        if mattes {
+            return Err(Error::Setting(
+                "--resume with --cryptomatte: a checkpoint does not hold Cryptomatte \
+                 layers; render again without --resume"
+                    .into(),
+            ));
+        }
+        if !checkpoint_path.exists() {
+            return Err(Error::Setting(format!(
+                "--resume: there is no checkpoint {} (it is written when a render is \
+                 interrupted, or with --checkpoint-every)",
+                checkpoint_path.display()
+            )));
+        }
+        let stamp = checkpoint::Stamp {
+            identity,
+            fingerprint: fingerprint(scene, self.first_sample, window),
+        };
+        let shape = checkpoint::FilmShape {
+            width: window.width(),
+            height: window.height(),
+            aovs: scene.aovs.len(),
+            spp: scene.settings.spp,
+            squared: scene.variance_aovs.clone(),
+            adaptive: scene.settings.noise_threshold > 0.0,
+        };
+        match checkpoint::read(checkpoint_path, stamp, shape) {
+            Ok(checkpoint) => Ok(Some(checkpoint)),
+            Err(e @ CheckpointError::SceneChanged { .. }) if self.restart_if_changed => {
+                warnings.push(format!("{e}: starting over (--restart-if-changed)"));
+                Ok(None)
+            }
+            Err(e) => Err(Error::Setting(e.to_string())),
+        }
     }
 
     /// The AOVs whose variance is written: the command line's and the scene's, by name
@@ -423,6 +463,7 @@ impl PreparedRender {
             paths,
             frame,
             metadata,
+            identity,
             resume,
             ..
         } = self;
@@ -431,7 +472,10 @@ impl PreparedRender {
             first_sample: job.first_sample,
         };
         let checkpoint_path = checkpoint::path_for(&paths.exr);
-        let fingerprint = fingerprint(&source, &scene, job.first_sample, frame.window);
+        let stamp = checkpoint::Stamp {
+            identity: &identity,
+            fingerprint: fingerprint(&scene, job.first_sample, frame.window),
+        };
         let mut last_checkpoint = std::time::Instant::now();
         let mut checkpoint_error = None;
         let mut save = |snapshot: &Snapshot| {
@@ -441,7 +485,7 @@ impl PreparedRender {
             let unfinished = snapshot.pilot.is_some_and(|p| !p.complete)
                 || !snapshot.rows_done.iter().all(|d| *d);
             if last_checkpoint.elapsed() >= every && unfinished {
-                if let Err(e) = checkpoint::write(&checkpoint_path, fingerprint, snapshot) {
+                if let Err(e) = checkpoint::write(&checkpoint_path, stamp, snapshot) {
                     checkpoint_error.get_or_insert(e);
                 }
                 last_checkpoint = std::time::Instant::now();
@@ -492,7 +536,7 @@ impl PreparedRender {
                 rows_done: &rows_done,
                 pilot: pilot.as_ref(),
             };
-            checkpoint::write(&checkpoint_path, fingerprint, &snapshot).map_err(Error::Output)?;
+            checkpoint::write(&checkpoint_path, stamp, &snapshot).map_err(Error::Output)?;
         }
         let overflowed = film
             .planes
@@ -622,10 +666,10 @@ fn remove_if_there(path: &std::path::Path, what: &str) -> Result<(), Error> {
     }
 }
 
-/// What a checkpoint must match to be resumed: everything that decides the pixels (the
-/// scene text, the settings after overrides, the film and window, the sample range, the
+/// What a checkpoint must match to be resumed besides the scene's identity: the rest of
+/// the job (the settings after overrides, the film and window, the sample range, the
 /// AOVs).
-fn fingerprint(source: &Source, scene: &Scene, first_sample: u32, window: PixelWindow) -> u64 {
+fn fingerprint(scene: &Scene, first_sample: u32, window: PixelWindow) -> u64 {
     let settings: String = crate::settings::all_pairs(&scene.settings)
         .iter()
         .map(|(k, v)| format!("{k}={v}\n"))
@@ -639,12 +683,7 @@ fn fingerprint(source: &Source, scene: &Scene, first_sample: u32, window: PixelW
         .iter()
         .map(|a| format!("{}={}\n", a.name, a.definition))
         .collect();
-    checkpoint::fingerprint(&[
-        source.name.as_bytes(),
-        source.text.as_bytes(),
-        settings.as_bytes(),
-        aovs.as_bytes(),
-    ])
+    checkpoint::fingerprint(&[settings.as_bytes(), aovs.as_bytes()])
 }
 
 /// Replaces a render's EXR by its denoised version and its preview by the denoised beauty.

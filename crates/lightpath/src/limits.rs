@@ -117,7 +117,8 @@ impl Limits {
 
 /// Reads an input file whole, within `file_bytes`: a device or a FIFO (`/dev/zero` named
 /// as an OBJ) is refused before reading, and a file that grows past the limit while being
-/// read is cut off with an error.
+/// read is cut off with an error. Every file a render reads comes through here, and is
+/// noted in the render's identity (`identity.rs`).
 pub fn read_input(path: &std::path::Path) -> Result<Vec<u8>, String> {
     use std::io::Read;
     let limits = Limits::current();
@@ -132,6 +133,7 @@ pub fn read_input(path: &std::path::Path) -> Result<Vec<u8>, String> {
         .read_to_end(&mut bytes)
         .map_err(|e| format!("cannot read: {e}"))?;
     limits.check_file_bytes(bytes.len() as u64, "reading this file")?;
+    crate::identity::note_read(path, &bytes);
     Ok(bytes)
 }
 

@@ -11,11 +11,14 @@
 //! - `lightpath/expression/<name>`: the AOV's expression as compiled (a standard name
 //!   expanded, prefixes included) beside what the user wrote.
 //! - `lightpath/scene`, `lightpath/spp`, `lightpath/first_sample`, `lightpath/seed`.
-//! - `lightpath/scene_hash`: FNV-1a 64 of the scene's content (its text, meshes and maps).
+//! - `lightpath/identity`: the hash of everything that decides the render's pixels (every
+//!   file it read and its identity settings); `lightpath/inputs`: the manifest of those
+//!   files, one `<hash> <path>` line each (`identity.rs`).
 //! - `lightpath/samples`: the sample ranges the file holds (`0-64` or, merged,
 //!   `0-64 64-128`); `lightpath/crop`: the pixel window rendered (`X0,Y0,X1,Y1`).
-//! - `lightpath/setting/<name>`: every other render setting (depth limits, clamps,
-//!   sampler, filter, resolution): parts of one frame must agree on all of them.
+//! - `lightpath/setting/<name>`: every other setting of the render's identity (depth
+//!   limits, clamps, sampler, filter, resolution, camera): parts of one frame must agree
+//!   on all of them.
 //! - Standard attributes: `software`, `chromaticities`, `worldToCamera`, `worldToNDC`,
 //!   and `capDate` only with `--timestamp`; `cryptomatte/<key>/…` for Cryptomatte layers.
 //! - `lightpath/kind/<name>`: what AOV `<name>` holds: `light` (radiance: what a denoiser
@@ -64,7 +67,8 @@ pub const FIRST_SAMPLE_ATTRIBUTE: &str = "lightpath/first_sample";
 pub const INTERRUPTED_ATTRIBUTE: &str = "lightpath/interrupted";
 pub const SEED_ATTRIBUTE: &str = "lightpath/seed";
 pub const EXPRESSION_ATTRIBUTE_PREFIX: &str = "lightpath/expression/";
-pub const SCENE_HASH_ATTRIBUTE: &str = "lightpath/scene_hash";
+pub const IDENTITY_ATTRIBUTE: &str = "lightpath/identity";
+pub const INPUTS_ATTRIBUTE: &str = "lightpath/inputs";
 pub const SAMPLES_ATTRIBUTE: &str = "lightpath/samples";
 pub const CROP_ATTRIBUTE: &str = "lightpath/crop";
 pub const SETTING_ATTRIBUTE_PREFIX: &str = "lightpath/setting/";

@@ -183,12 +183,18 @@ impl MipMap {
     }
 
     /// Decodes a PNG, JPEG or EXR image (told apart by their first bytes) to linear
-    /// RGBA; 8- and 16-bit images by `space`, EXR as stored.
+    /// RGBA; 8- and 16-bit images by `space`, EXR as stored. The size its header declares
+    /// is checked against the limits (`limits.rs`) before any pixel is allocated.
     pub fn decode(bytes: &[u8], space: ColorSpace) -> Result<MipMap, String> {
         if bytes.starts_with(&[0x76, 0x2f, 0x31, 0x01]) {
-            return decode_exr(bytes);
+            let (w, h, texels) = crate::output::decode_exr_rgba(bytes)?;
+            if w == 0 || h == 0 {
+                return Err("the image is empty".into());
+            }
+            let texels = texels.into_iter().map(Vec4::from_array).collect();
+            return Ok(MipMap::new(w as u32, h as u32, texels));
         }
-        let img = image::load_from_memory(bytes).map_err(|e| e.to_string())?;
+        let img = decode_8_or_16_bit(bytes)?;
         let (w, h) = (img.width(), img.height());
         if w == 0 || h == 0 {
             return Err("the image is empty".into());
@@ -239,38 +245,38 @@ impl MipMap {
         Ok(MipMap::new(w, h, texels))
     }
 
-    /// Reads and decodes an image file.
+    /// Reads and decodes an image file, through `limits::read_input` like every input of
+    /// a render (within the input-size limit, and noted in the render's identity).
     pub fn read(path: &Path, space: ColorSpace) -> Result<MipMap, String> {
-        let bytes = std::fs::read(path).map_err(|e| format!("cannot read it: {e}"))?;
+        let bytes = crate::limits::read_input(path).map_err(|e| format!("cannot read it: {e}"))?;
         MipMap::decode(&bytes, space)
     }
 }
 
-fn decode_exr(bytes: &[u8]) -> Result<MipMap, String> {
-    use exr::prelude::*;
-    let image = read()
-        .no_deep_data()
-        .largest_resolution_level()
-        .rgba_channels(
-            |res, _| (res.width(), vec![Vec4::ZERO; res.width() * res.height()]),
-            |(w, px), pos, (r, g, b, a): (f32, f32, f32, f32)| {
-                px[pos.y() * *w + pos.x()] = Vec4::new(r, g, b, a)
-            },
-        )
-        .first_valid_layer()
-        .all_attributes()
-        .from_buffered(std::io::Cursor::new(bytes))
-        .map_err(|e| e.to_string())?;
-    let size = image.layer_data.size;
-    let (_, texels) = image.layer_data.channel_data.pixels;
-    if size.width() == 0 || size.height() == 0 {
-        return Err("the image is empty".into());
-    }
-    Ok(MipMap::new(
-        size.width() as u32,
-        size.height() as u32,
-        texels,
-    ))
+/// Bytes per texel a decoded 8- or 16-bit image costs at most: the decoder's image (up to
+/// 8), its RGBA conversion (up to 16), and the mip-mapped texels (16, a third more for the
+/// smaller levels).
+const DECODE_BYTES_PER_TEXEL: u64 = 8 + 16 + 22;
+
+/// A PNG or JPEG, after checking the size its header declares against the pixel and
+/// memory limits; the decoder is held to the memory limit too.
+fn decode_8_or_16_bit(bytes: &[u8]) -> Result<image::DynamicImage, String> {
+    let limits = crate::limits::Limits::current();
+    let reader = || {
+        image::ImageReader::new(std::io::Cursor::new(bytes))
+            .with_guessed_format()
+            .map_err(|e| e.to_string())
+    };
+    let (w, h) = reader()?.into_dimensions().map_err(|e| e.to_string())?;
+    let texels = w as u64 * h as u64;
+    let what = format!("a {w}x{h} texture");
+    limits.check_pixels(texels, &what)?;
+    limits.check_memory(texels.saturating_mul(DECODE_BYTES_PER_TEXEL), &what)?;
+    let mut reader = reader()?;
+    let mut decoder_limits = image::Limits::default();
+    decoder_limits.max_alloc = Some(limits.memory);
+    reader.limits(decoder_limits);
+    reader.decode().map_err(|e| e.to_string())
 }
 
 /// A placement of texture coordinates (KHR_texture_transform): `uv' = M·(u, v, 1)`,
@@ -454,6 +460,42 @@ mod tests {
         assert!((d.x - 128.0 / 255.0).abs() < 1e-6);
         assert_eq!((c.y, c.z, c.w), (1.0, 0.0, 1.0));
         assert!(MipMap::decode(b"not an image", ColorSpace::Srgb).is_err());
+    }
+
+    #[test]
+    fn a_texture_declaring_more_pixels_than_the_limit_is_refused_before_decoding() {
+        // A PNG signature, a header (IHDR) of 65535 × 65535 RGBA8 texels and no
+        // pixel data: 17 GB, were it allocated.
+        let mut png = b"\x89PNG\r\n\x1a\n\0\0\0\x0dIHDR".to_vec();
+        png.extend(65535u32.to_be_bytes());
+        png.extend(65535u32.to_be_bytes());
+        png.extend([8, 6, 0, 0, 0]);
+        let crc = png_crc(&png[12..]);
+        png.extend(crc.to_be_bytes());
+        // An empty IDAT chunk: the header is read up to the first one.
+        png.extend(b"\0\0\0\0IDAT");
+        png.extend(png_crc(b"IDAT").to_be_bytes());
+        let e = MipMap::decode(&png, ColorSpace::Srgb).unwrap_err();
+        assert!(
+            e.contains("65535x65535 texture") && e.contains("LIGHTPATH_MAX_"),
+            "{e}"
+        );
+    }
+
+    /// The CRC-32 PNG chunks end with (ISO 3309).
+    fn png_crc(bytes: &[u8]) -> u32 {
+        let mut c = !0u32;
+        for &b in bytes {
+            c ^= b as u32;
+            for _ in 0..8 {
+                c = if c & 1 == 1 {
+                    0xedb8_8320 ^ (c >> 1)
+                } else {
+                    c >> 1
+                };
+            }
+        }
+        !c
     }
 
     #[test]

@@ -8,12 +8,15 @@ pub mod atomic;
 mod exr;
 pub mod naming;
 mod png;
+mod read;
 pub mod target;
 
 pub use self::exr::{
-    aov_attributes, check_exr_file, derived_aovs, read_exr, shadow_matte, software, stage_film,
-    stage_image, write_channels, write_exr, write_film, write_image, DerivedAov, ExrCompression,
-    ExrContents, ExrHeader, ExrOptions,
+    aov_attributes, derived_aovs, shadow_matte, software, stage_film, stage_image, write_channels,
+    write_exr, write_film, write_image, DerivedAov, ExrCompression, ExrHeader, ExrOptions,
 };
 pub use self::png::{stage_png, stage_png_rgb, write_png, write_png_rgb};
+pub use self::read::{
+    check_exr_file, decode_exr_rgba, read_exr, read_exr_header, ExrContents, ExrLayout,
+};
 pub use crate::aov::naming::{channel_names, AOV_ATTRIBUTE_PREFIX};

@@ -2,12 +2,11 @@
 //! answer, so the binary only passes its arguments through.
 
 use crate::aov::naming::{
-    format_ranges, CROP_ATTRIBUTE, FIRST_SAMPLE_ATTRIBUTE, SAMPLES_ATTRIBUTE, SCENE_ATTRIBUTE,
-    SCENE_HASH_ATTRIBUTE,
+    format_ranges, CROP_ATTRIBUTE, FIRST_SAMPLE_ATTRIBUTE, IDENTITY_ATTRIBUTE, INPUTS_ATTRIBUTE,
+    SAMPLES_ATTRIBUTE, SCENE_ATTRIBUTE,
 };
 use crate::film::PixelWindow;
-use crate::scene::desc::{LightKind, SceneDesc};
-use crate::scene::Scene;
+use crate::identity::Identity;
 use std::path::{Path, PathBuf};
 
 /// The files one render writes.
@@ -82,70 +81,26 @@ impl RenderMetadata {
 }
 
 /// Every render setting (`settings.rs`: `lightpath/spp`, `lightpath/seed` and
-/// `lightpath/setting/<name>`), plus the scene's hash and the crop.
+/// `lightpath/setting/<name>`), the render's identity (`identity.rs`: its hash and its
+/// manifest of inputs), and the crop.
 pub fn settings_attributes(
-    scene: &Scene,
-    scene_hash: u64,
+    scene: &crate::scene::Scene,
+    identity: &Identity,
     crop: PixelWindow,
 ) -> Vec<(String, String)> {
     let mut out = crate::settings::header_attributes(&scene.settings);
-    out.push((SCENE_HASH_ATTRIBUTE.into(), format!("{scene_hash:016x}")));
+    // The camera is part of the identity but no render setting.
+    out.extend(
+        identity
+            .settings
+            .iter()
+            .filter(|(k, _)| k == "camera")
+            .map(|(k, v)| (crate::identity::setting_attribute(k), v.clone())),
+    );
+    out.push((IDENTITY_ATTRIBUTE.into(), identity.hash_text()));
+    out.push((INPUTS_ATTRIBUTE.into(), identity.manifest()));
     out.push((CROP_ATTRIBUTE.into(), crop.to_string()));
     out
-}
-
-/// FNV-1a, 64 bits: the scene hash (stable across machines and versions, unlike
-/// `std`'s hasher).
-#[derive(Clone, Copy, Debug)]
-pub struct Fnv64(pub u64);
-
-impl Default for Fnv64 {
-    fn default() -> Self {
-        Fnv64(0xcbf2_9ce4_8422_2325)
-    }
-}
-
-impl Fnv64 {
-    pub fn write(&mut self, bytes: &[u8]) {
-        for &b in bytes {
-            self.0 ^= b as u64;
-            self.0 = self.0.wrapping_mul(0x0100_0000_01b3);
-        }
-    }
-}
-
-/// The hash of a scene's content: its text, every mesh's data (OBJ files included, as
-/// loaded) and the bytes of every map it reads. Two parts of a farm render compare it
-/// to know they rendered the same scene, wherever the file lay.
-pub fn scene_hash(text: &str, desc: &SceneDesc) -> Result<u64, String> {
-    let mut h = Fnv64::default();
-    h.write(text.as_bytes());
-    for o in &desc.objects {
-        if let Some(parts) = o.shape.mesh_parts() {
-            for m in parts {
-                for p in &m.positions {
-                    p.iter().for_each(|v| h.write(&v.to_le_bytes()));
-                }
-                for t in &m.indices {
-                    t.iter().for_each(|v| h.write(&v.to_le_bytes()));
-                }
-                for n in m.normals.iter().flatten() {
-                    n.iter().for_each(|v| h.write(&v.to_le_bytes()));
-                }
-            }
-        }
-    }
-    for l in &desc.lights {
-        if let LightKind::Dome {
-            map: Some((path, origin)),
-        } = &l.kind
-        {
-            let bytes = std::fs::read(path)
-                .map_err(|e| format!("{origin}: cannot read {}: {e}", path.display()))?;
-            h.write(&bytes);
-        }
-    }
-    Ok(h.0)
 }
 
 /// A UTC date as `capDate` writes it (`YYYY:MM:DD hh:mm:ss`), from seconds since 1970.
@@ -191,17 +146,5 @@ mod tests {
         assert_eq!(capture_date(0), "1970:01:01 00:00:00");
         assert_eq!(capture_date(951_782_400), "2000:02:29 00:00:00");
         assert_eq!(capture_date(1_798_761_599), "2026:12:31 23:59:59");
-    }
-
-    #[test]
-    fn fnv_matches_its_reference_values() {
-        let mut h = Fnv64::default();
-        h.write(b"");
-        assert_eq!(h.0, 0xcbf2_9ce4_8422_2325);
-        h.write(b"a");
-        assert_eq!(h.0, 0xaf63_dc4c_8601_ec8c);
-        let mut h = Fnv64::default();
-        h.write(b"foobar");
-        assert_eq!(h.0, 0x8594_4171_f739_67e8);
     }
 }

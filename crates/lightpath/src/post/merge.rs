@@ -4,7 +4,8 @@
 //! Every part's header is read and checked before any pixel is: the parts must show the
 //! same frame (display window), the same channels and every header attribute but the
 //! ones that say which part it is (`lightpath/spp`, `first_sample`, `samples`, `crop`,
-//! `scene`: the path may differ between machines; the scene's hash may not). Parts with
+//! `scene`: the path may differ between machines; the scene's identity may not, and when
+//! it differs the manifests of inputs name the file that changed). Parts with
 //! the same window are sample ranges of it: their ranges may not overlap (a merged file
 //! lists every range it holds, so merging it again with one of its parts is refused).
 //! Parts with different windows are tiles: they may not overlap, must hold the same
@@ -17,11 +18,12 @@
 //! one at a time: the memory is one part plus the merged window's sums.
 
 use crate::aov::naming::{
-    format_ranges, parse_ranges, CROP_ATTRIBUTE, FIRST_SAMPLE_ATTRIBUTE, INTERRUPTED_ATTRIBUTE,
-    SAMPLES_ATTRIBUTE, SAMPLE_COUNT_CHANNEL, SCENE_ATTRIBUTE, SPP_ATTRIBUTE,
+    format_ranges, parse_ranges, CROP_ATTRIBUTE, FIRST_SAMPLE_ATTRIBUTE, IDENTITY_ATTRIBUTE,
+    INPUTS_ATTRIBUTE, INTERRUPTED_ATTRIBUTE, SAMPLES_ATTRIBUTE, SAMPLE_COUNT_CHANNEL,
+    SCENE_ATTRIBUTE, SPP_ATTRIBUTE,
 };
 use crate::film::PixelWindow;
-use crate::output::{read_exr, write_image, ExrHeader, ExrOptions};
+use crate::output::{read_exr, read_exr_header, write_image, ExrHeader, ExrOptions};
 use crate::post::cryptomatte;
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
@@ -63,46 +65,14 @@ struct Part {
 
 impl Part {
     fn read(path: &Path) -> Result<Part, String> {
-        let meta = ::exr::meta::MetaData::read_from_file(path, false)
-            .map_err(|e| format!("cannot read {}: {e}", path.display()))?;
-        let header = meta
-            .headers
-            .first()
-            .ok_or_else(|| format!("{}: no image in the file", path.display()))?;
-        let display = header.shared_attributes.display_window;
-        let pos = header.own_attributes.layer_position;
-        let (x0, y0) = (
-            pos.x() - display.position.x(),
-            pos.y() - display.position.y(),
-        );
-        let size = header.layer_size;
-        if x0 < 0
-            || y0 < 0
-            || x0 as usize + size.width() > display.size.width()
-            || y0 as usize + size.height() > display.size.height()
-        {
-            return Err(format!(
-                "{}: its data window is not inside its display window",
-                path.display()
-            ));
-        }
+        let layout = read_exr_header(path)?;
         let window = PixelWindow {
-            x0: x0 as u32,
-            y0: y0 as u32,
-            x1: x0 as u32 + size.width() as u32,
-            y1: y0 as u32 + size.height() as u32,
+            x0: layout.origin[0],
+            y0: layout.origin[1],
+            x1: layout.origin[0] + layout.width as u32,
+            y1: layout.origin[1] + layout.height as u32,
         };
-        let text: BTreeMap<String, String> = header
-            .own_attributes
-            .other
-            .iter()
-            .filter_map(|(k, v)| match v {
-                ::exr::meta::attribute::AttributeValue::Text(t) => {
-                    Some((k.to_string(), t.to_string()))
-                }
-                _ => None,
-            })
-            .collect();
+        let text: BTreeMap<String, String> = layout.attributes.into_iter().collect();
         if text.contains_key(INTERRUPTED_ATTRIBUTE) {
             return Err(format!(
                 "{} is an interrupted render (some rows are empty): finish it with --resume first",
@@ -144,16 +114,11 @@ impl Part {
                 }
             }
         };
-        let mut channels: Vec<String> = header
-            .channels
-            .list
-            .iter()
-            .map(|c| c.name.to_string())
-            .collect();
+        let mut channels = layout.channels;
         channels.sort();
         Ok(Part {
             path: path.to_path_buf(),
-            frame: [display.size.width() as u32, display.size.height() as u32],
+            frame: layout.frame,
             window,
             ranges,
             channels,
@@ -199,8 +164,13 @@ fn same_frame(a: &Part, b: &Part) -> Result<(), String> {
             only(b, a)
         ));
     }
+    changed_inputs(a, b)?;
     let keys: std::collections::BTreeSet<&String> = a.text.keys().chain(b.text.keys()).collect();
-    for k in keys {
+    // The identity last: a setting that differs is named by its own attribute.
+    let (identity, others): (Vec<&String>, Vec<&String>) = keys
+        .into_iter()
+        .partition(|k| [IDENTITY_ATTRIBUTE, INPUTS_ATTRIBUTE].contains(&k.as_str()));
+    for k in others.into_iter().chain(identity) {
         if per_part(k) {
             continue;
         }
@@ -223,6 +193,34 @@ fn same_frame(a: &Part, b: &Part) -> Result<(), String> {
         }
     }
     Ok(())
+}
+
+/// Parts of different scenes (`lightpath/identity` differs): the files that changed
+/// between them, from their manifests (`identity.rs`). A differing setting is left to
+/// the attribute that names it.
+fn changed_inputs(a: &Part, b: &Part) -> Result<(), String> {
+    if a.text.get(IDENTITY_ATTRIBUTE) == b.text.get(IDENTITY_ATTRIBUTE) {
+        return Ok(());
+    }
+    let manifest = |p: &Part| {
+        p.text
+            .get(INPUTS_ATTRIBUTE)
+            .and_then(|m| crate::identity::parse_manifest(m))
+    };
+    let (Some(ma), Some(mb)) = (manifest(a), manifest(b)) else {
+        return Ok(());
+    };
+    let changes = crate::identity::input_changes(&ma, &mb);
+    if changes.is_empty() {
+        return Ok(());
+    }
+    Err(format!(
+        "{} and {} are renders of different scenes: {} (from the first to the second; \
+         render every part from the same files)",
+        a.name(),
+        b.name(),
+        changes.join("; ")
+    ))
 }
 
 fn overlaps(a: &PixelWindow, b: &PixelWindow) -> bool {

@@ -141,7 +141,15 @@ fn identical_renders_are_identical_files_and_the_header_explains_them() {
     ] {
         assert_eq!(raw.text(k).as_deref(), Some(v), "{k}");
     }
-    assert_eq!(raw.text("lightpath/scene_hash").unwrap().len(), 16);
+    assert_eq!(
+        raw.text("lightpath/setting/camera").as_deref(),
+        Some("default")
+    );
+    assert_eq!(raw.text("lightpath/identity").unwrap().len(), 16);
+    // The manifest: the built-in scene is the one input, with its hash.
+    let inputs = raw.text("lightpath/inputs").unwrap();
+    let (hash, path) = inputs.trim_end().split_once(' ').unwrap();
+    assert_eq!((hash.len(), path), (16, "builtin:cornell"), "{inputs}");
     // Cryptomatte ids are float32 even when the rest is half.
     render(
         "cornell",
@@ -531,7 +539,10 @@ fn merges_that_should_fail_fail_naming_the_reason() {
     let why = refuse(&mut merge(&[&a, &aov], "x.exr"));
     assert!(why.contains("channels") && why.contains("x.R"), "{why}");
     let why = refuse(&mut merge(&[&a, &other], "x.exr"));
-    assert!(why.contains("lightpath/scene_hash"), "{why}");
+    assert!(
+        why.contains("different scenes") && why.contains("other.toml is read now"),
+        "{why}"
+    );
     // A merged file records its ranges: merging it again with a part double-counts.
     succeed(&mut merge(&[&a, &c], "ac.exr"));
     let why = refuse(&mut merge(&[&dir.join("ac.exr"), &c], "x.exr"));

@@ -444,7 +444,13 @@ fn a_cancelled_render_resumed_from_its_checkpoint_equals_the_uninterrupted_one_b
         rows_done: &part.rows_done,
         pilot: None,
     };
-    lightpath::checkpoint::write(&path, 7, &snapshot).unwrap();
+    // A checkpoint of some scene: its identity does not matter here.
+    let identity = lightpath::identity::Identity::new(std::path::Path::new(""), &[], Vec::new());
+    let stamp = lightpath::checkpoint::Stamp {
+        identity: &identity,
+        fingerprint: 7,
+    };
+    lightpath::checkpoint::write(&path, stamp, &snapshot).unwrap();
     let shape = lightpath::checkpoint::FilmShape {
         width: 24,
         height: 40,
@@ -453,7 +459,7 @@ fn a_cancelled_render_resumed_from_its_checkpoint_equals_the_uninterrupted_one_b
         squared: Vec::new(),
         adaptive: false,
     };
-    let back = lightpath::checkpoint::read(&path, 7, shape).unwrap();
+    let back = lightpath::checkpoint::read(&path, stamp, shape).unwrap();
     std::fs::remove_dir_all(&dir).unwrap();
     let resumed = render_resumable(
         &scene,

@@ -10,6 +10,7 @@ mod embree;
 mod farm;
 mod gltf;
 mod hostile;
+mod identity;
 mod meshes;
 mod mutation;
 mod newcomer;

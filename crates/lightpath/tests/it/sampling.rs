@@ -256,6 +256,12 @@ fn an_interrupted_adaptive_render_resumes_bit_for_bit() {
     let dir = std::env::temp_dir().join(format!("lightpath-adaptive-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     let path = dir.join("a.exr.checkpoint");
+    // A checkpoint of some scene: its identity does not matter here.
+    let identity = lightpath::identity::Identity::new(std::path::Path::new(""), &[], Vec::new());
+    let stamp = lightpath::checkpoint::Stamp {
+        identity: &identity,
+        fingerprint: 7,
+    };
     // 40 rows in bands of 8: bands 1–5 are the pilot's, 6–10 the second pass's.
     for stop_after in [2, 5, 7] {
         let cancel = AtomicBool::new(false);
@@ -264,7 +270,7 @@ fn an_interrupted_adaptive_render_resumes_bit_for_bit() {
             bands += 1;
             if bands == stop_after {
                 cancel.store(true, Ordering::SeqCst);
-                checkpoint::write(&path, 7, snapshot).unwrap();
+                checkpoint::write(&path, stamp, snapshot).unwrap();
             }
         };
         let part = render_resumable(
@@ -288,7 +294,7 @@ fn an_interrupted_adaptive_render_resumes_bit_for_bit() {
             squared: Vec::new(),
             adaptive: true,
         };
-        let back = checkpoint::read(&path, 7, shape).unwrap();
+        let back = checkpoint::read(&path, stamp, shape).unwrap();
         // After band 5 every pilot row is done, but the pass is not yet marked complete.
         assert_eq!(back.pilot.as_ref().unwrap().complete, stop_after > 5);
         let resumed = render_resumable(

@@ -238,6 +238,10 @@ pub(crate) struct RenderArgs {
     /// command plus --resume. The finished image equals an uninterrupted render's.
     #[arg(long)]
     pub(crate) resume: bool,
+    /// With --resume: if the scene changed since the checkpoint was written (a file it
+    /// read, or a setting that decides its pixels), start over instead of refusing.
+    #[arg(long, requires = "resume")]
+    pub(crate) restart_if_changed: bool,
     /// Also write a checkpoint every SECONDS while rendering (a render killed outright
     /// then loses at most that much).
     #[arg(long, value_name = "SECONDS", value_parser = parse_seconds)]

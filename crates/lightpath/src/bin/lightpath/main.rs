@@ -217,6 +217,7 @@ fn render(args: RenderArgs) -> ExitCode {
         cryptomatte: args.cryptomatte.then_some(args.cryptomatte_ranks),
         timestamp: args.timestamp,
         resume: args.resume,
+        restart_if_changed: args.restart_if_changed,
         checkpoint_every: args
             .checkpoint_every
             .map(std::time::Duration::from_secs_f64),

@@ -265,24 +265,20 @@ fn parallelogram(prims: &[Prim]) -> Option<[Vec3A; 3]> {
 }
 
 fn load_env(path: &Path, origin: &Origin) -> Result<EnvMap, SceneError> {
-    use exr::prelude::*;
-    crate::output::check_exr_file(path).map_err(|e| origin.error(e))?;
-    let image = read_first_rgba_layer_from_file(
-        path,
-        |res, _| (res.width(), vec![Vec3A::ZERO; res.width() * res.height()]),
-        |(w, px), pos, (r, g, b, _a): (f32, f32, f32, f32)| {
-            px[pos.y() * *w + pos.x()] = Vec3A::new(r, g, b)
-        },
-    )
-    .map_err(|e| {
+    let cannot = |e: String| {
         origin.error(format!(
             "cannot read environment map {}: {e}",
             path.display()
         ))
-    })?;
-    let size = image.layer_data.size;
-    let (_, texels) = image.layer_data.channel_data.pixels;
-    Ok(EnvMap::new(size.width(), size.height(), texels))
+    };
+    // Read as every input is (limits, identity), decoded by the one EXR reader.
+    let bytes = crate::limits::read_input(path).map_err(cannot)?;
+    let (w, h, texels) = crate::output::decode_exr_rgba(&bytes).map_err(cannot)?;
+    let texels = texels
+        .into_iter()
+        .map(|[r, g, b, _]| Vec3A::new(r, g, b))
+        .collect();
+    Ok(EnvMap::new(w, h, texels))
 }
 
 /// Light linking, resolved per object once: each object's `unlit_by`.

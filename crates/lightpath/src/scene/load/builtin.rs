@@ -16,11 +16,16 @@ pub fn get(name: &str) -> Option<&'static str> {
     BUILTIN.iter().find(|(n, _)| *n == name).map(|(_, s)| *s)
 }
 
-/// The source of a built-in scene, named `builtin:<name>`.
+/// The source of a built-in scene, named `builtin:<name>`; read from the binary, it is
+/// an input of the render's identity like a scene file.
 pub fn source(name: &str) -> Option<super::Source> {
-    get(name).map(|text| super::Source {
-        name: format!("builtin:{name}"),
-        text: text.to_string(),
-        dir: std::path::PathBuf::new(),
+    get(name).map(|text| {
+        let name = format!("builtin:{name}");
+        crate::identity::note_read(std::path::Path::new(&name), text.as_bytes());
+        super::Source {
+            name,
+            text: text.to_string(),
+            dir: std::path::PathBuf::new(),
+        }
     })
 }

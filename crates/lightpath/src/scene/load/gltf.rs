@@ -282,8 +282,7 @@ impl Loader {
                 return Err(at.error(format!("{}: {e}", pointer_of(path))));
             }
         }
-        let buffers = gltf::import_buffers(&document, Some(&dir), blob)
-            .map_err(|e| at.error(format!("/buffers: cannot load a buffer: {e}")))?;
+        let buffers = read_buffers(&document, &dir, blob).map_err(|e| at.error(e))?;
         let desc = SceneDesc {
             source: file.to_string(),
             warnings,
@@ -663,7 +662,9 @@ impl Loader {
                         bytes: Arc::from(bytes),
                     }
                 }
-                None => ImageSource::File(self.dir.join(percent_decode(uri))),
+                None => {
+                    ImageSource::File(uri_path(&self.dir, uri).map_err(|e| self.error(&at, e))?)
+                }
             },
         };
         self.images.insert(img.index(), source.clone());
@@ -845,6 +846,62 @@ fn extra_strings(extras: &gltf::json::Extras, key: &str) -> Vec<String> {
             .filter_map(|x| x.as_str().map(str::to_string))
             .collect(),
         _ => Vec::new(),
+    }
+}
+
+/// Each buffer's bytes: the binary chunk of a `.glb`, a data URI, or a file read through
+/// `limits::read_input` (within the input-size limit, and an input of the render's
+/// identity); padded to a multiple of 4 bytes as the `gltf` crate's readers expect.
+fn read_buffers(
+    document: &Document,
+    dir: &Path,
+    mut blob: Option<Vec<u8>>,
+) -> Result<Vec<gltf::buffer::Data>, String> {
+    let mut out = Vec::new();
+    for buffer in document.buffers() {
+        let at = format!("/buffers/{}", buffer.index());
+        let mut data = match buffer.source() {
+            gltf::buffer::Source::Bin => blob
+                .take()
+                .ok_or_else(|| format!("{at}: it is the binary chunk, which the file lacks"))?,
+            gltf::buffer::Source::Uri(uri) => match uri.strip_prefix("data:") {
+                Some(rest) => rest
+                    .split_once(";base64,")
+                    .and_then(|(_, data)| base64_decode(data))
+                    .ok_or_else(|| format!("{at}: its data URI is not valid base64"))?,
+                None => {
+                    let path = uri_path(dir, uri).map_err(|e| format!("{at}: {e}"))?;
+                    crate::limits::read_input(&path).map_err(|e| {
+                        format!("{at}: cannot load a buffer from {}: {e}", path.display())
+                    })?
+                }
+            },
+        };
+        if data.len() < buffer.length() {
+            return Err(format!(
+                "{at}: it holds {} bytes, fewer than its byteLength {}",
+                data.len(),
+                buffer.length()
+            ));
+        }
+        while data.len() % 4 != 0 {
+            data.push(0);
+        }
+        out.push(gltf::buffer::Data(data));
+    }
+    Ok(out)
+}
+
+/// The file a (non-data) URI names: `file:` URIs as they are, relative references
+/// against the glTF's folder; any other scheme is refused.
+fn uri_path(dir: &Path, uri: &str) -> Result<PathBuf, String> {
+    let file = uri.strip_prefix("file://").or(uri.strip_prefix("file:"));
+    match file {
+        Some(path) => Ok(PathBuf::from(percent_decode(path))),
+        None if uri.contains(':') => Err(format!(
+            "'{uri}': only relative paths, file: and data: URIs are read"
+        )),
+        None => Ok(dir.join(percent_decode(uri))),
     }
 }
 
