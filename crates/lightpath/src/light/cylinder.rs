@@ -113,7 +113,7 @@ impl Cylinder {
         let q = p - self.center;
         let across = q - self.axis * q.dot(self.axis);
         let d = across.length();
-        if !(d > self.radius) {
+        if d.is_nan() || d <= self.radius {
             return None;
         }
         let towards = across / d;
@@ -143,7 +143,7 @@ impl LightModel for Cylinder {
         let dist = dist2.sqrt();
         let wi = d / dist;
         let cos_l = -wi.dot(n);
-        if !(cos_l > 0.0) {
+        if cos_l.is_nan() || cos_l <= 0.0 {
             return None;
         }
         Some(LightSample {
