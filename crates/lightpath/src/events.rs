@@ -3,7 +3,7 @@
 //! once, compiled with the AOVs, and that same list is classified, so every event the
 //! integrator steps has a class by construction.
 
-use crate::light::Light;
+use crate::light::{Light, LightClasses};
 use crate::scene::{Material, Object};
 use glam::Vec3A;
 use lpe::{Automaton, ClassId, Event, EventType, Profile, Scatter};
@@ -73,12 +73,10 @@ pub struct Vocabulary {
     uses: Vec<Use>,
 }
 
-/// The classes of the events that are not per object.
+/// The classes of the events that are neither an object's nor a light's.
 pub struct Classes {
     pub camera: ClassId,
     pub data_light: ClassId,
-    /// Each light's `L` and `O` classes.
-    pub lights: Vec<(ClassId, ClassId)>,
 }
 
 impl Vocabulary {
@@ -122,7 +120,8 @@ impl Vocabulary {
                 v.push(e, Use::Glow { object });
             }
         }
-        for (id, l) in lights.iter().enumerate() {
+        // A glow's events are its object's `O` (above), not a light's.
+        for (id, l) in lights.iter().enumerate().filter(|(_, l)| !l.glow) {
             let light = id as u32;
             v.push(
                 Event::new(EventType::Light, None, l.groups.iter()),
@@ -143,19 +142,18 @@ impl Vocabulary {
         &self.events
     }
 
-    /// Stores each object's classes and returns the others; `automaton` must have been
-    /// compiled with exactly `events()` as its vocabulary.
+    /// Stores each object's and each light's classes and returns the others;
+    /// `automaton` must have been compiled with exactly `events()` as its vocabulary.
     pub fn classify(
         &self,
         automaton: &Automaton,
         objects: &mut [Object],
-        lights: usize,
+        lights: &mut [Light],
     ) -> Classes {
         let classes = automaton.vocabulary_classes();
         let mut out = Classes {
             camera: classes[0],
             data_light: classes[1],
-            lights: vec![(classes[0], classes[0]); lights],
         };
         for o in objects.iter_mut() {
             o.lobe_classes.clear();
@@ -171,9 +169,18 @@ impl Vocabulary {
                     objects[object as usize].data_lobes.push((lobe, class))
                 }
                 Use::Glow { object } => objects[object as usize].glow_class = Some(class),
-                Use::Light { light } => out.lights[light as usize].0 = class,
-                Use::LightSeen { light } => out.lights[light as usize].1 = class,
+                Use::Light { light } => lights[light as usize].classes.light = class,
+                Use::LightSeen { light } => lights[light as usize].classes.seen = class,
             }
+        }
+        // A light sample of a glow, like a ray that finds it, is its object's `O`.
+        for l in lights.iter_mut().filter(|l| l.glow) {
+            let object = &objects[l.object.expect("a glow has its object") as usize];
+            let glow = object.glow_class.expect("a glowing object has its O class");
+            l.classes = LightClasses {
+                light: glow,
+                seen: glow,
+            };
         }
         // Keep only data lobes some rule can accept: the others would cost two steps per
         // vertex for nothing.

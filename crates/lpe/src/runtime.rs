@@ -17,7 +17,8 @@ pub struct RuleId(pub u32);
 
 /// An event class: all events that every rule treats alike. Obtained from
 /// [`Automaton::classify`], once per distinct event (at scene build, not per vertex).
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+/// The default is class 0, a placeholder for what a renderer classifies later.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
 pub struct ClassId(u32);
 
 impl ClassId {

@@ -959,8 +959,8 @@ impl Accel {
                 };
                 (ng, ns)
             }
-            Prim::Sphere { center, radius } => {
-                let n = (p - center) / radius;
+            curved @ (Prim::Sphere { .. } | Prim::Cylinder { .. }) => {
+                let n = curved.curved_normal(p);
                 (n, n)
             }
             Prim::Instance { .. } => unreachable!("instances are placed above"),
@@ -1123,7 +1123,7 @@ impl<L: Lanes> Tree<L> {
                             }
                         }
                     }
-                    Prim::Sphere { .. } | Prim::Instance { .. } => {
+                    Prim::Sphere { .. } | Prim::Cylinder { .. } | Prim::Instance { .. } => {
                         for (mask, lanes) in spheres.iter_mut().enumerate() {
                             if seen_by(mask) {
                                 *lanes |= 1 << lane;

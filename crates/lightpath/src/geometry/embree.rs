@@ -305,7 +305,8 @@ impl EmbreeScene {
                 let object = accel.object_of(slot as u32);
                 let kind = match prim {
                     Prim::Triangle { .. } => Kind::Triangles,
-                    Prim::Sphere { .. } => Kind::Spheres,
+                    // User geometry: `Prim::intersect` tests them.
+                    Prim::Sphere { .. } | Prim::Cylinder { .. } => Kind::Spheres,
                     Prim::Instance { index, .. } => {
                         instances.push((slot as u32, *index, object, vis));
                         continue;

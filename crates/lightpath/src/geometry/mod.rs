@@ -77,6 +77,14 @@ pub enum Prim {
         center: Vec3A,
         radius: f32,
     },
+    /// The side of a cylinder, open at both ends (a cylinder light's surface): points
+    /// within `radius` of the segment `center ± axis · half_length`, `axis` unit length.
+    Cylinder {
+        center: Vec3A,
+        axis: Vec3A,
+        radius: f32,
+        half_length: f32,
+    },
     /// A placement of a shared mesh (`Accel::instance`), with its world bounds; the
     /// accelerator traces it in the mesh's own space.
     Instance {
@@ -124,6 +132,19 @@ impl Prim {
             }
             Prim::Sphere { center, radius } => {
                 (center - Vec3A::splat(radius), center + Vec3A::splat(radius))
+            }
+            Prim::Cylinder {
+                center,
+                axis,
+                radius,
+                half_length,
+            } => {
+                // Per world axis: the segment's half extent plus the rim circle's, whose
+                // plane is tilted from that axis by the cylinder's axis.
+                let rim = (Vec3A::ONE - axis * axis).max(Vec3A::ZERO);
+                let half = axis.abs() * half_length
+                    + Vec3A::new(rim.x.sqrt(), rim.y.sqrt(), rim.z.sqrt()) * radius;
+                (center - half, center + half)
             }
             Prim::Instance { lo, hi, .. } => (lo, hi),
         }
@@ -187,16 +208,29 @@ impl Prim {
                     f32::INFINITY
                 }
             }
+            Prim::Cylinder { .. } => self.cylinder_intersect(origin, dir, tmin, tmax),
             Prim::Instance { .. } => f32::INFINITY,
         }
     }
 
-    /// The unit geometric normal of a triangle (its winding's side); `+Z` for a sphere,
-    /// whose normal depends on the point.
+    /// The unit geometric normal at `p` on a sphere or cylinder: outwards.
+    pub fn curved_normal(&self, p: Vec3A) -> Vec3A {
+        match *self {
+            Prim::Sphere { center, radius } => (p - center) / radius,
+            Prim::Cylinder { center, axis, .. } => {
+                let q = p - center;
+                (q - axis * q.dot(axis)).normalize_or(Vec3A::Z)
+            }
+            Prim::Triangle { .. } | Prim::Instance { .. } => self.face_normal(),
+        }
+    }
+
+    /// The unit geometric normal of a triangle (its winding's side); `+Z` for a sphere
+    /// or cylinder, whose normal depends on the point (`curved_normal`).
     pub fn face_normal(&self) -> Vec3A {
         match *self {
             Prim::Triangle { e1, e2, .. } => e1.cross(e2).normalize_or(Vec3A::Z),
-            Prim::Sphere { .. } | Prim::Instance { .. } => Vec3A::Z,
+            Prim::Sphere { .. } | Prim::Cylinder { .. } | Prim::Instance { .. } => Vec3A::Z,
         }
     }
 
@@ -204,8 +238,51 @@ impl Prim {
         match *self {
             Prim::Triangle { e1, e2, .. } => 0.5 * e1.cross(e2).length(),
             Prim::Sphere { radius, .. } => 4.0 * std::f32::consts::PI * radius * radius,
+            Prim::Cylinder {
+                radius,
+                half_length,
+                ..
+            } => 4.0 * std::f32::consts::PI * radius * half_length,
             // Lights are never instances; the area of a placement is not needed.
             Prim::Instance { .. } => 0.0,
         }
+    }
+
+    /// The nearest t in (tmin, tmax) where the ray meets the side of a cylinder, or infinity:
+    /// the sphere's quadratic in the plane across the axis, each root kept if it lies within
+    /// the cylinder's length.
+    #[inline]
+    fn cylinder_intersect(&self, origin: Vec3A, dir: Vec3A, tmin: f32, tmax: f32) -> f32 {
+        let Prim::Cylinder {
+            center,
+            axis,
+            radius,
+            half_length,
+        } = *self
+        else {
+            return f32::INFINITY;
+        };
+        let oc = origin - center;
+        let (o_along, d_along) = (oc.dot(axis), dir.dot(axis));
+        let (o_across, d_across) = (oc - axis * o_along, dir - axis * d_along);
+        let a = d_across.length_squared();
+        let half_b = o_across.dot(d_across);
+        let c = o_across.length_squared() - radius * radius;
+        let disc = half_b * half_b - a * c;
+        if a == 0.0 || disc < 0.0 {
+            return f32::INFINITY;
+        }
+        let sq = disc.sqrt();
+        let q = -(half_b + sq.copysign(half_b));
+        let (mut t0, mut t1) = (q / a, c / q);
+        if t0 > t1 {
+            std::mem::swap(&mut t0, &mut t1);
+        }
+        for t in [t0, t1] {
+            if t > tmin && t < tmax && (o_along + t * d_along).abs() <= half_length {
+                return t;
+            }
+        }
+        f32::INFINITY
     }
 }

@@ -6,8 +6,8 @@
 use super::path::{PathState, Vertex};
 use super::routing::{Origin, Via};
 use super::{Sink, Tracer};
-use crate::geometry::{Hit, Prim, Ray, Visibility};
-use crate::light::{Light, LightShape};
+use crate::geometry::{Hit, Ray, Visibility};
+use crate::light::{Light, LightModel};
 use crate::sampler::{dim, Sampler};
 use glam::Vec3A;
 
@@ -69,8 +69,7 @@ impl Tracer<'_> {
     ) {
         let scene = self.scene;
         let light = &scene.lights[li as usize];
-        let (l_class, o_class) = scene.light_classes[li as usize];
-        let part = scene.light_parts[li as usize];
+        let part = light.part;
         let (class, weight, origin) = if path.depth == 0 {
             if !light.camera_visible {
                 return;
@@ -84,7 +83,7 @@ impl Tracer<'_> {
                 scatters: 0,
                 part,
             };
-            (o_class, 1.0, origin)
+            (light.classes.seen, 1.0, origin)
         } else {
             let via = Via::Hit {
                 light_sampled: !path.prev_delta,
@@ -95,7 +94,11 @@ impl Tracer<'_> {
                 scatters: path.depth,
                 part,
             };
-            (l_class, self.bsdf_weight(path, li, light_pdf), origin)
+            (
+                light.classes.light,
+                self.bsdf_weight(path, li, light_pdf),
+                origin,
+            )
         };
         let s = scene.automaton.step(path.state, class);
         self.contribute(out, s, path.throughput, le, weight, origin);
@@ -132,9 +135,8 @@ impl Tracer<'_> {
             return;
         };
         let wi = v.sh.frame.to_local(ls.wi);
-        let l_class = scene.light_classes[li].0;
-        let part = scene.light_parts[li];
-        let glow = li as u32 >= scene.first_glow_light;
+        let l_class = light.classes.light;
+        let (part, glow) = (light.part, light.glow);
         let light_pdf = select_pmf * ls.pdf;
         // The shadow ray is traced once, and only if some lobe's contribution counts.
         let mut visible: Option<bool> = None;
@@ -191,39 +193,18 @@ impl Tracer<'_> {
 
     /// The nearest light surface along `ray`, ignoring everything else: (light, t,
     /// normal). Mesh lights are found in their own BVH (their triangles are many); the
-    /// few triangles of area lights are tried one by one.
+    /// other declared lights each try their own surface (glows are not lights here).
     fn nearest_light(&self, ray: &Ray) -> Option<(usize, f32, Vec3A)> {
-        let mut best: Option<(usize, f32, Vec3A)> = self
-            .scene
+        let scene = self.scene;
+        let mut best: Option<(usize, f32, Vec3A)> = scene
             .mesh_lights
             .intersect(ray, 0.0, Visibility::ALL)
             .map(|h| (h.object as usize, h.t, h.ng));
-        let declared = &self.scene.lights[..self.scene.first_glow_light as usize];
+        let declared = &scene.lights[..scene.first_glow_light as usize];
         for (li, light) in declared.iter().enumerate() {
-            match &light.shape {
-                LightShape::Triangles { mesh: true, .. } => {}
-                LightShape::Triangles { prims, normals, .. } => {
-                    for (&i, n) in prims.iter().zip(normals) {
-                        let p = &self.scene.accel.prims()[i as usize];
-                        let tmax = best.map_or(f32::INFINITY, |b| b.1);
-                        let t = p.intersect(ray.origin, ray.dir, 0.0, tmax);
-                        if t < tmax {
-                            best = Some((li, t, *n));
-                        }
-                    }
-                }
-                LightShape::Sphere { center, radius } => {
-                    let tmax = best.map_or(f32::INFINITY, |b| b.1);
-                    let sphere = Prim::Sphere {
-                        center: *center,
-                        radius: *radius,
-                    };
-                    let t = sphere.intersect(ray.origin, ray.dir, 0.0, tmax);
-                    if t.is_finite() {
-                        best = Some((li, t, (ray.origin + ray.dir * t - *center) / *radius));
-                    }
-                }
-                _ => {}
+            let tmax = best.map_or(f32::INFINITY, |b| b.1);
+            if let Some((t, n)) = light.shape.intersect(ray, tmax, scene.accel.prims()) {
+                best = Some((li, t, n));
             }
         }
         best
@@ -281,13 +262,12 @@ impl Tracer<'_> {
         occluded: bool,
     ) {
         let scene = self.scene;
-        let s = scene
-            .automaton
-            .step(path.state, scene.light_classes[li as usize].0);
+        let light = &scene.lights[li as usize];
+        let s = scene.automaton.step(path.state, light.classes.light);
         let origin = Origin {
             via: Via::LightsOnly { occluded },
             scatters: path.depth,
-            part: scene.light_parts[li as usize],
+            part: light.part,
         };
         self.contribute(out, s, path.throughput, le, weight, origin);
     }

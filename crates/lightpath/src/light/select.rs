@@ -24,7 +24,7 @@
 //! light_selection = "tree"   # tree | power | uniform
 //! ```
 
-use super::{Light, LightShape};
+use super::Light;
 use crate::geometry::Prim;
 use crate::sampling::Distribution1D;
 use glam::Vec3A;
@@ -86,7 +86,7 @@ impl LightSelector {
                 count: lights.len(),
             },
             LightSelection::Power => {
-                let w: Vec<f32> = lights.iter().map(|l| power(l, scene_radius)).collect();
+                let w: Vec<f32> = lights.iter().map(|l| l.power(scene_radius)).collect();
                 if w.iter().sum::<f32>() > 0.0 {
                     LightSelector::Power(Distribution1D::new(&w))
                 } else {
@@ -138,46 +138,34 @@ impl LightSelector {
     }
 }
 
-/// Emitted power of a light in the same unit for every kind (radiance × area × π for
-/// surfaces; for lights at infinity the power through the scene's cross-section, as
-/// pbrt-v4's `Phi`), by its colour's largest component.
-pub fn power(light: &Light, scene_radius: f32) -> f32 {
-    let c = light.color.max_element().max(0.0);
-    let r2 = scene_radius * scene_radius;
-    match &light.shape {
-        LightShape::Triangles {
-            area, two_sided, ..
-        } => c * area * PI * if *two_sided { 2.0 } else { 1.0 },
-        LightShape::Sphere { radius, .. } => c * 4.0 * PI * radius * radius * PI,
-        LightShape::Point { .. } => c * 4.0 * PI,
-        LightShape::Spot {
-            cos_inner,
-            cos_outer,
-            ..
-        } => c * 2.0 * PI * (1.0 - 0.5 * (cos_inner + cos_outer)),
-        LightShape::Distant { .. } => c * PI * r2,
-        LightShape::Dome { map } => {
-            let avg = map.as_ref().map_or(1.0, |m| m.average().max_element());
-            c * avg * PI * PI * r2
-        }
-    }
+/// What the light tree knows of a light ([`LightModel::reach`](super::LightModel::reach)).
+#[derive(Clone, Copy, Debug)]
+pub enum Reach {
+    /// A light with a place: its bounds in the tree.
+    Bounded(LightBounds),
+    /// A light at infinity beside the tree: the irradiance it can deliver (dome: π ×
+    /// average radiance; distant: its irradiance) and a distant light's direction, whose
+    /// cosine with the receiver's normal scales it (zero: none).
+    Infinite { irradiance: f32, dir: Vec3A },
+    /// A light that sends nothing (black, or without area).
+    Nowhere,
 }
 
 /// A cone of directions: axis `w` and the cosine of its half angle.
 #[derive(Clone, Copy, Debug)]
-struct Cone {
-    w: Vec3A,
-    cos_theta: f32,
+pub struct Cone {
+    pub w: Vec3A,
+    pub cos_theta: f32,
 }
 
 impl Cone {
-    const SPHERE: Cone = Cone {
+    pub const SPHERE: Cone = Cone {
         w: Vec3A::Z,
         cos_theta: -1.0,
     };
 
     /// The smallest cone holding both (pbrt-v4 `Union(DirectionCone, DirectionCone)`).
-    fn union(a: Cone, b: Cone) -> Cone {
+    pub fn union(a: Cone, b: Cone) -> Cone {
         let theta_a = a.cos_theta.clamp(-1.0, 1.0).acos();
         let theta_b = b.cos_theta.clamp(-1.0, 1.0).acos();
         let theta_d = a.w.dot(b.w).clamp(-1.0, 1.0).acos();
@@ -214,13 +202,13 @@ impl Cone {
 /// beside the tree (pbrt-v4 uses the flux, which overweights points by 4 against
 /// surfaces).
 #[derive(Clone, Copy, Debug)]
-struct LightBounds {
-    min: Vec3A,
-    max: Vec3A,
-    phi: f32,
-    normals: Cone,
-    cos_e: f32,
-    two_sided: bool,
+pub struct LightBounds {
+    pub min: Vec3A,
+    pub max: Vec3A,
+    pub phi: f32,
+    pub normals: Cone,
+    pub cos_e: f32,
+    pub two_sided: bool,
 }
 
 /// cos(a − b), or 1 when b ≥ a's angle is not smaller (pbrt-v4's clamped differences).
@@ -267,85 +255,6 @@ impl LightBounds {
 
     fn centroid(&self) -> Vec3A {
         0.5 * (self.min + self.max)
-    }
-}
-
-/// The bounds of one light in the tree, or `None` for lights at infinity.
-fn light_bounds(light: &Light, prims: &[Prim]) -> Option<LightBounds> {
-    let c = light.color.max_element().max(0.0);
-    match &light.shape {
-        LightShape::Triangles {
-            prims: ids,
-            normals,
-            area,
-            two_sided,
-            ..
-        } => {
-            let mut min = Vec3A::splat(f32::INFINITY);
-            let mut max = Vec3A::splat(f32::NEG_INFINITY);
-            for &i in ids {
-                if let Prim::Triangle { p0, e1, e2, .. } = prims[i as usize] {
-                    for q in [p0, p0 + e1, p0 + e2] {
-                        min = min.min(q);
-                        max = max.max(q);
-                    }
-                }
-            }
-            let mut cone: Option<Cone> = None;
-            for n in normals {
-                let one = Cone {
-                    w: *n,
-                    cos_theta: 1.0,
-                };
-                cone = Some(cone.map_or(one, |c| Cone::union(c, one)));
-            }
-            (min.x <= max.x).then_some(LightBounds {
-                min,
-                max,
-                phi: c * area,
-                normals: cone.unwrap_or(Cone::SPHERE),
-                cos_e: 0.0,
-                two_sided: *two_sided,
-            })
-        }
-        LightShape::Sphere { center, radius } => Some(LightBounds {
-            min: *center - Vec3A::splat(*radius),
-            max: *center + Vec3A::splat(*radius),
-            phi: c * PI * radius * radius,
-            normals: Cone::SPHERE,
-            cos_e: 0.0,
-            two_sided: false,
-        }),
-        LightShape::Point { position } => Some(LightBounds {
-            min: *position,
-            max: *position,
-            phi: c,
-            normals: Cone::SPHERE,
-            cos_e: 0.0,
-            two_sided: false,
-        }),
-        LightShape::Spot {
-            position,
-            axis,
-            cos_inner,
-            cos_outer,
-        } => {
-            // Normals within the inner cone, emission falling to nothing by the outer one.
-            let theta_e =
-                (cos_outer.clamp(-1.0, 1.0).acos() - cos_inner.clamp(-1.0, 1.0).acos()).max(0.0);
-            Some(LightBounds {
-                min: *position,
-                max: *position,
-                phi: c,
-                normals: Cone {
-                    w: *axis,
-                    cos_theta: *cos_inner,
-                },
-                cos_e: theta_e.cos(),
-                two_sided: false,
-            })
-        }
-        LightShape::Distant { .. } | LightShape::Dome { .. } => None,
     }
 }
 
@@ -483,18 +392,12 @@ impl LightTree {
         let mut items = Vec::new();
         let mut infinite = Vec::new();
         for (i, l) in lights.iter().enumerate() {
-            let c = l.color.max_element().max(0.0);
-            match (&l.shape, light_bounds(l, prims)) {
-                (_, Some(b)) if b.phi > 0.0 => items.push((i as u32, b)),
-                (LightShape::Dome { map }, _) if c > 0.0 => infinite.push(Infinite {
+            match l.reach(prims) {
+                Reach::Bounded(b) if b.phi > 0.0 => items.push((i as u32, b)),
+                Reach::Infinite { irradiance, dir } => infinite.push(Infinite {
                     light: i as u32,
-                    irradiance: c * PI * map.as_ref().map_or(1.0, |m| m.average().max_element()),
-                    dir: Vec3A::ZERO,
-                }),
-                (LightShape::Distant { dir }, _) if c > 0.0 => infinite.push(Infinite {
-                    light: i as u32,
-                    irradiance: c,
-                    dir: *dir,
+                    irradiance,
+                    dir,
                 }),
                 _ => {}
             }
@@ -663,16 +566,11 @@ impl LightTree {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::light::{Distant, Dome, LightShape, Point, Sphere, Spot, Triangles};
     use crate::sampling::{uniform_sphere, Rng};
 
-    fn light(shape: LightShape, color: f32) -> Light {
-        Light {
-            shape,
-            color: Vec3A::splat(color),
-            groups: Vec::new(),
-            camera_visible: true,
-            object: None,
-        }
+    fn light(shape: impl Into<LightShape>, color: f32) -> Light {
+        Light::new(shape, Vec3A::splat(color))
     }
 
     /// A mixed scene: 40 points and spheres of different powers spread over a box, a
@@ -683,13 +581,14 @@ mod tests {
         for i in 0..40 {
             let p = Vec3A::new(rng.next_f32(), rng.next_f32(), rng.next_f32()) * 8.0 - 4.0;
             let power = 0.1 + 10.0 * rng.next_f32();
-            let shape = if i % 2 == 0 {
-                LightShape::Point { position: p }
+            let shape: LightShape = if i % 2 == 0 {
+                Point { position: p }.into()
             } else {
-                LightShape::Sphere {
+                Sphere {
                     center: p,
                     radius: 0.1,
                 }
+                .into()
             };
             lights.push(light(shape, power));
         }
@@ -700,19 +599,18 @@ mod tests {
             normals: u32::MAX,
         }];
         lights.push(light(
-            LightShape::Triangles {
+            Triangles {
                 prims: vec![0],
                 normals: vec![prims[0].face_normal()],
                 parallelogram: None,
                 by_area: Distribution1D::new(&[1.0]),
                 area: 0.5,
                 two_sided: false,
-                mesh: false,
             },
             20.0,
         ));
         lights.push(light(
-            LightShape::Spot {
+            Spot {
                 position: Vec3A::new(0.0, 4.0, 0.0),
                 axis: -Vec3A::Y,
                 cos_inner: 0.9,
@@ -720,9 +618,9 @@ mod tests {
             },
             30.0,
         ));
-        lights.push(light(LightShape::Dome { map: None }, 0.05));
+        lights.push(light(Dome { map: None }, 0.05));
         lights.push(light(
-            LightShape::Distant {
+            Distant {
                 dir: Vec3A::new(0.3, -1.0, 0.1).normalize(),
             },
             1.0,
@@ -794,12 +692,12 @@ mod tests {
     fn power_selection_follows_power() {
         let lights = [
             light(
-                LightShape::Point {
+                Point {
                     position: Vec3A::ZERO,
                 },
                 1.0,
             ),
-            light(LightShape::Point { position: Vec3A::X }, 10.0),
+            light(Point { position: Vec3A::X }, 10.0),
         ];
         let sel = LightSelector::build(LightSelection::Power, &lights, &[], 1.0);
         let ratio = sel.pmf(1, Vec3A::Y, Vec3A::ZERO) / sel.pmf(0, Vec3A::Y, Vec3A::ZERO);
@@ -814,7 +712,7 @@ mod tests {
         let mut lights: Vec<Light> = (0..64)
             .map(|i| {
                 light(
-                    LightShape::Point {
+                    Point {
                         position: Vec3A::new(i as f32, 0.0, 0.0),
                     },
                     1.0,
@@ -831,14 +729,13 @@ mod tests {
         let (_, prims) = scene();
         lights.truncate(1);
         lights.push(light(
-            LightShape::Triangles {
+            Triangles {
                 prims: vec![0],
                 normals: vec![prims[0].face_normal()],
                 parallelogram: None,
                 by_area: Distribution1D::new(&[1.0]),
                 area: 0.5,
                 two_sided: false,
-                mesh: false,
             },
             5.0,
         ));

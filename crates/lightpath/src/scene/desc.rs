@@ -322,6 +322,11 @@ pub enum LightKind {
         center: [f32; 3],
         radius: f32,
     },
+    /// The side of a cylinder along local X, centred at the origin (UsdLux's).
+    Cylinder {
+        radius: f32,
+        length: f32,
+    },
     Point {
         position: [f32; 3],
     },

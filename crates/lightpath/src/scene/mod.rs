@@ -77,11 +77,10 @@ pub struct Scene {
     pub objects: Vec<Object>,
     pub materials: Vec<Material>,
     /// Declared lights, then from `first_glow_light` on the glowing objects that light
-    /// sampling also picks (`build/glows.rs`).
+    /// sampling also picks (`build/glows.rs`, each with `Light::glow` set). Each light
+    /// carries its events' classes and its part in split AOVs.
     pub lights: Vec<Light>,
     pub first_glow_light: u32,
-    /// Class of each light's `L` and `O` events (a glow's: its object's `O`, twice).
-    pub light_classes: Vec<(ClassId, ClassId)>,
     pub light_select: crate::light::select::LightSelector,
     /// Lights reached by rays that escape the scene.
     pub escape_lights: Vec<u32>,
@@ -99,8 +98,6 @@ pub struct Scene {
     pub epsilon: f32,
     /// Light group names, sorted; split AOV parts follow this order, then the default.
     pub light_groups: Vec<String>,
-    /// Each light's part in split AOVs (its first group, or the default part).
-    pub light_parts: Vec<u32>,
     /// True if any rule has the `unoccluded` or `shadows` prefix.
     pub any_unoccluded: bool,
     /// Per automaton state: can some object's data lobe be accepted from here? Most

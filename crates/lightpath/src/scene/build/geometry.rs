@@ -77,7 +77,7 @@ pub fn check_finite(shape: &ShapePrims, origin: &Origin) -> Result<(), SceneErro
                 let (lo, hi) = p.bounds();
                 center.is_finite() && radius.is_finite() && lo.is_finite() && hi.is_finite()
             }
-            Prim::Instance { .. } => {
+            Prim::Cylinder { .. } | Prim::Instance { .. } => {
                 let (lo, hi) = p.bounds();
                 lo.is_finite() && hi.is_finite()
             }

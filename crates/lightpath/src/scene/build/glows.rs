@@ -3,7 +3,7 @@
 //! light-group part; but it joins light selection, so that a small glowing object is not
 //! found by BSDF rays alone (a firefly each time one finds it), and both ways of reaching
 //! it are weighed by MIS. The integrator routes a light sample of a glow with the glow's
-//! `O` event, like a ray that hits it (`Scene::first_glow_light`).
+//! `O` event, like a ray that hits it (`Light::glow`).
 //!
 //! A glow is sampled when its object is one sphere or made of triangles, its emission is
 //! finite, not black and not textured (a light's radiance is the same all over), and
@@ -13,7 +13,7 @@
 //! rays only.
 
 use crate::geometry::{Accel, Prim};
-use crate::light::{Light, LightShape};
+use crate::light::{Light, LightShape, Mesh, Sphere, Triangles};
 use crate::sampling::Distribution1D;
 use crate::scene::desc::ObjectDesc;
 use crate::scene::{Material, Object};
@@ -55,11 +55,9 @@ pub fn add(
         };
         objects[id].glow_light = Some(lights.len() as u32);
         lights.push(Light {
-            shape,
-            color: e,
-            groups: Vec::new(),
-            camera_visible: true,
             object: Some(id as u32),
+            glow: true,
+            ..Light::new(shape, e)
         });
     }
 }
@@ -71,7 +69,7 @@ fn shape(range: &Range<u32>, accel: &Accel) -> Option<LightShape> {
     let mut slots: Vec<u32> = range.clone().map(|i| accel.slot(i)).collect();
     if let [slot] = slots[..] {
         if let Prim::Sphere { center, radius } = prims[slot as usize] {
-            return Some(LightShape::Sphere { center, radius });
+            return Some(Sphere { center, radius }.into());
         }
     }
     slots.sort_unstable();
@@ -86,13 +84,15 @@ fn shape(range: &Range<u32>, accel: &Accel) -> Option<LightShape> {
         normals.push(p.face_normal());
     }
     let area: f32 = areas.iter().sum();
-    (area > 0.0 && area.is_finite()).then(|| LightShape::Triangles {
-        prims: slots,
-        normals,
-        parallelogram: None,
-        by_area: Distribution1D::new(&areas),
-        area,
-        two_sided: true,
-        mesh: true,
+    (area > 0.0 && area.is_finite()).then(|| {
+        Mesh(Triangles {
+            prims: slots,
+            normals,
+            parallelogram: None,
+            by_area: Distribution1D::new(&areas),
+            area,
+            two_sided: true,
+        })
+        .into()
     })
 }

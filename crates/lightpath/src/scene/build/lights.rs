@@ -3,7 +3,10 @@
 
 use crate::geometry::shapes::{self, ShapePrims};
 use crate::geometry::{Accel, Prim};
-use crate::light::{EnvMap, Light, LightShape};
+use crate::light::{
+    Cylinder, Distant, Dome, EnvMap, Light, LightModel, LightShape, Mesh, Point, Sphere, Spot,
+    Triangles,
+};
 use crate::sampling::Distribution1D;
 use crate::scene::desc::{LightDesc, LightKind, Origin};
 use crate::scene::{Object, SceneError};
@@ -21,7 +24,7 @@ pub fn light_shape(l: &LightDesc) -> Result<(LightShape, Option<ShapePrims>, Vec
         super::geometry::check_finite(&prims, &l.origin)?;
         let areas: Vec<f32> = prims.prims.iter().map(Prim::area).collect();
         let normals = prims.prims.iter().map(Prim::face_normal).collect();
-        let shape = LightShape::Triangles {
+        let shape = Triangles {
             parallelogram: parallelogram(&prims.prims),
             // Filled once the primitives are in the scene (`locate_prims`).
             prims: Vec::new(),
@@ -29,9 +32,8 @@ pub fn light_shape(l: &LightDesc) -> Result<(LightShape, Option<ShapePrims>, Vec
             by_area: Distribution1D::new(&areas),
             area: areas.iter().sum(),
             two_sided: l.two_sided,
-            mesh: false,
         };
-        Ok((shape, Some(prims), color))
+        Ok((shape.into(), Some(prims), color))
     };
     Ok(match &l.kind {
         LightKind::Rectangle => area(shapes::rectangle(xf))?,
@@ -50,12 +52,18 @@ pub fn light_shape(l: &LightDesc) -> Result<(LightShape, Option<ShapePrims>, Vec
             }
             let prims = shapes::sphere(center, radius);
             super::geometry::check_finite(&prims, &l.origin)?;
-            (LightShape::Sphere { center, radius }, Some(prims), color)
+            (Sphere { center, radius }.into(), Some(prims), color)
+        }
+        LightKind::Cylinder { radius, length } => {
+            let cylinder = Cylinder::placed(*radius, *length, xf, &l.origin)?;
+            let prims = cylinder.surface();
+            (cylinder.into(), Some(prims), color)
         }
         LightKind::Point { position } => (
-            LightShape::Point {
+            Point {
                 position: v3(*position),
-            },
+            }
+            .into(),
             None,
             color,
         ),
@@ -67,33 +75,33 @@ pub fn light_shape(l: &LightDesc) -> Result<(LightShape, Option<ShapePrims>, Vec
         } => {
             let half = cone_angle.to_radians() * 0.5;
             let soft = cone_softness.to_radians();
-            let shape = LightShape::Spot {
+            let shape = Spot {
                 position: v3(*position),
                 axis: v3(*direction).normalize_or(-Vec3A::Y),
                 cos_inner: (half - soft).max(0.0).cos(),
                 cos_outer: half.cos(),
             };
-            (shape, None, color)
+            (shape.into(), None, color)
         }
         LightKind::Distant { direction } => (
-            LightShape::Distant {
+            Distant {
                 dir: v3(*direction).normalize_or(-Vec3A::Y),
-            },
+            }
+            .into(),
             None,
             color,
         ),
         // Its object's triangles, filled once they are in the scene (`mesh_surfaces`).
         LightKind::Mesh { .. } => {
-            let shape = LightShape::Triangles {
+            let shape = Mesh(Triangles {
                 prims: Vec::new(),
                 normals: Vec::new(),
                 parallelogram: None,
                 by_area: Distribution1D::default(),
                 area: 0.0,
                 two_sided: l.two_sided,
-                mesh: true,
-            };
-            (shape, None, color)
+            });
+            (shape.into(), None, color)
         }
         LightKind::Dome { map } => {
             let map = match map {
@@ -106,7 +114,7 @@ pub fn light_shape(l: &LightDesc) -> Result<(LightShape, Option<ShapePrims>, Vec
                     }
                 }
             };
-            (LightShape::Dome { map }, None, color)
+            (Dome { map }.into(), None, color)
         }
     })
 }
@@ -123,7 +131,8 @@ fn check_light_numbers(l: &LightDesc) -> Result<(), SceneError> {
         LightKind::Rectangle
         | LightKind::Disk { .. }
         | LightKind::Dome { .. }
-        | LightKind::Mesh { .. } => true,
+        | LightKind::Mesh { .. }
+        | LightKind::Cylinder { .. } => true,
         LightKind::Quad { corners } => corners.iter().all(|c| finite(c)),
         LightKind::Sphere { center, .. } => finite(center),
         LightKind::Point { position } => finite(position),
@@ -171,8 +180,8 @@ fn dome_rotation(xf: &glam::Affine3A, origin: &Origin) -> Result<Option<glam::Ma
 /// gave them (`GeometryBuilder::add`), the accelerator then reordered that list.
 pub fn locate_prims(lights: &mut [Light], added: &[Option<Range<u32>>], accel: &Accel) {
     for (l, range) in lights.iter_mut().zip(added) {
-        if let (LightShape::Triangles { prims, .. }, Some(range)) = (&mut l.shape, range) {
-            *prims = range.clone().map(|i| accel.slot(i)).collect();
+        if let (LightShape::Triangles(t), Some(range)) = (&mut l.shape, range) {
+            t.prims = range.clone().map(|i| accel.slot(i)).collect();
         }
     }
 }
@@ -194,13 +203,13 @@ pub fn mesh_surfaces(
         let LightKind::Mesh { object } = desc.kind else {
             continue;
         };
-        let LightShape::Triangles {
+        let LightShape::Mesh(Mesh(Triangles {
             prims: ids,
             normals,
             by_area,
             area,
             ..
-        } = &mut light.shape
+        })) = &mut light.shape
         else {
             continue;
         };
@@ -302,14 +311,14 @@ pub fn escape_lights(lights: &[Light]) -> Vec<u32> {
     lights
         .iter()
         .enumerate()
-        .filter(|(_, l)| matches!(l.shape, LightShape::Dome { .. }))
+        .filter(|(_, l)| l.shape.escapes())
         .map(|(i, _)| i as u32)
         .collect()
 }
 
-/// Light group names, sorted, and each light's part in split AOVs (its first group, or
+/// Light group names, sorted; sets each light's part in split AOVs (its first group, or
 /// the default part after all groups).
-pub fn groups(lights: &[Light]) -> (Vec<String>, Vec<u32>) {
+pub fn groups(lights: &mut [Light]) -> Vec<String> {
     let mut light_groups: Vec<String> = lights
         .iter()
         .flat_map(|l| l.groups.iter().cloned())
@@ -317,14 +326,12 @@ pub fn groups(lights: &[Light]) -> (Vec<String>, Vec<u32>) {
     light_groups.sort();
     light_groups.dedup();
     let default_part = light_groups.len() as u32;
-    let light_parts = lights
-        .iter()
-        .map(|l| {
-            l.groups
-                .first()
-                .and_then(|g| light_groups.iter().position(|x| x == g))
-                .map_or(default_part, |p| p as u32)
-        })
-        .collect();
-    (light_groups, light_parts)
+    for l in lights.iter_mut() {
+        l.part = l
+            .groups
+            .first()
+            .and_then(|g| light_groups.iter().position(|x| x == g))
+            .map_or(default_part, |p| p as u32);
+    }
+    light_groups
 }

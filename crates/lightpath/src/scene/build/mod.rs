@@ -50,19 +50,12 @@ impl Scene {
             scene_radius,
         );
 
-        // Glows' events are their objects' (`O`), not a light's.
-        let declared = &lights[..first_glow_light];
-        let vocabulary = Vocabulary::of_scene(&objects, &materials, declared);
+        let vocabulary = Vocabulary::of_scene(&objects, &materials, &lights);
         let automaton = compile_aovs(desc, aovs, &vocabulary)?;
-        let mut classes = vocabulary.classify(&automaton, &mut objects, first_glow_light);
-        for l in &lights[first_glow_light..] {
-            let object = &objects[l.object.expect("a glow has its object") as usize];
-            let glow = object.glow_class.expect("a glowing object has its O class");
-            classes.lights.push((glow, glow));
-        }
+        let classes = vocabulary.classify(&automaton, &mut objects, &mut lights);
 
         let camera = camera::camera(desc)?;
-        let (light_groups, light_parts) = lights::groups(&lights);
+        let light_groups = lights::groups(&mut lights);
         let aovs = output_aovs(&automaton, aovs, &light_groups);
         let data_live = data_live(&automaton, &objects, classes.data_light);
         let any_unoccluded = aovs.iter().any(|a| {
@@ -74,7 +67,6 @@ impl Scene {
             mesh_lights,
             objects,
             materials,
-            light_classes: classes.lights,
             light_select,
             first_glow_light: first_glow_light as u32,
             escape_lights: lights::escape_lights(&lights),
@@ -89,7 +81,6 @@ impl Scene {
             scene_radius,
             epsilon,
             light_groups,
-            light_parts,
             any_unoccluded,
             data_live,
             variance_aovs: Vec::new(),
@@ -222,11 +213,10 @@ fn add_lights(
             _ => object,
         };
         lights.push(Light {
-            shape,
-            color,
             groups: l.groups.clone(),
             camera_visible: l.camera_visible,
             object,
+            ..Light::new(shape, color)
         });
         ranges.push(range);
     }

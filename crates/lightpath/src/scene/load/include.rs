@@ -115,7 +115,10 @@ fn place_light(l: &mut LightDesc, xf: &Affine3A) {
             vector(direction);
         }
         LightKind::Distant { direction } => vector(direction),
-        LightKind::Rectangle | LightKind::Disk { .. } | LightKind::Sphere { .. } => {}
+        LightKind::Rectangle
+        | LightKind::Disk { .. }
+        | LightKind::Sphere { .. }
+        | LightKind::Cylinder { .. } => {}
         LightKind::Dome { .. } => {}
     }
     l.transform = *xf * l.transform;

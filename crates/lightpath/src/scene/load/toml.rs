@@ -308,6 +308,8 @@ struct LightDesc {
     corners: Option<[[f32; 3]; 4]>,
     center: Option<[f32; 3]>,
     radius: Option<f32>,
+    /// Cylinder: its length along local X.
+    length: Option<f32>,
     position: Option<[f32; 3]>,
     direction: Option<[f32; 3]>,
     /// Spot: full cone angle and the width of its soft edge, in degrees.
@@ -610,6 +612,10 @@ fn light(src: &Source, l: &Spanned<LightDesc>) -> Result<d::LightDesc, SceneErro
             let radius = l.radius.ok_or_else(|| src.error(Some(span.clone()), "sphere light needs 'radius'"))?;
             (d::LightKind::Sphere { center: l.center.unwrap_or([0.0; 3]), radius }, color(l.radiance, "radiance")?)
         }
+        "cylinder" => {
+            let size = |v: Option<f32>, what| v.ok_or_else(|| src.error(Some(span.clone()), format!("cylinder light needs '{what}'")));
+            (d::LightKind::Cylinder { radius: size(l.radius, "radius")?, length: size(l.length, "length")? }, color(l.radiance, "radiance")?)
+        }
         "point" => {
             let position = need(l.position, "position")?;
             (d::LightKind::Point { position }, color(l.intensity, "intensity")?)
@@ -633,7 +639,7 @@ fn light(src: &Source, l: &Spanned<LightDesc>) -> Result<d::LightDesc, SceneErro
         other => {
             return Err(src.error(
                 Some(l.kind.span()),
-                format!("unknown light type '{other}': expected rect, quad, disk, sphere, point, spot, distant, dome or mesh"),
+                format!("unknown light type '{other}': expected rect, quad, disk, sphere, cylinder, point, spot, distant, dome or mesh"),
             ))
         }
     };
