@@ -169,8 +169,8 @@ settings! {
         role: Shared,
         header: Header::Setting,
         help: "How lights are chosen for light sampling: tree (power, distance and \
-               orientation), power, or uniform (relighting from AOVs then equals \
-               re-rendering bit for bit).",
+               orientation), power, or uniform (with clamps off, relighting from AOVs \
+               then equals re-rendering up to float rounding; docs/aovs.md).",
     }
     noise_threshold: f32 = 0.0, {
         section: Render,
