@@ -14,7 +14,7 @@ pub fn profile() -> Profile {
     Profile::new(&[Camera, Reflect, Transmit, Light, Emission])
 }
 
-/// What a user (data) lobe reports (LPE.md §1).
+/// What a user (data) lobe reports (docs/lpe.md#paths-and-events).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum DataLobe {
     Albedo,

@@ -77,7 +77,7 @@ pub use crate::settings::SettingOverrides;
 /// Which AOVs the command line asks for, besides the scene's own.
 #[derive(Clone, Debug, Default)]
 pub struct AovRequest {
-    /// Add the standard set (LPE.md §7).
+    /// Add the standard set (docs/lpe.md#standard-aovs).
     pub standard: bool,
     /// `NAME=DEFINITION` arguments.
     pub extra: Vec<String>,

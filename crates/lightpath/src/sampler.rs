@@ -1,5 +1,5 @@
 //! Sample streams indexed by dimension: the one owner of which number of a camera sample
-//! drives which decision (DESIGN.md). A camera sample's numbers depend only on (seed,
+//! drives which decision (docs/architecture.md). A camera sample's numbers depend only on (seed,
 //! pixel, sample index, dimension), so a low-discrepancy sampler (Owen-scrambled Sobol)
 //! drops in by implementing [`Sampler`] and nothing else changes.
 //!

@@ -1,4 +1,4 @@
-//! The event model of LPE.md §1: what a renderer feeds the automaton at each path vertex,
+//! The event model of docs/lpe.md#paths-and-events: what a renderer feeds the automaton at each path vertex,
 //! and the path notation of §10 used by tests and `lpe match`.
 
 use crate::error::{Error, ErrorKind, Span};
@@ -230,12 +230,12 @@ impl fmt::Display for Event {
     }
 }
 
-/// Writes a path in the notation of LPE.md §10.
+/// Writes a path in the notation of docs/lpe.md#path-notation.
 pub fn format_path(events: &[Event]) -> String {
     events.iter().map(|e| e.to_string()).collect()
 }
 
-/// Parses a concrete path in the notation of LPE.md §10, e.g. `C<RD'floor'><L'key'>`.
+/// Parses a concrete path in the notation of docs/lpe.md#path-notation, e.g. `C<RD'floor'><L'key'>`.
 pub fn parse_path(src: &str) -> Result<Vec<Event>, Error> {
     let mut events = Vec::new();
     let mut chars = Cursor { src, pos: 0 };

@@ -1,5 +1,5 @@
 //! Lowering: the syntax tree becomes a regular expression over *event predicates*, each a
-//! conjunction of a type set, a scatter set and label-set constraints (LPE.md §3–4).
+//! conjunction of a type set, a scatter set and label-set constraints (docs/lpe.md#atoms–4).
 
 use crate::event::{
     class_mask, scatter_bit, Event, EventType, Scatter, ScatterClass, ALL_SCATTERS,
@@ -135,7 +135,7 @@ pub fn lower(e: &Expr) -> Hir {
                 lighting_scatters(),
                 vec![],
             ),
-            // A negated scatter slot admits user lobes (LPE.md §4).
+            // A negated scatter slot admits user lobes (docs/lpe.md#events-in-angle-brackets).
             SlotKind::Scatter => Pred::new(
                 ALL_TYPES,
                 ALL_SCATTERS & !scatter_bits(items.iter()),
@@ -276,5 +276,5 @@ fn label_list<'a>(items: impl Iterator<Item = &'a Item>) -> Vec<String> {
     v
 }
 
-/// The event types the generic profile does not emit (LPE.md §1): V and B.
+/// The event types the generic profile does not emit (docs/lpe.md#paths-and-events): V and B.
 pub const RESERVED_TYPES: u8 = (1 << EventType::Volume as u8) | (1 << EventType::Background as u8);

@@ -1,4 +1,4 @@
-//! The prefixes of LPE.md §6 and the standard names of §7.
+//! The prefixes of docs/lpe.md#prefixes and the standard names of §7.
 
 /// A prefix changes how the renderer routes contributions to the AOV carrying it.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
@@ -81,7 +81,7 @@ impl FromIterator<Prefix> for Flags {
     }
 }
 
-/// The standard names of LPE.md §7, with their definitions (prefixes included).
+/// The standard names of docs/lpe.md#standard-aovs, with their definitions (prefixes included).
 pub const STANDARD_NAMES: [(&str, &str); 11] = [
     ("beauty", "C[DS]*[<L.>O]"),
     ("emission", "CO"),

@@ -119,7 +119,7 @@ pub struct Stats {
     pub min_dfa_states: usize,
 }
 
-/// What a renderer can emit (LPE.md §1): the event types its paths contain. Rules that
+/// What a renderer can emit (docs/lpe.md#paths-and-events): the event types its paths contain. Rules that
 /// need other types get a warning: they would stay black.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Profile {
@@ -169,7 +169,7 @@ impl Default for Compiler {
     }
 }
 
-/// Default limit on DFA states built by subset construction (LPE.md §8).
+/// Default limit on DFA states built by subset construction (docs/lpe.md#errors).
 pub const DEFAULT_STATE_LIMIT: usize = 10_000;
 
 impl Compiler {
@@ -192,7 +192,7 @@ impl Compiler {
     }
 
     /// Whether the alphabet includes the default events (every event of the shapes the
-    /// profile emits, LPE.md §1: `C`, `L`, `O` (and `V`, `B` if it emits them) without
+    /// profile emits, docs/lpe.md#paths-and-events: `C`, `L`, `O` (and `V`, `B` if it emits them) without
     /// scatter, `R`/`T` with any lobe; each with no label or one label the rules name). A renderer that passes
     /// its whole scene as the vocabulary turns this off for the smallest table.
     pub fn default_alphabet(mut self, on: bool) -> Compiler {

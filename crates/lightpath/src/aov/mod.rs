@@ -55,7 +55,7 @@ impl AovSpec {
     }
 }
 
-/// The data AOVs Lightpath adds to LPE.md §7's set: the first hit's world-space shading
+/// The data AOVs Lightpath adds to docs/lpe.md#standard-aovs's set: the first hit's world-space shading
 /// normal (`U6`) and camera-space depth (`U7`), one value per sample like `albedo`. With
 /// `albedo` they are what a denoiser takes as auxiliary images.
 pub const STANDARD_DATA: [(&str, &str); 2] = [
@@ -80,7 +80,7 @@ pub fn resolve_definition(definition: &str) -> &str {
         .map_or(definition, |(_, d)| d)
 }
 
-/// The standard AOVs of LPE.md §7 other than beauty, then `normal` and `depth`.
+/// The standard AOVs of docs/lpe.md#standard-aovs other than beauty, then `normal` and `depth`.
 pub fn standard() -> Vec<AovSpec> {
     STANDARD_NAMES
         .iter()

@@ -5,7 +5,7 @@
 //! - `lightpath/aov/<name>`: the AOV's definition (prose for people; never parsed).
 //! - `lightpath/part/<name>`: the AOV `<name>` is a part of (its whole).
 //! - `lightpath/partition/<name>`: which partition of that whole it belongs to:
-//!   `standard` (LPE.md §7 set), `bounces` or `lightgroups`.
+//!   `standard` (docs/lpe.md#standard-aovs set), `bounces` or `lightgroups`.
 //! - `lightpath/lightgroup/<name>`: for a `lightgroups` part, its light group, or
 //!   `__default` for lights without a group (and glowing objects).
 //! - `lightpath/expression/<name>`: the AOV's expression as compiled (a standard name
@@ -53,7 +53,7 @@ pub const PART_ATTRIBUTE_PREFIX: &str = "lightpath/part/";
 pub const PARTITION_ATTRIBUTE_PREFIX: &str = "lightpath/partition/";
 pub const LIGHTGROUP_ATTRIBUTE_PREFIX: &str = "lightpath/lightgroup/";
 /// Render metadata attributes.
-/// The holdout pair RenderMan's shadow matte is derived from (LPE.md §7), and the matte.
+/// The holdout pair RenderMan's shadow matte is derived from (docs/lpe.md#standard-aovs), and the matte.
 pub const OCCLUDED: &str = "occluded";
 pub const UNOCCLUDED: &str = "unoccluded";
 pub const SHADOW: &str = "shadow";
@@ -390,7 +390,7 @@ pub struct PartOf {
     pub group: Option<Option<String>>,
 }
 
-/// The order parts of a partition are listed in: the standard set as LPE.md §7 lists it,
+/// The order parts of a partition are listed in: the standard set as docs/lpe.md#standard-aovs lists it,
 /// bounces by count (`plus` last), light groups by name with the default group last.
 pub fn part_order(part: &PartOf) -> (usize, u32, bool, String) {
     match part.kind {

@@ -16,7 +16,7 @@ pub const MAX_BOUNCES: u32 = 63;
 /// What was asked for.
 #[derive(Clone, Debug, Default)]
 pub struct PlanRequest {
-    /// The standard set of LPE.md §7.
+    /// The standard set of docs/lpe.md#standard-aovs.
     pub standard: bool,
     /// The scene's `[aovs]`, in order: name and definition.
     pub scene_aovs: Vec<(String, String)>,
@@ -47,7 +47,7 @@ pub enum PlanError {
     BadAov { arg: String, message: String },
     /// A light-group split names an AOV the render does not have.
     UnknownSplit(String),
-    /// `--bounces K` outside 1 ..= 63 (a quantifier bound of LPE.md §5 is at most 64).
+    /// `--bounces K` outside 1 ..= 63 (a quantifier bound of docs/lpe.md#quantifiers is at most 64).
     Bounces(u32),
     /// Two `--aov`s of one name: which one was meant cannot be guessed.
     DuplicateAov(String),

@@ -1,7 +1,7 @@
 //! Direct light with multiple importance sampling: light samples at each scattering
 //! vertex (every non-delta lobe through its own event, then `L`, or a glow's `O`), lights
 //! and sampled glows found by BSDF rays with the complementary weight, and the lights-only test that `unoccluded` and
-//! `shadows` AOVs see. The one power heuristic of the renderer lives here (DESIGN.md).
+//! `shadows` AOVs see. The one power heuristic of the renderer lives here (docs/architecture.md).
 
 use super::path::{PathState, Vertex};
 use super::routing::{Origin, Via};
@@ -211,7 +211,7 @@ impl Tracer<'_> {
     }
 
     /// The BSDF-sampled `ray` of `path` tested against the lights alone, for
-    /// `unoccluded` and `shadows` AOVs (LPE.md §6): the nearest light surface along it,
+    /// `unoccluded` and `shadows` AOVs (docs/lpe.md#prefixes): the nearest light surface along it,
     /// or the escape lights if there is none, with the same MIS weight as the light the
     /// real ray would find. `hit` is what the real ray found: the light counts as
     /// occluded unless it is that, so `plain + shadows = unoccluded` sample by sample.

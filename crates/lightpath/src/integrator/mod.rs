@@ -1,5 +1,5 @@
 //! Unidirectional path tracing with light sampling and MIS (power heuristic), Russian
-//! roulette and depth limits, feeding the LPE automaton one event per vertex (DESIGN.md):
+//! roulette and depth limits, feeding the LPE automaton one event per vertex (docs/architecture.md):
 //! the camera event, the sampled lobe's event at each scattering vertex, every lobe of a
 //! light sample through its own event then `L`, light hits through `L` with the
 //! complementary weight, emission through `O`. A dead automaton state ends the path.

@@ -190,7 +190,7 @@ impl Tracer<'_> {
         }
     }
 
-    /// Data lobes, each as if lit by a unit light (LPE.md §1).
+    /// Data lobes, each as if lit by a unit light (docs/lpe.md#paths-and-events).
     fn data_lobes(&self, out: &mut Sink, path: &PathState, v: &Vertex) {
         let scene = self.scene;
         let a = &scene.automaton;

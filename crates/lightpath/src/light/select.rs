@@ -1,4 +1,4 @@
-//! Which light a shading point samples, with what probability (DESIGN.md's owner of that
+//! Which light a shading point samples, with what probability (docs/architecture.md's owner of that
 //! decision). Three strategies, `[render] light_selection` / `--light-selection`:
 //!
 //! - `tree` (default): a bounding volume hierarchy over the lights with a surface, points

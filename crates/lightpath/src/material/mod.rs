@@ -1,5 +1,5 @@
 //! Materials as small lists of lobes. Each lobe event is reflection or transmission,
-//! diffuse or specular, with RenderMan's lobe number (LPE.md §1), so that light sampling
+//! diffuse or specular, with RenderMan's lobe number (docs/lpe.md#paths-and-events), so that light sampling
 //! can send every lobe's contribution through its own LPE event.
 //!
 //! ```toml

@@ -15,7 +15,7 @@ pub struct Definition {
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub enum Body {
     Expr(Expr),
-    /// A standard name after `lpe:` (LPE.md §7), in its canonical spelling.
+    /// A standard name after `lpe:` (docs/lpe.md#standard-aovs), in its canonical spelling.
     Standard(&'static str),
 }
 

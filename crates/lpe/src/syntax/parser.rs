@@ -1,5 +1,5 @@
 //! A hand-written recursive-descent parser over characters, so that every error can
-//! point at exactly the token LPE.md §8 names.
+//! point at exactly the token docs/lpe.md#errors names.
 
 use super::ast::{Body, Definition, Expr, Item, Slot, SlotItem, SlotKind};
 use crate::error::{Error, ErrorKind, Span};
@@ -119,7 +119,7 @@ fn is_quantifier_start(c: char) -> bool {
     matches!(c, '*' | '+' | '?' | '{')
 }
 
-/// Quantifier bounds above this are errors (LPE.md §5).
+/// Quantifier bounds above this are errors (docs/lpe.md#quantifiers).
 const MAX_BOUND: u64 = 64;
 
 impl<'a> Parser<'a> {
@@ -312,7 +312,7 @@ impl<'a> Parser<'a> {
             _ => {}
         }
         let syntax = |c: &Cursor<'_>, what: &str| -> Error {
-            // A token (LPE.md §8): a numbered symbol such as `D4` or a label is reported
+            // A token (docs/lpe.md#errors): a numbered symbol such as `D4` or a label is reported
             // whole, as anywhere else.
             let span = match c.peek() {
                 Some((at, _)) => c.token_span(at),

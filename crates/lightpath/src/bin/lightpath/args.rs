@@ -174,7 +174,7 @@ pub(crate) struct RenderArgs {
     /// An extra AOV, NAME=DEFINITION (repeatable).
     #[arg(long = "aov")]
     pub(crate) aovs: Vec<String>,
-    /// Which standard AOVs to add: standard (the table of LPE.md §7) or none.
+    /// Which standard AOVs to add: standard (the table of docs/lpe.md#standard-aovs) or none.
     #[arg(long = "aovs", default_value = "standard", value_parser = ["standard", "none"])]
     pub(crate) aov_set: String,
     /// Split beauty per light group: beauty_<group>, and beauty__default for lights

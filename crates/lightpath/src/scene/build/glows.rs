@@ -1,5 +1,5 @@
 //! Glowing surfaces (objects with `emission`, not lights) sampled as lights. A glow stays
-//! what LPE.md says it is, emission seen as `O` with its object's labels, in the default
+//! what docs/lpe.md says it is, emission seen as `O` with its object's labels, in the default
 //! light-group part; but it joins light selection, so that a small glowing object is not
 //! found by BSDF rays alone (a firefly each time one finds it), and both ways of reaching
 //! it are weighed by MIS. The integrator routes a light sample of a glow with the glow's

@@ -152,7 +152,7 @@ pub fn no_light_warning(desc: &SceneDesc) -> Option<String> {
 
 /// A mesh light over the triangles of `objects[object]`, as loaders make one for an
 /// emissive material: two-sided, as Blender and Cycles render emission, and its light
-/// group is the object's name (RenderMan's mesh lights, LPE.md §1).
+/// group is the object's name (RenderMan's mesh lights, docs/lpe.md#paths-and-events).
 pub fn mesh_light(object: usize, name: &str, radiance: [f32; 3], origin: Origin) -> LightDesc {
     LightDesc {
         kind: LightKind::Mesh { object },
