@@ -247,7 +247,6 @@ impl RenderJob {
         }
         self.overrides.apply(&mut desc.render);
         let paths = output::naming::output_paths(&self.scene, self.output.as_deref());
-        checks::outputs(&paths, &self.scene).map_err(Error::Output)?;
         checks::settings(&desc, self.first_sample)
             .map_err(|e| Error::Setting(format!("{}: {e}", desc.source)))?;
         let mut warnings = desc.warnings.clone();
@@ -257,9 +256,14 @@ impl RenderJob {
             .check_aovs(specs.len() as u64, "this render's AOV plan")
             .map_err(Error::Setting)?;
         let mut scene = Scene::build(&desc, &specs)?;
+        let reads = recording.finish();
+        // No output may replace a file the scene reads (its includes, meshes, textures).
+        let mut inputs: Vec<&std::path::Path> = reads.iter().map(|r| r.path.as_path()).collect();
+        inputs.push(std::path::Path::new(&self.scene));
+        checks::outputs(&paths, &inputs).map_err(Error::Output)?;
         let identity = Identity::new(
             &source.dir,
-            &recording.finish(),
+            &reads,
             crate::identity::settings(&desc, self.camera.as_deref()),
         );
         scene

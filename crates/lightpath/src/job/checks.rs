@@ -61,12 +61,13 @@ pub fn film(scene: &Scene) -> Result<(), String> {
     Ok(())
 }
 
-/// The EXR and its preview can be written where asked, without destroying the scene.
-pub fn outputs(paths: &OutputPaths, scene: &str) -> Result<(), String> {
+/// The EXR and its preview (and an interrupted render's partial pair) can be written
+/// where asked, without destroying the scene or any file it reads.
+pub fn outputs(paths: &OutputPaths, inputs: &[&Path]) -> Result<(), String> {
     target::check_exr_name(&paths.exr, Some(&paths.png))?;
     let partial = crate::output::naming::partial_paths(paths);
     for path in [&paths.exr, &paths.png, &partial.exr, &partial.png] {
-        target::check(path, &[Path::new(scene)])?;
+        target::check(path, inputs)?;
     }
     Ok(())
 }

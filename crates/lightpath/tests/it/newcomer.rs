@@ -168,3 +168,40 @@ fn typos_are_answered_with_a_guess() {
         assert!(comp.status.success(), "{spelling}: {}", stderr(&comp));
     }
 }
+
+#[test]
+fn no_output_replaces_a_file_the_scene_reads() {
+    let dir = Scratch::new("inputs-kept");
+    let texture = dir.join("wood.png");
+    let texels = [vec![0.5f32; 4], vec![0.3; 4], vec![0.1; 4]];
+    lightpath::output::write_png_rgb(&texture, 2, 2, &texels, 0.0).unwrap();
+    let before = std::fs::read(&texture).unwrap();
+    let scene = include_str!("../../../../scenes/cornell-classic.toml").replacen(
+        "[materials.white]\ntype = \"diffuse\"",
+        "[materials.white]\ntype = \"diffuse\"\ncolor_texture = \"wood.png\"",
+        1,
+    );
+    assert!(scene.contains("wood.png"));
+    std::fs::write(dir.join("scene.toml"), scene).unwrap();
+    // -o wood.exr would write its preview over the texture wood.png.
+    let out = lightpath()
+        .arg("render")
+        .arg(dir.join("scene.toml"))
+        .args(["--quiet", "--spp", "1", "--resolution", "8x8", "-o"])
+        .arg(dir.join("wood.exr"))
+        .output()
+        .unwrap();
+    assert!(!out.status.success());
+    assert!(stderr(&out).contains("wood.png"), "{}", stderr(&out));
+    assert_eq!(std::fs::read(&texture).unwrap(), before);
+    assert!(!dir.join("wood.exr").exists());
+    // Any other name renders, reading the texture.
+    let out = lightpath()
+        .arg("render")
+        .arg(dir.join("scene.toml"))
+        .args(["--quiet", "--spp", "1", "--resolution", "8x8", "-o"])
+        .arg(dir.join("shot.exr"))
+        .output()
+        .unwrap();
+    assert!(out.status.success(), "{}", stderr(&out));
+}
