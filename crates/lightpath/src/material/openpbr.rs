@@ -244,10 +244,17 @@ impl Bsdf {
             }
         }
         if set.glass {
+            // With a depth, the colour is the interior's absorption (a medium's), not a
+            // tint of the interface.
+            let tint = if p.transmission_depth > 0.0 {
+                Vec3A::ONE
+            } else {
+                p.transmission_color
+            };
             b.push(Dielectric {
                 eta,
                 alpha: spec_alpha,
-                tint: p.transmission_color * (dielectric * transmission),
+                tint: tint * (dielectric * transmission),
             });
         }
         if set.metal {
