@@ -10,6 +10,7 @@ use super::{
     coat::Coat, conductor::Conductor, dielectric::Dielectric, lambert::Lambert,
     translucent::DiffuseTransmission,
 };
+use super::fuzz::Fuzz;
 use glam::{Vec2, Vec3A};
 use lpe::Scatter;
 
@@ -115,4 +116,4 @@ macro_rules! lobes {
     };
 }
 
-lobes!(Lambert, DiffuseTransmission, Conductor, Dielectric, Coat);
+lobes!(Lambert, DiffuseTransmission, Conductor, Dielectric, Coat, Fuzz);

@@ -21,6 +21,8 @@ mod coat;
 mod conductor;
 mod dielectric;
 pub mod fresnel;
+mod fuzz;
+mod fuzz_table;
 mod lambert;
 pub mod lobe;
 pub mod microfacet;
@@ -31,11 +33,14 @@ mod translucent;
 
 #[cfg(test)]
 mod tests;
+#[cfg(test)]
+mod tests_fuzz;
 
 pub use coat::Coat;
 pub use conductor::Conductor;
 pub use dielectric::Dielectric;
 pub use fresnel::fresnel_dielectric;
+pub use fuzz::Fuzz;
 pub use lambert::Lambert;
 pub use lobe::{Lobe, LobeModel, LobeTag};
 pub use pbr::PbrParams;
