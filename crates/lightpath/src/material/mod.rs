@@ -29,12 +29,15 @@ pub mod microfacet;
 pub mod pbr;
 pub mod texture;
 pub mod textured;
+pub mod thin_film;
 mod translucent;
 
 #[cfg(test)]
 mod tests;
 #[cfg(test)]
 mod tests_fuzz;
+#[cfg(test)]
+mod tests_thin_film;
 
 pub use coat::Coat;
 pub use conductor::Conductor;
@@ -44,6 +47,7 @@ pub use fuzz::Fuzz;
 pub use lambert::Lambert;
 pub use lobe::{Lobe, LobeModel, LobeTag};
 pub use pbr::PbrParams;
+pub use thin_film::{conductor_ior_from_colors, thin_film_fresnel, FilmBase};
 pub use translucent::DiffuseTransmission;
 
 use crate::sampling::Frame;
