@@ -386,6 +386,32 @@ fn white_fuzz_never_reflects_more_than_it_receives() {
     assert!(max > 0.7, "largest albedo {max}");
 }
 
+/// The table's shape (which a transposed or misread table would break): the fuzz
+/// reflects more towards grazing at every roughness, and more with roughness away
+/// from grazing.
+#[test]
+fn albedo_grows_with_roughness_and_towards_grazing() {
+    let albedo = |r: f32, mu: f32| {
+        Fuzz {
+            color: Vec3A::ONE,
+            weight: 1.0,
+            roughness: r,
+        }
+        .albedo(mu)
+    };
+    for i in 0..=50 {
+        for j in 2..=50 {
+            let (r, mu) = (i as f32 / 50.0, j as f32 / 50.0);
+            assert!(albedo(r, mu) <= albedo(r, mu - 0.02) + 1e-6, "α {r}, μ {mu}");
+            if i > 0 {
+                assert!(albedo(r, mu) + 1e-6 >= albedo(r - 0.02, mu), "α {r}, μ {mu}");
+            }
+        }
+    }
+    assert!(albedo(1.0, 0.02) > 0.7 && albedo(1.0, 1.0) < 0.4);
+    assert!(albedo(0.2, 1.0) < 1e-3);
+}
+
 /// Fuzz over a white Lambertian scaled by 1 − weight · R(μo), as the layering does,
 /// keeps a white furnace white.
 #[test]
