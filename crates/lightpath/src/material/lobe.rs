@@ -6,11 +6,11 @@
 //! transmission inside its own sampling (glass, per microfacet) emits two, and `sub`
 //! numbers them.
 
+use super::fuzz::Fuzz;
 use super::{
     coat::Coat, conductor::Conductor, dielectric::Dielectric, lambert::Lambert,
     translucent::DiffuseTransmission,
 };
-use super::fuzz::Fuzz;
 use glam::{Vec2, Vec3A};
 use lpe::Scatter;
 
@@ -116,4 +116,11 @@ macro_rules! lobes {
     };
 }
 
-lobes!(Lambert, DiffuseTransmission, Conductor, Dielectric, Coat, Fuzz);
+lobes!(
+    Lambert,
+    DiffuseTransmission,
+    Conductor,
+    Dielectric,
+    Coat,
+    Fuzz
+);

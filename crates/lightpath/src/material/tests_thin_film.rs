@@ -90,7 +90,9 @@ fn no_film_is_the_plain_fresnel_of_the_base() {
                         got,
                         want,
                         2e-5,
-                        &format!("metal {f0}, cos {cos}, outside {outside}, film {film}/{thickness}"),
+                        &format!(
+                            "metal {f0}, cos {cos}, outside {outside}, film {film}/{thickness}"
+                        ),
                     );
                 }
             }
@@ -226,7 +228,10 @@ fn colour_changes_with_thickness() {
             blue_wins += 1;
         }
     }
-    assert!(red_wins >= 3 && blue_wins >= 3, "red {red_wins}, blue {blue_wins}");
+    assert!(
+        red_wins >= 3 && blue_wins >= 3,
+        "red {red_wins}, blue {blue_wins}"
+    );
     // Without the film every channel reflects 0.04 at normal incidence, whatever the
     // thickness; R₁₂ = 1/9 and R₂₃ ≈ 0.02 swing the film's ±2√(R₁₂R₂₃) ≈ ±0.1.
     assert!((hi - lo).min_element() > 0.1, "range {lo} .. {hi}");

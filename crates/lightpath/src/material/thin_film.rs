@@ -52,7 +52,11 @@ pub fn thin_film_fresnel(
         cos1 = 1.0;
     }
     let cos1 = cos1.min(1.0);
-    let d = if thickness_nm > 0.0 { thickness_nm } else { 0.0 };
+    let d = if thickness_nm > 0.0 {
+        thickness_nm
+    } else {
+        0.0
+    };
     let mut eta2 = positive_or(film_ior, eta1);
     if d < 30.0 {
         eta2 = eta1 + (eta2 - eta1) * smoothstep(d / 30.0);
@@ -153,9 +157,9 @@ pub(super) const PAPER_FIT: [(f64, f64, f64, usize); 4] = [
 /// matrix (primaries and D65 white of IEC 61966-2-1) times diag(D65 white), so E white
 /// maps to RGB white (rows sum to one).
 pub(super) const XYZ_TO_RGB: [Vec3A; 3] = [
-    Vec3A::new(3.080_399_1, -1.537_383_2, -0.543_015_9),
-    Vec3A::new(-0.921_223_4, 1.875_967_5, 0.045_255_9),
-    Vec3A::new(0.052_873_9, -0.203_977, 1.151_103),
+    Vec3A::new(3.080_399, -1.537_383, -0.543_016),
+    Vec3A::new(-0.921_223_4, 1.875_968, 0.045_255_86),
+    Vec3A::new(0.052_873_94, -0.203_977, 1.151_103),
 ];
 
 /// The normalised sensitivities' Fourier transform at optical path difference `opd`
