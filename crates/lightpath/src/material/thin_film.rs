@@ -69,24 +69,28 @@ pub fn thin_film_fresnel(
             } else {
                 (eta1, eta3)
             };
-            let xyz = airy_xyz(cos1, outside, eta2, d, C::real(under));
+            let xyz =
+                Film::new(cos1, outside, eta2, d).map_or(Vec3A::ONE, |f| f.xyz(C::real(under)));
             Vec3A::new(
                 XYZ_TO_RGB[0].dot(xyz),
                 XYZ_TO_RGB[1].dot(xyz),
                 XYZ_TO_RGB[2].dot(xyz),
             )
         }
-        FilmBase::Conductor { eta, kappa } => {
-            let mut out = [0.0; 3];
-            for (c, o) in out.iter_mut().enumerate() {
-                let n3 = C {
-                    re: positive_or(eta[c], 1e-4).max(1e-4),
-                    im: if kappa[c] > 0.0 { kappa[c] } else { 0.0 },
-                };
-                *o = XYZ_TO_RGB[c].dot(airy_xyz(cos1, eta1, eta2, d, n3));
+        FilmBase::Conductor { eta, kappa } => match Film::new(cos1, eta1, eta2, d) {
+            None => Vec3A::ONE,
+            Some(film) => {
+                let mut out = [0.0; 3];
+                for (c, o) in out.iter_mut().enumerate() {
+                    let n3 = C {
+                        re: positive_or(eta[c], 1e-4).max(1e-4),
+                        im: if kappa[c] > 0.0 { kappa[c] } else { 0.0 },
+                    };
+                    *o = XYZ_TO_RGB[c].dot(film.xyz(n3));
+                }
+                Vec3A::from(out)
             }
-            Vec3A::from(out)
-        }
+        },
     };
     Vec3A::new(unit(rgb.x), unit(rgb.y), unit(rgb.z))
 }
@@ -163,59 +167,81 @@ pub(super) const XYZ_TO_RGB: [Vec3A; 3] = [
 ];
 
 /// The normalised sensitivities' Fourier transform at optical path difference `opd`
-/// (nm) with phase `shift`.
-fn sensitivity(opd: f32, shift: f32) -> Vec3A {
+/// (nm), split so that any phase shift is cheap: S(opd, shift) = A cos(shift) −
+/// B sin(shift), returned as (A, B) (cos(x + s) = cos x cos s − sin x sin s).
+fn sensitivity(opd: f32) -> (Vec3A, Vec3A) {
     let t = 2.0 * PI * opd;
-    let mut xyz = [0.0f32; 3];
+    let mut a = [0.0f32; 3];
+    let mut b = [0.0f32; 3];
     for (w, pos, var, c) in LOBES {
-        xyz[c] += w * (pos * t + shift).cos() * (-var * t * t).exp();
+        let g = w * (-var * t * t).exp();
+        let (sin, cos) = (pos * t).sin_cos();
+        a[c] += g * cos;
+        b[c] += g * sin;
     }
-    Vec3A::from(xyz)
+    (Vec3A::from(a), Vec3A::from(b))
 }
 
-/// Spectrally integrated Airy reflectance (XYZ, flat reflectance R → (R, R, R)) of the
-/// film η₂ of thickness `d` nm between η₁ and `n3`, at cos θ₁ = `cos1` in [0, 1].
-fn airy_xyz(cos1: f32, eta1: f32, eta2: f32, d: f32, n3: C) -> Vec3A {
-    // Top interface (dielectric): total reflection if the film is optically thinner.
-    let Some((r12, cos2)) = amplitudes(eta1, C::real(eta2), cos1) else {
-        return Vec3A::ONE;
-    };
-    let Some(cos2) = cos2.real_part() else {
-        return Vec3A::ONE;
-    };
-    let opd = 2.0 * eta2 * d * cos2;
-    let Some((r23, _)) = amplitudes(eta2, n3, cos2) else {
-        return Vec3A::ONE;
-    };
-    let mut sum = Vec3A::ZERO;
-    for (a12, a23) in r12.into_iter().zip(r23) {
-        sum += 0.5 * airy_sum(a12, a23, opd);
-    }
-    sum
+/// The film seen at one angle: the top interface and the sensitivities at the first
+/// three path differences, shared by both polarisations and every base channel.
+struct Film {
+    eta2: f32,
+    cos2: f32,
+    r12: [C; 2],
+    orders: [(Vec3A, Vec3A); 3],
 }
 
-/// Equation 10 for one polarisation: amplitudes r₁₂ (outside → film) and r₂₃ (film →
-/// base); r₂₁ = −r₁₂ gives the phase π − φ₁₂ + φ₂₃ of each round trip.
-fn airy_sum(r12: C, r23: C, opd: f32) -> Vec3A {
-    let big_r12 = r12.norm_sqr().min(1.0);
-    let big_r23 = r23.norm_sqr().min(1.0);
-    let r123 = big_r12 * big_r23;
-    if r123 >= 1.0 || big_r23 >= 1.0 {
-        // Total reflection at the base: a lossless film sends everything back.
-        return Vec3A::ONE;
+impl Film {
+    /// The film η₂ of thickness `d` nm under η₁, at cos θ₁ = `cos1` in [0, 1]; `None`
+    /// on total reflection at the top (a film optically thinner than the outside).
+    fn new(cos1: f32, eta1: f32, eta2: f32, d: f32) -> Option<Film> {
+        let (r12, cos2) = amplitudes(eta1, C::real(eta2), cos1)?;
+        let cos2 = cos2.real_part()?;
+        let opd = 2.0 * eta2 * d * cos2;
+        Some(Film {
+            eta2,
+            cos2,
+            r12,
+            orders: [1.0, 2.0, 3.0].map(|m| sensitivity(m * opd)),
+        })
     }
-    let t121 = 1.0 - big_r12;
-    let rs = t121 * t121 * big_r23 / (1.0 - r123);
-    let phi = PI - r12.arg() + r23.arg();
-    let mut out = Vec3A::splat(big_r12 + rs);
-    let mut cm = rs - t121;
-    let root = r123.sqrt();
-    for m in 1..=3 {
-        cm *= root;
-        let mf = m as f32;
-        out += 2.0 * cm * sensitivity(mf * opd, mf * phi);
+
+    /// Spectrally integrated reflectance (XYZ, flat reflectance R → (R, R, R)) over a
+    /// base of index `n3`.
+    fn xyz(&self, n3: C) -> Vec3A {
+        let Some((r23, _)) = amplitudes(self.eta2, n3, self.cos2) else {
+            return Vec3A::ONE;
+        };
+        let mut sum = Vec3A::ZERO;
+        for (a12, a23) in self.r12.into_iter().zip(r23) {
+            sum += 0.5 * self.airy_sum(a12, a23);
+        }
+        sum
     }
-    out
+
+    /// Equation 10 for one polarisation: amplitudes r₁₂ (outside → film) and r₂₃
+    /// (film → base); r₂₁ = −r₁₂ gives the phase π − φ₁₂ + φ₂₃ of each round trip.
+    fn airy_sum(&self, r12: C, r23: C) -> Vec3A {
+        let big_r12 = r12.norm_sqr().min(1.0);
+        let big_r23 = r23.norm_sqr().min(1.0);
+        let r123 = big_r12 * big_r23;
+        if r123 >= 1.0 || big_r23 >= 1.0 {
+            // Total reflection at the base: a lossless film sends everything back.
+            return Vec3A::ONE;
+        }
+        let t121 = 1.0 - big_r12;
+        let rs = t121 * t121 * big_r23 / (1.0 - r123);
+        let phi = PI - r12.arg() + r23.arg();
+        let mut out = Vec3A::splat(big_r12 + rs);
+        let mut cm = rs - t121;
+        let root = r123.sqrt();
+        for (m, (a, b)) in self.orders.iter().enumerate() {
+            cm *= root;
+            let (sin, cos) = ((m + 1) as f32 * phi).sin_cos();
+            out += 2.0 * cm * (*a * cos - *b * sin);
+        }
+        out
+    }
 }
 
 /// Fresnel amplitudes (s, p) from a real index `n1` into `n2` at cos θ₁ = `cos1`, and
