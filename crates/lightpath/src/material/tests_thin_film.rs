@@ -141,12 +141,12 @@ fn reflectance_stays_within_zero_and_one() {
     assert!(n > 50_000);
 }
 
-/// Against an independent computation (python, f64): the exact Airy reflectance
-/// |(r₁₂ + r₂₃ e^{iδ}) / (1 + r₁₂ r₂₃ e^{iδ})|² per polarisation, integrated by
-/// quadrature over wavenumber against the paper's Gaussian sensitivities (the
-/// densities whose Fourier transforms its code evaluates), converted like the renderer.
-/// Differences: the series cut after m = 3 (at most 1.2e-4 in these cases, measured in
-/// the same python) and f32 rounding; tolerance 3e-4.
+/// Against an independent computation, `tests_thin_film_reference.py` (f64): the exact
+/// Airy reflectance |(r₁₂ + r₂₃ e^{iδ}) / (1 + r₁₂ r₂₃ e^{iδ})|² per polarisation,
+/// integrated by quadrature over wavenumber against the paper's Gaussian sensitivities
+/// (the densities whose Fourier transforms its code evaluates), converted like the
+/// renderer. Differences: the series cut after m = 3 (at most 1.2e-4 in these cases, the
+/// conductor's red; 1e-6 or less on dielectrics) and f32 rounding; tolerance 3e-4.
 #[test]
 fn matches_an_independent_spectral_integration() {
     let cases: [(f32, f32, f32, f32, FilmBase, [f64; 3]); 5] = [
