@@ -6,6 +6,7 @@
 //! transmission inside its own sampling (glass, per microfacet) emits two, and `sub`
 //! numbers them.
 
+use super::fuzz::Fuzz;
 use super::{
     coat::Coat, conductor::Conductor, dielectric::Dielectric, lambert::Lambert,
     translucent::DiffuseTransmission,
@@ -115,4 +116,11 @@ macro_rules! lobes {
     };
 }
 
-lobes!(Lambert, DiffuseTransmission, Conductor, Dielectric, Coat);
+lobes!(
+    Lambert,
+    DiffuseTransmission,
+    Conductor,
+    Dielectric,
+    Coat,
+    Fuzz
+);
