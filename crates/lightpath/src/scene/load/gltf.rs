@@ -1268,6 +1268,25 @@ fn percent_decode(uri: &str) -> String {
     String::from_utf8_lossy(&out).into_owned()
 }
 
+/// Sets OpenPBR number `input` (a name from the table).
+fn set_number(p: &mut OpenPbr, input: &str, v: f32) {
+    if let Some(InputMut::Scalar(slot)) = openpbr::input(input).map(|i| (i.get)(p)) {
+        *slot = v;
+    }
+}
+
+/// A texture on OpenPBR input `input` (a name from the table).
+fn input_texture(input: &str, texture: TextureDesc, channel: u8, srgb: bool) -> InputTexture {
+    InputTexture {
+        input: openpbr::input(input)
+            .expect("glTF maps to OpenPBR inputs")
+            .name,
+        texture,
+        channel,
+        srgb,
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -1301,24 +1320,5 @@ mod tests {
         // Inner 0: Blender's blend 1, the smoothstep spans cos(outer)..1.
         let (_, soft) = spot_cone(0.0, 0.5);
         assert!((soft - 0.5f32.to_degrees()).abs() < 1e-3);
-    }
-}
-
-/// Sets OpenPBR number `input` (a name from the table).
-fn set_number(p: &mut OpenPbr, input: &str, v: f32) {
-    if let Some(InputMut::Scalar(slot)) = openpbr::input(input).map(|i| (i.get)(p)) {
-        *slot = v;
-    }
-}
-
-/// A texture on OpenPBR input `input` (a name from the table).
-fn input_texture(input: &str, texture: TextureDesc, channel: u8, srgb: bool) -> InputTexture {
-    InputTexture {
-        input: openpbr::input(input)
-            .expect("glTF maps to OpenPBR inputs")
-            .name,
-        texture,
-        channel,
-        srgb,
     }
 }
