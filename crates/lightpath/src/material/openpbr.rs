@@ -24,7 +24,9 @@
 use super::layer::Layer;
 use super::lobe::Lobe;
 use super::pbr::dielectric_f0;
-use super::{roughness_to_alpha, Bsdf, Coat, Conductor, Dielectric, DiffuseTransmission, Lambert};
+use super::{
+    roughness_to_alpha, Bsdf, Coat, Conductor, Dielectric, DiffuseTransmission, Fuzz, Lambert,
+};
 use glam::Vec3A;
 
 /// What a parameter holds.
@@ -276,6 +278,16 @@ impl Bsdf {
                 Layer::coat(coat, p.coat_color, p.coat_darkening, base_albedo),
                 below,
             );
+        }
+        if set.fuzz {
+            let below = b.len();
+            let fuzz = Fuzz {
+                color: p.fuzz_color,
+                weight: p.fuzz_weight.clamp(0.0, 1.0),
+                roughness: p.fuzz_roughness.clamp(0.0, 1.0),
+            };
+            b.push(fuzz);
+            b.layer(Layer::Fuzz(fuzz), below);
         }
         // The `U2` albedo: the colours of the lobes by their weights.
         let albedo = base_w

@@ -147,6 +147,18 @@ fn a_white_base_under_its_default_specular_keeps_the_dome_white() {
 }
 
 #[test]
+fn fuzz_over_a_white_base_keeps_the_dome_white() {
+    for roughness in [0.3, 1.0] {
+        let params = format!("base_color = [1, 1, 1]\nspecular_weight = 0\nfuzz_weight = 1\nfuzz_roughness = {roughness}");
+        let (mean, se) = furnace(&params, 16);
+        assert!(
+            (mean - 1.0).abs() < 5.0 * se + 1e-3,
+            "roughness {roughness}: mean {mean} ± {se}"
+        );
+    }
+}
+
+#[test]
 fn an_emissive_openpbr_glows() {
     let text = FURNACE.replace("PARAMS", "emission_luminance = 2\nemission_color = [1, 0.5, 0]\nbase_color = [0, 0, 0]\nspecular_weight = 0")
         .replace("radiance = [1, 1, 1]", "radiance = [0, 0, 0]");
@@ -163,13 +175,14 @@ fn an_emissive_openpbr_glows() {
 fn openpbr_lobes_emit_renderman_events() {
     // A coated, metallic-and-dielectric, partly transmissive material: each lobe's
     // AOV sees light, and the standard partition still sums to the beauty.
-    let params = "base_color = [0.8, 0.3, 0.2]\nbase_metalness = 0.3\ntransmission_weight = 0.3\ncoat_weight = 0.5\ncoat_roughness = 0.2\nspecular_roughness = 0.4";
+    let params = "base_color = [0.8, 0.3, 0.2]\nbase_metalness = 0.3\ntransmission_weight = 0.3\ncoat_weight = 0.5\ncoat_roughness = 0.2\nspecular_roughness = 0.4\nfuzz_weight = 0.5";
     let text = FURNACE.replace("PARAMS", params);
     let extra = vec![
         AovSpec::new("coat", "C<RS4>.*[<L.>O]"),
         AovSpec::new("spec", "C<R[S2 S3]>.*[<L.>O]"),
         AovSpec::new("glass", "C<[RT]S8>.*[<L.>O]"),
         AovSpec::new("diffuse", "C<RD2>.*[<L.>O]"),
+        AovSpec::new("fuzz", "C<RS6>.*[<L.>O]"),
     ];
     let mut aovs = extra;
     aovs.extend(aov::standard());
@@ -188,7 +201,7 @@ fn openpbr_lobes_emit_renderman_events() {
             assert!(err <= 1e-5, "partition off by {err} at {x},{y}");
         }
     }
-    for name in ["coat", "spec", "glass", "diffuse"] {
+    for name in ["coat", "spec", "glass", "diffuse", "fuzz"] {
         let k = scene.aovs.iter().position(|a| a.name == name).unwrap();
         let sum: f32 = (0..16)
             .flat_map(|y| (0..16).map(move |x| (x, y)))
