@@ -17,6 +17,8 @@
 //! one file per lobe kind; [`microfacet`] (GGX) and [`fresnel`] are shared. A [`Bsdf`]
 //! holds up to [`MAX_LOBES`] lobes inline, optionally under a [`Coat`] layer.
 
+pub mod albedo;
+mod albedo_tables;
 mod coat;
 mod conductor;
 mod dielectric;
@@ -27,6 +29,7 @@ pub mod microfacet;
 pub mod pbr;
 pub mod texture;
 pub mod textured;
+mod specular;
 mod translucent;
 
 #[cfg(test)]
@@ -39,6 +42,7 @@ pub use fresnel::fresnel_dielectric;
 pub use lambert::Lambert;
 pub use lobe::{Lobe, LobeModel, LobeTag};
 pub use pbr::PbrParams;
+pub use specular::Specular;
 pub use translucent::DiffuseTransmission;
 
 use crate::sampling::Frame;
@@ -164,13 +168,14 @@ impl Bsdf {
         )
     }
 
-    /// Metal: a mirror (RS2) when `alpha` is 0, GGX (RS3) otherwise.
+    /// Metal (RS2): a mirror when `alpha` is 0, GGX otherwise; Schlick Fresnel.
     pub fn conductor(f0: Vec3A, alpha: f32) -> Bsdf {
-        Bsdf::layered(&[Conductor { f0, alpha }.into()], None, f0)
+        Bsdf::layered(&[Conductor::schlick(f0, alpha).into()], None, f0)
     }
 
     /// Glass (RS8 + TS8), smooth or rough.
     pub fn dielectric(eta: f32, alpha: f32, tint: Vec3A) -> Bsdf {
+        let alpha = Vec2::splat(alpha);
         Bsdf::layered(&[Dielectric { eta, alpha, tint }.into()], None, tint)
     }
 

@@ -1,0 +1,111 @@
+//! Dielectric specular reflection over an opaque base (OpenPBR's specular layer on its
+//! diffuse or subsurface base): GGX reflection, anisotropic, with exact unpolarised
+//! Fresnel and Kulla–Conty multiple scattering (Kulla & Conty 2017, "Revisiting
+//! Physically Based Shading at Imageworks"), the dielectric's mean Fresnel F_avg(η)
+//! in their F_ms. Reflection only: what it does not reflect enters the base, which the
+//! material attenuates with [`Specular::albedo`] and [`Specular::albedo_avg`] as
+//! base × (1 − E(μo))(1 − E(μi)) / (1 − E_avg), reciprocal, and exactly the energy
+//! left for a white base.
+//!
+//! Its event is `RS2` (primary specular), or the lobe number it is given.
+
+use super::albedo;
+use super::fresnel::fresnel_dielectric;
+use super::lobe::{LobeModel, LobeSample, LobeTag, SampleCtx};
+use super::microfacet::{
+    clamp_weight, is_smooth, reflection_eval, reflection_sample, reflection_tags, Ggx,
+    MicrofacetReflection,
+};
+use crate::light::luminance;
+use glam::{Vec2, Vec3A};
+
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Specular {
+    /// Relative index of refraction, below / above the surface (below 1: the denser
+    /// medium is above, e.g. under a coat of higher index).
+    pub eta: f32,
+    /// Colour of the reflection (OpenPBR: specular colour); it does not change what
+    /// the base receives.
+    pub tint: Vec3A,
+    /// Mixing weight in [0, 1].
+    pub weight: f32,
+    /// GGX (αx along the tangent, αy); both 0 is smooth, a delta lobe.
+    pub alpha: Vec2,
+    /// RenderMan lobe number: 2 primary specular, 4 coat, 5 iridescence.
+    pub lobe: u8,
+}
+
+impl Specular {
+    fn eta(&self) -> f32 {
+        if self.eta > 0.0 {
+            self.eta
+        } else {
+            1.0
+        }
+    }
+
+    fn f_avg(&self) -> Vec3A {
+        Vec3A::splat(albedo::dielectric_f_avg(self.eta()))
+    }
+
+    /// Directional albedo E(μo) with a white tint: weight × (single scattering with the
+    /// exact Fresnel + multiple scattering), for `wo_z` = cos θo (its absolute value).
+    /// Below 1; what the base beneath receives is 1 − E.
+    pub fn albedo(&self, wo_z: f32) -> f32 {
+        let mu = wo_z.abs();
+        let w = clamp_weight(self.weight);
+        if is_smooth(self.alpha) {
+            return w * fresnel_dielectric(mu, self.eta());
+        }
+        let r = MicrofacetReflection::new(self.alpha, self.f_avg());
+        let a = Ggx::new(self.alpha).mean_alpha();
+        (w * (albedo::dielectric_e(mu, a, self.eta()) + r.ms_albedo(mu).x)).min(1.0)
+    }
+
+    /// The cosine-weighted average of [`Specular::albedo`], 2∫E(μ)μ dμ.
+    pub fn albedo_avg(&self) -> f32 {
+        let w = clamp_weight(self.weight);
+        if is_smooth(self.alpha) {
+            return w * albedo::dielectric_f_avg(self.eta());
+        }
+        let r = MicrofacetReflection::new(self.alpha, self.f_avg());
+        let a = Ggx::new(self.alpha).mean_alpha();
+        (w * (albedo::dielectric_e_avg(a, self.eta()) + r.ms_albedo_avg().x)).min(1.0)
+    }
+
+    /// The factor on a base lobe beneath, (1 − E(μo))(1 − E(μi)) / (1 − E_avg): what
+    /// enters through the layer and leaves through it again.
+    pub fn base_attenuation(&self, wo_z: f32, wi_z: f32) -> f32 {
+        let avg = 1.0 - self.albedo_avg();
+        if avg <= 0.0 {
+            return 0.0;
+        }
+        (1.0 - self.albedo(wo_z)) * (1.0 - self.albedo(wi_z)) / avg
+    }
+
+    fn fresnel(&self, cos: f32) -> Vec3A {
+        self.tint * fresnel_dielectric(cos, self.eta())
+    }
+}
+
+impl LobeModel for Specular {
+    fn tags(&self) -> &'static [LobeTag] {
+        reflection_tags(self.lobe, is_smooth(self.alpha))
+    }
+    fn eval(&self, _: usize, wo: Vec3A, wi: Vec3A, sel: f32) -> (Vec3A, f32) {
+        // The multiple scattering takes the tint as the single scattering does.
+        let f_avg = self.f_avg() * self.tint;
+        reflection_eval(self.alpha, self.weight, f_avg, wo, wi, sel, |c| {
+            self.fresnel(c)
+        })
+    }
+    fn sample(&self, wo: Vec3A, ctx: SampleCtx, u: Vec2) -> Option<LobeSample> {
+        let f_avg = self.f_avg() * self.tint;
+        reflection_sample(self.alpha, self.weight, f_avg, wo, ctx, u, |c| {
+            self.fresnel(c)
+        })
+    }
+    fn selection_weight(&self, wo: Vec3A) -> f32 {
+        clamp_weight(self.weight) * luminance(self.fresnel(wo.z.abs()))
+    }
+}
