@@ -22,6 +22,8 @@
 //! `material::tests::albedo_tables_match_fresh_integration` recomputes entries.
 
 use super::albedo_tables as t;
+use super::microfacet::Ggx;
+use glam::Vec3A;
 
 /// Points along μ and √α of the F = 1 table.
 pub const N_2D: usize = 32;
@@ -97,6 +99,89 @@ fn linear(table: &[f32], n: usize, x: f32) -> f32 {
     lerp(table[i], table[i + 1], t)
 }
 
+/// Points along μ, azimuth, √α_rms and αy/αx of the anisotropic F = 1 table.
+pub const N_ANISO: [usize; 4] = [16, 8, 16, 8];
+
+/// The anisotropic table's coordinates of `g`: (√α_rms axis, ratio axis, swapped),
+/// α_rms = √((αx² + αy²)/2) and the ratio of the smaller alpha to the larger, which is
+/// taken as the x axis (`swapped` when that is the bitangent).
+fn aniso_coord(g: &Ggx) -> (f32, f32, bool) {
+    let (ax, ay) = (g.alpha_x, g.alpha_y);
+    let rms = ((ax * ax + ay * ay) / 2.0).sqrt();
+    let (ratio, swapped) = if ax >= ay { (ay / ax, false) } else { (ax / ay, true) };
+    (alpha_coord(rms), ratio, swapped)
+}
+
+fn quadrilinear(w: [f32; 4]) -> f32 {
+    let [nm, np, na, nr] = N_ANISO;
+    let (r, tr) = coord(w[3], nr);
+    let (a, ta) = coord(w[2], na);
+    let (p, tp) = coord(w[1], np);
+    let (m, tm) = coord(w[0], nm);
+    let at = |r: usize, a: usize, p: usize| {
+        let i = ((r * na + a) * np + p) * nm + m;
+        lerp(t::GGX_E_ANISO[i], t::GGX_E_ANISO[i + 1], tm)
+    };
+    let ap = |r: usize, a: usize| lerp(at(r, a, p), at(r, a, p + 1), tp);
+    let ra = |r: usize| lerp(ap(r, a), ap(r, a + 1), ta);
+    lerp(ra(r), ra(r + 1), tr)
+}
+
+/// Albedo of single-scattering GGX reflection with F = 1 towards `w` (the local frame
+/// of `g`): the isotropic table, or for unequal alphas the anisotropic one, which also
+/// depends on the azimuth of `w`.
+pub fn ggx_e_dir(g: &Ggx, w: Vec3A) -> f32 {
+    let mu = w.z.abs();
+    if g.alpha_x == g.alpha_y {
+        return ggx_e(mu, g.alpha_x);
+    }
+    let (a, r, swapped) = aniso_coord(g);
+    // The distribution is symmetric about both axes: the azimuth folds into [0, π/2].
+    let mut phi = w.y.abs().atan2(w.x.abs()) / std::f32::consts::FRAC_PI_2;
+    if swapped {
+        phi = 1.0 - phi;
+    }
+    quadrilinear([mu, phi, a, r])
+}
+
+/// The cosine-weighted average of [`ggx_e_dir`] over the hemisphere.
+pub fn ggx_e_avg_of(g: &Ggx) -> f32 {
+    if g.alpha_x == g.alpha_y {
+        return ggx_e_avg(g.alpha_x);
+    }
+    let (a, r, _) = aniso_coord(g);
+    let n = N_ANISO[2];
+    bilinear_rect(&t::GGX_E_AVG_ANISO, n, N_ANISO[3], r, a)
+}
+
+/// Bilinear lookup in a table of `ny` rows of `nx` entries.
+fn bilinear_rect(table: &[f32], nx: usize, ny: usize, y: f32, x: f32) -> f32 {
+    let (j, ty) = coord(y, ny);
+    let (i, tx) = coord(x, nx);
+    let row = |j: usize| lerp(table[j * nx + i], table[j * nx + i + 1], tx);
+    lerp(row(j), row(j + 1), ty)
+}
+
+/// For the dielectric tables, which are isotropic: an anisotropic distribution reads
+/// them at α_rms, and its single scattering towards `w` differs from the isotropic one
+/// by the ratio of their F = 1 albedos, which this returns (1 when isotropic).
+pub fn aniso_ratio(g: &Ggx, w: Vec3A) -> f32 {
+    if g.alpha_x == g.alpha_y {
+        return 1.0;
+    }
+    let iso = ggx_e(w.z.abs(), table_alpha(g));
+    if iso <= 0.0 {
+        1.0
+    } else {
+        ggx_e_dir(g, w) / iso
+    }
+}
+
+/// The isotropic alpha at which the dielectric tables are read: α_rms.
+pub fn table_alpha(g: &Ggx) -> f32 {
+    ((g.alpha_x * g.alpha_x + g.alpha_y * g.alpha_y) / 2.0).sqrt()
+}
+
 /// Albedo of single-scattering GGX reflection with F = 1 from `mu` = cos θo.
 pub fn ggx_e(mu: f32, alpha: f32) -> f32 {
     bilinear(&t::GGX_E, N_2D, alpha_coord(alpha), mu)
@@ -170,9 +255,8 @@ pub fn glass_e_avg(alpha: f32, eta: f32) -> f32 {
 #[cfg(test)]
 pub(super) mod generator {
     use super::super::fresnel::{fresnel_dielectric, reflect, refract};
-    use super::super::microfacet::Ggx;
     use super::*;
-    use glam::{Vec2, Vec3A};
+    use glam::Vec2;
     use std::fmt::Write;
 
     /// What is integrated.
@@ -230,7 +314,11 @@ pub(super) mod generator {
     /// the TIR edge and the horizon, where the integrand jumps, cost little accuracy).
     pub fn integrate(kind: Kind, mu: f32, alpha: f32, n: usize, seed: u64) -> (f64, f64) {
         let wo = Vec3A::new((1.0 - mu * mu).max(0.0).sqrt(), 0.0, mu);
-        let g = Ggx::isotropic(alpha);
+        integrate_dir(kind, &Ggx::isotropic(alpha), wo, n, seed)
+    }
+
+    /// [`integrate`] for any distribution and direction.
+    pub fn integrate_dir(kind: Kind, g: &Ggx, wo: Vec3A, n: usize, seed: u64) -> (f64, f64) {
         let mut rng = crate::sampling::Rng::for_sample(seed, 0, 0);
         let mut est = [0.0f64; REPLICAS];
         for e in &mut est {
@@ -242,7 +330,7 @@ pub(super) mod generator {
                         ((a as f32 + j.x) / n as f32).min(1.0 - f32::EPSILON),
                         ((b as f32 + j.y) / n as f32).min(1.0 - f32::EPSILON),
                     );
-                    sum += weight(kind, &g, wo, g.sample_visible(wo, u));
+                    sum += weight(kind, g, wo, g.sample_visible(wo, u));
                 }
             }
             *e = sum / (n * n) as f64;
@@ -295,6 +383,47 @@ pub(super) mod generator {
         (out, err)
     }
 
+    /// The anisotropic node (μ, azimuth, α_rms, ratio) `idx` as a direction and a
+    /// distribution.
+    pub fn aniso_node(idx: [usize; 4]) -> (Vec3A, Ggx) {
+        let [nm, np, na, nr] = N_ANISO;
+        let mu = node_mu(idx[0], nm);
+        let phi = idx[1] as f32 / (np - 1) as f32 * std::f32::consts::FRAC_PI_2;
+        let rms = node_alpha(idx[2], na);
+        let ratio = idx[3] as f32 / (nr - 1) as f32;
+        let ax = rms * (2.0 / (1.0 + ratio * ratio)).sqrt();
+        let s = (1.0 - mu * mu).max(0.0).sqrt();
+        let wo = Vec3A::new(s * phi.cos(), s * phi.sin(), mu);
+        (wo, Ggx::new(Vec2::new(ax, ratio * ax)))
+    }
+
+    /// The anisotropic F = 1 table [ratio][√α_rms][azimuth][μ], its averages
+    /// [ratio][√α_rms] and its largest standard error.
+    fn aniso_table(grid: usize) -> (Vec<f32>, Vec<f32>, f64) {
+        let [nm, np, na, nr] = N_ANISO;
+        let (mut out, mut avg) = (Vec::new(), Vec::new());
+        let mut err: f64 = 0.0;
+        for r in 0..nr {
+            for a in 0..na {
+                let mut mean_row = vec![0.0f32; nm];
+                for p in 0..np {
+                    for m in 0..nm {
+                        let (wo, g) = aniso_node([m, p, a, r]);
+                        let seed = 500_000 + (((r * na + a) * np + p) * nm + m) as u64;
+                        let (e, se) = integrate_dir(Kind::White, &g, wo, grid, seed);
+                        err = err.max(se);
+                        out.push(e as f32);
+                        // Trapezoid rule over the azimuth: the interpolant's exact mean.
+                        let w = if p == 0 || p == np - 1 { 0.5 } else { 1.0 };
+                        mean_row[m] += e as f32 * w / (np - 1) as f32;
+                    }
+                }
+                avg.push(row_average(&mean_row));
+            }
+        }
+        (out, avg, err)
+    }
+
     fn averages(table: &[f32], n: usize) -> Vec<f32> {
         table.chunks(n).map(row_average).collect()
     }
@@ -330,6 +459,20 @@ pub(super) mod generator {
             "GGX_E_AVG",
             "E_avg(α), F = 1: [√α].",
             &averages(&e, N_2D),
+        );
+        let (aniso, aniso_avg, err) = aniso_table(grid);
+        errors.push(err);
+        write_array(
+            &mut out,
+            "GGX_E_ANISO",
+            "E(μ, φ, α_rms, αy/αx), F = 1: [ratio][√α_rms][φ][μ].",
+            &aniso,
+        );
+        write_array(
+            &mut out,
+            "GGX_E_AVG_ANISO",
+            "E_avg(α_rms, αy/αx), F = 1: [ratio][√α_rms].",
+            &aniso_avg,
         );
         for (side, flip) in [("ENTER", false), ("EXIT", true)] {
             let eta_of = |k: usize| {
@@ -386,7 +529,7 @@ pub(super) mod generator {
         writeln!(
             out,
             "/// Five times the largest standard error of an entry: the error the tests allow\n\
-             /// an entry.\npub const GENERATOR_ERROR: f32 = {:.6};",
+             /// an entry.\n#[cfg(test)]\npub const GENERATOR_ERROR: f32 = {:.6};",
             5.0 * max + 1e-6
         )
         .unwrap();

@@ -38,7 +38,16 @@ impl Dielectric {
 
     /// Turquin's energy scale 1/E(μo) for rough glass seen from `wo`.
     fn compensation(&self, g: &Ggx, wo: Vec3A) -> f32 {
-        let e = albedo::glass_e(wo.z.abs(), g.mean_alpha(), self.etap(wo));
+        // Anisotropic glass: the isotropic table at α_rms, its loss scaled as the
+        // F = 1 reflection's loss differs between the two.
+        let a = albedo::table_alpha(g);
+        let e = albedo::glass_e(wo.z.abs(), a, self.etap(wo));
+        let iso = albedo::ggx_e(wo.z.abs(), a);
+        let e = if iso < 1.0 {
+            1.0 - (1.0 - e) * (1.0 - albedo::ggx_e_dir(g, wo)) / (1.0 - iso)
+        } else {
+            e
+        };
         // E is above one half for any η and α the tables hold; the floor only guards
         // against a broken table.
         1.0 / e.max(0.5)

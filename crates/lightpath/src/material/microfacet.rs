@@ -40,10 +40,6 @@ impl Ggx {
     pub fn isotropic(alpha: f32) -> Ggx {
         Ggx::new(Vec2::splat(alpha))
     }
-    /// The isotropic alpha the albedo tables use for this distribution: √(αx·αy).
-    pub fn mean_alpha(&self) -> f32 {
-        (self.alpha_x * self.alpha_y).sqrt()
-    }
     pub fn d(&self, m: Vec3A) -> f32 {
         let (ax, ay) = (self.alpha_x, self.alpha_y);
         let x = m.x / ax;
@@ -124,7 +120,8 @@ pub fn kulla_conty_fms(f_avg: Vec3A, e_avg: f32) -> Vec3A {
 /// GGX reflection, single scattering with any Fresnel term plus Kulla & Conty's (2017)
 /// multiple-scattering lobe
 /// `f_ms · cos θi = F_ms (1 − E(μo)) (1 − E(μi)) μi / (π (1 − E_avg))`,
-/// E the albedo with F = 1 (tables in [`super::albedo`]). That lobe is symmetric in
+/// E the albedo with F = 1 (tables in [`super::albedo`]; for anisotropic alphas E also
+/// depends on the azimuth, so that this remains exact). That lobe is symmetric in
 /// (μo, μi), so reciprocity holds, and it returns exactly the energy
 /// (1 − E(μo)) · F_ms that single scattering loses.
 ///
@@ -145,7 +142,7 @@ impl MicrofacetReflection {
     /// hemisphere.
     pub fn new(alpha: Vec2, f_avg: Vec3A) -> MicrofacetReflection {
         let ggx = Ggx::new(alpha);
-        let e_avg = albedo::ggx_e_avg(ggx.mean_alpha());
+        let e_avg = albedo::ggx_e_avg_of(&ggx);
         MicrofacetReflection {
             ggx,
             ms: kulla_conty_fms(f_avg, e_avg),
@@ -162,16 +159,16 @@ impl MicrofacetReflection {
         }
     }
 
-    fn e(&self, mu: f32) -> f32 {
-        albedo::ggx_e(mu, self.ggx.mean_alpha())
+    fn e(&self, w: Vec3A) -> f32 {
+        albedo::ggx_e_dir(&self.ggx, w)
     }
 
     /// Probability of sampling the multiple-scattering lobe from `wo`.
-    fn p_ms(&self, wo_z: f32) -> f32 {
+    fn p_ms(&self, wo: Vec3A) -> f32 {
         if self.ms == Vec3A::ZERO {
             0.0
         } else {
-            (1.0 - self.e(wo_z)).clamp(0.0, 1.0)
+            (1.0 - self.e(wo)).clamp(0.0, 1.0)
         }
     }
 
@@ -194,7 +191,7 @@ impl MicrofacetReflection {
         if self.ms == Vec3A::ZERO {
             return (f, pdf_ss);
         }
-        let (eo, ei) = (self.e(wo.z), self.e(wi.z));
+        let (eo, ei) = (self.e(wo), self.e(wi));
         let denom = PI * (1.0 - self.e_avg);
         if denom > 1e-6 {
             f += self.ms * ((1.0 - eo) * (1.0 - ei) * wi.z / denom);
@@ -210,7 +207,7 @@ impl MicrofacetReflection {
         if wo.z <= 0.0 {
             return None;
         }
-        let wi = if u_choice < self.p_ms(wo.z) {
+        let wi = if u_choice < self.p_ms(wo) {
             cosine_hemisphere(u)
         } else {
             reflect(wo, self.ggx.sample_visible(wo, u))
@@ -218,13 +215,13 @@ impl MicrofacetReflection {
         (wi.z > 0.0).then_some(wi)
     }
 
-    /// The multiple-scattering lobe's directional albedo from `wo_z`:
-    /// `F_ms · (1 − E(μo))`.
-    pub fn ms_albedo(&self, wo_z: f32) -> Vec3A {
+    /// The multiple-scattering lobe's directional albedo from `wo`:
+    /// `F_ms · (1 − E(ωo))`.
+    pub fn ms_albedo(&self, wo: Vec3A) -> Vec3A {
         if self.ms == Vec3A::ZERO {
             Vec3A::ZERO
         } else {
-            self.ms * (1.0 - self.e(wo_z))
+            self.ms * (1.0 - self.e(wo))
         }
     }
 

@@ -48,18 +48,22 @@ impl Specular {
         Vec3A::splat(albedo::dielectric_f_avg(self.eta()))
     }
 
-    /// Directional albedo E(μo) with a white tint: weight × (single scattering with the
-    /// exact Fresnel + multiple scattering), for `wo_z` = cos θo (its absolute value).
-    /// Below 1; what the base beneath receives is 1 − E.
-    pub fn albedo(&self, wo_z: f32) -> f32 {
-        let mu = wo_z.abs();
+    /// Directional albedo E(ωo) with a white tint: weight × (single scattering with the
+    /// exact Fresnel + multiple scattering), towards `wo` in the local frame (`wo.z`
+    /// taken as positive; the azimuth matters only when anisotropic). Below 1; what
+    /// the base beneath receives is 1 − E.
+    pub fn albedo(&self, wo: Vec3A) -> f32 {
+        let wo = Vec3A::new(wo.x, wo.y, wo.z.abs());
         let w = clamp_weight(self.weight);
         if is_smooth(self.alpha) {
-            return w * fresnel_dielectric(mu, self.eta());
+            return w * fresnel_dielectric(wo.z, self.eta());
         }
         let r = MicrofacetReflection::new(self.alpha, self.f_avg());
-        let a = Ggx::new(self.alpha).mean_alpha();
-        (w * (albedo::dielectric_e(mu, a, self.eta()) + r.ms_albedo(mu).x)).min(1.0)
+        let g = Ggx::new(self.alpha);
+        // Dielectric tables are isotropic: read at α_rms, corrected by the F = 1 ratio.
+        let ss = albedo::dielectric_e(wo.z, albedo::table_alpha(&g), self.eta())
+            * albedo::aniso_ratio(&g, wo);
+        (w * (ss + r.ms_albedo(wo).x)).min(1.0)
     }
 
     /// The cosine-weighted average of [`Specular::albedo`], 2∫E(μ)μ dμ.
@@ -69,18 +73,27 @@ impl Specular {
             return w * albedo::dielectric_f_avg(self.eta());
         }
         let r = MicrofacetReflection::new(self.alpha, self.f_avg());
-        let a = Ggx::new(self.alpha).mean_alpha();
-        (w * (albedo::dielectric_e_avg(a, self.eta()) + r.ms_albedo_avg().x)).min(1.0)
+        let g = Ggx::new(self.alpha);
+        // Anisotropic: the isotropic average at α_rms, scaled as the F = 1 averages are.
+        let a = albedo::table_alpha(&g);
+        let iso = albedo::ggx_e_avg(a);
+        let ratio = if iso > 0.0 {
+            albedo::ggx_e_avg_of(&g) / iso
+        } else {
+            1.0
+        };
+        let ss = albedo::dielectric_e_avg(a, self.eta()) * ratio;
+        (w * (ss + r.ms_albedo_avg().x)).min(1.0)
     }
 
     /// The factor on a base lobe beneath, (1 − E(μo))(1 − E(μi)) / (1 − E_avg): what
     /// enters through the layer and leaves through it again.
-    pub fn base_attenuation(&self, wo_z: f32, wi_z: f32) -> f32 {
+    pub fn base_attenuation(&self, wo: Vec3A, wi: Vec3A) -> f32 {
         let avg = 1.0 - self.albedo_avg();
         if avg <= 0.0 {
             return 0.0;
         }
-        (1.0 - self.albedo(wo_z)) * (1.0 - self.albedo(wi_z)) / avg
+        (1.0 - self.albedo(wo)) * (1.0 - self.albedo(wi)) / avg
     }
 
     fn fresnel(&self, cos: f32) -> Vec3A {

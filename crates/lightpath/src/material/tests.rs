@@ -774,7 +774,7 @@ fn pbr_material_conserves_energy_and_full_metal_is_the_conductor() {
 #[test]
 #[ignore]
 fn generate_albedo_tables() {
-    let text = super::albedo::generator::generate(48);
+    let text = super::albedo::generator::generate(64);
     let path = concat!(env!("CARGO_MANIFEST_DIR"), "/src/material/albedo_tables.rs");
     std::fs::write(path, text).unwrap();
 }
@@ -860,9 +860,17 @@ fn albedo_tables_match_fresh_integration() {
             check(format!("glass, {what}"), albedo::glass_e(mu, alpha, eta), t);
         }
     }
-    // The generator's error bound is small enough to be useful.
-    assert!(GENERATOR_ERROR < 2e-3, "{GENERATOR_ERROR}");
+    // Anisotropic entries, by the generator's own estimator on a finer grid and other
+    // random numbers.
+    for idx in [[15, 3, 12, 2], [8, 7, 15, 0], [4, 0, 9, 5]] {
+        let (wo, g) = generator::aniso_node(idx);
+        let fresh = generator::integrate_dir(generator::Kind::White, &g, wo, 128, 99);
+        check(format!("anisotropic {g:?} wo {wo}"), albedo::ggx_e_dir(&g, wo), fresh);
+    }
     assert!(failures.is_empty(), "{failures:#?}");
+    // The generator's error bound (5 standard errors, the largest over all entries) is
+    // small against the energies compensated (a few % to 60 %).
+    assert!(GENERATOR_ERROR < 5e-3, "{GENERATOR_ERROR}");
 }
 
 #[test]
@@ -977,11 +985,12 @@ fn white_furnace_rough_glass_keeps_its_energy_from_both_sides() {
                 let e = lobe_energy(&lobe, wo, 100_000, k as u64);
                 let g = super::microfacet::Ggx::new(alpha);
                 let etap = if wo.z > 0.0 { 1.5 } else { 1.0 / 1.5 };
+                let a = super::albedo::table_alpha(&g);
                 println!(
                     "rough glass roughness {roughness} alpha {alpha}, θo {:.0}°: {:.4} (single scattering {:.4})",
                     wo.z.acos().to_degrees(),
                     e.0,
-                    super::albedo::glass_e(wo.z.abs(), g.mean_alpha(), etap)
+                    super::albedo::glass_e(wo.z.abs(), a, etap)
                 );
                 if !within(e, FURNACE.0, FURNACE.1) {
                     failures.push(format!("roughness {roughness} alpha {alpha} wo {wo}: {e:?}"));
@@ -1001,7 +1010,7 @@ fn specular_over_white(spec: &Specular, wo: Vec3A, n: usize, seed: u64) -> (f64,
     let mut rng = Rng::for_sample(seed, 6, 0);
     let base = mean_se((0..n).map(|_| {
         let wi = crate::sampling::cosine_hemisphere(rng.next_2d());
-        spec.base_attenuation(wo.z, wi.z) as f64
+        spec.base_attenuation(wo, wi) as f64
     }));
     (top.0 + base.0, (top.1 * top.1 + base.1 * base.1).sqrt())
 }
@@ -1086,7 +1095,7 @@ fn passive_lobes_never_create_energy() {
             failures.push(format!("{lobe:?} wo {wo}: {e:?}"));
         }
         if let Lobe::Specular(s) = lobe {
-            let a = s.albedo(wo.z);
+            let a = s.albedo(wo);
             if !(0.0..=1.0).contains(&a) || !(0.0..=1.0).contains(&s.albedo_avg()) {
                 failures.push(format!("{s:?}: albedo {a}, avg {}", s.albedo_avg()));
             }
@@ -1149,7 +1158,8 @@ fn conductor_and_specular_are_reciprocal() {
         alpha: Vec2::splat(0.3),
         lobe: 2,
     };
-    assert_eq!(s.base_attenuation(0.3, 0.9), s.base_attenuation(0.9, 0.3));
+    let (a, b) = (dir(70.0, 10.0), dir(20.0, 200.0));
+    assert_eq!(s.base_attenuation(a, b), s.base_attenuation(b, a));
 }
 
 #[test]
