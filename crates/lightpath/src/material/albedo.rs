@@ -108,7 +108,11 @@ pub const N_ANISO: [usize; 4] = [16, 8, 16, 8];
 fn aniso_coord(g: &Ggx) -> (f32, f32, bool) {
     let (ax, ay) = (g.alpha_x, g.alpha_y);
     let rms = ((ax * ax + ay * ay) / 2.0).sqrt();
-    let (ratio, swapped) = if ax >= ay { (ay / ax, false) } else { (ax / ay, true) };
+    let (ratio, swapped) = if ax >= ay {
+        (ay / ax, false)
+    } else {
+        (ax / ay, true)
+    };
     (alpha_coord(rms), ratio, swapped)
 }
 
@@ -162,23 +166,31 @@ fn bilinear_rect(table: &[f32], nx: usize, ny: usize, y: f32, x: f32) -> f32 {
     lerp(row(j), row(j + 1), ty)
 }
 
-/// For the dielectric tables, which are isotropic: an anisotropic distribution reads
-/// them at α_rms, and its single scattering towards `w` differs from the isotropic one
-/// by the ratio of their F = 1 albedos, which this returns (1 when isotropic).
-pub fn aniso_ratio(g: &Ggx, w: Vec3A) -> f32 {
+/// The isotropic alpha at which an anisotropic `g` reads the (isotropic) dielectric
+/// tables towards `w`: the roughness of the slopes in `w`'s plane of incidence (what
+/// decides Fresnel and total internal reflection), α² = αx²wx² + αy²wy² + μ²α_rms², which
+/// turns into the mean α_rms² towards the normal, where no plane is preferred.
+/// `g`'s own alpha when isotropic.
+pub fn directional_alpha(g: &Ggx, w: Vec3A) -> f32 {
     if g.alpha_x == g.alpha_y {
-        return 1.0;
+        return g.alpha_x;
     }
-    let iso = ggx_e(w.z.abs(), table_alpha(g));
-    if iso <= 0.0 {
-        1.0
-    } else {
-        ggx_e_dir(g, w) / iso
-    }
+    let (ax, ay) = (g.alpha_x * w.x, g.alpha_y * w.y);
+    let rms2 = (g.alpha_x * g.alpha_x + g.alpha_y * g.alpha_y) / 2.0;
+    (ax * ax + ay * ay + w.z * w.z * rms2).sqrt()
 }
 
-/// The isotropic alpha at which the dielectric tables are read: α_rms.
-pub fn table_alpha(g: &Ggx) -> f32 {
+/// The smaller alpha of `g`: where the directional alpha misjudges (glass, and
+/// reflection with total internal reflection, whose losses depend on the slopes in
+/// every plane), anisotropic lobes read the isotropic tables here, which compensates
+/// less than the lobe loses but never creates energy.
+pub fn min_alpha(g: &Ggx) -> f32 {
+    g.alpha_x.min(g.alpha_y)
+}
+
+/// The cosine-weighted mean of [`directional_alpha`]² is α_rms²: the alpha of the
+/// dielectric tables' averages for an anisotropic `g`.
+pub fn rms_alpha(g: &Ggx) -> f32 {
     ((g.alpha_x * g.alpha_x + g.alpha_y * g.alpha_y) / 2.0).sqrt()
 }
 

@@ -7,8 +7,8 @@
 //! numbers them.
 
 use super::{
-    coat::Coat, conductor::Conductor, dielectric::Dielectric, lambert::Lambert,
-    specular::Specular, translucent::DiffuseTransmission,
+    coat::Coat, conductor::Conductor, dielectric::Dielectric, lambert::Lambert, specular::Specular,
+    translucent::DiffuseTransmission,
 };
 use glam::{Vec2, Vec3A};
 use lpe::Scatter;
@@ -115,4 +115,11 @@ macro_rules! lobes {
     };
 }
 
-lobes!(Lambert, DiffuseTransmission, Conductor, Dielectric, Coat, Specular);
+lobes!(
+    Lambert,
+    DiffuseTransmission,
+    Conductor,
+    Dielectric,
+    Coat,
+    Specular
+);

