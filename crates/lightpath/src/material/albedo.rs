@@ -419,7 +419,7 @@ pub(super) mod generator {
             for a in 0..na {
                 let mut mean_row = vec![0.0f32; nm];
                 for p in 0..np {
-                    for m in 0..nm {
+                    for (m, mean) in mean_row.iter_mut().enumerate() {
                         let (wo, g) = aniso_node([m, p, a, r]);
                         let seed = 500_000 + (((r * na + a) * np + p) * nm + m) as u64;
                         let (e, se) = integrate_dir(Kind::White, &g, wo, grid, seed);
@@ -427,7 +427,7 @@ pub(super) mod generator {
                         out.push(e as f32);
                         // Trapezoid rule over the azimuth: the interpolant's exact mean.
                         let w = if p == 0 || p == np - 1 { 0.5 } else { 1.0 };
-                        mean_row[m] += e as f32 * w / (np - 1) as f32;
+                        *mean += e as f32 * w / (np - 1) as f32;
                     }
                 }
                 avg.push(row_average(&mean_row));
@@ -442,7 +442,12 @@ pub(super) mod generator {
 
     fn write_array(out: &mut String, name: &str, doc: &str, v: &[f32]) {
         writeln!(out, "/// {doc}").unwrap();
-        writeln!(out, "pub static {name}: [f32; {}] = [", v.len()).unwrap();
+        writeln!(
+            out,
+            "#[rustfmt::skip]\npub static {name}: [f32; {}] = [",
+            v.len()
+        )
+        .unwrap();
         for chunk in v.chunks(8) {
             let line: Vec<String> = chunk.iter().map(|x| format!("{x:.6}")).collect();
             writeln!(out, "    {},", line.join(", ")).unwrap();

@@ -14,7 +14,8 @@
 //! radiance by 1/η² (η the relative index crossed, reported as `BsdfSample::eta`).
 //!
 //! Layout: [`lobe`] defines the lobe interface ([`LobeModel`]) and the [`Lobe`] enum;
-//! one file per lobe kind; [`microfacet`] (GGX) and [`fresnel`] are shared. A [`Bsdf`]
+//! one file per lobe kind; [`microfacet`] (GGX and the reflection every specular lobe
+//! shares), [`fresnel`] and [`albedo`] (energy-compensation tables) are shared. A [`Bsdf`]
 //! holds up to [`MAX_LOBES`] lobes inline, optionally under a [`Coat`] layer.
 
 pub mod albedo;
