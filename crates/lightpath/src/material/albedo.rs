@@ -14,6 +14,13 @@
 //! albedo of the specular layer over an opaque base, so that the base can be attenuated
 //! by what the layer reflects.
 //!
+//! Anisotropic GGX: its F = 1 albedo depends on the azimuth too, so it has its own
+//! table over (μ, azimuth folded into [0, π/2], √α_rms, αy/αx), which keeps the
+//! Kulla–Conty lobe exact. The dielectric tables stay isotropic: anisotropic lobes read
+//! them at [`directional_alpha`] (dielectric specular, η ≥ 1: within 2 % in the
+//! furnace tests) or at [`min_alpha`] (glass, and reflection under total internal
+//! reflection, where no single alpha fits: they compensate less, never too much).
+//!
 //! Axes: μ = cos θo linear in [0, 1]; √α linear in [0, 1] (α beyond 1 reads the edge);
 //! η through √((η − 1)/(η + 1)) / √(1/2) linear in [0, 1] for η in [1, 3] (the
 //! exiting tables take 1/η). Lookup is bi/trilinear, allocation-free. The tables in

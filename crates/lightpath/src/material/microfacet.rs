@@ -1,8 +1,10 @@
 //! The anisotropic GGX (Trowbridge–Reitz) microfacet distribution with Smith
 //! shadowing, in the shading frame (`x` the tangent, `y` the bitangent, `z` the normal),
-//! and [`MicrofacetReflection`], the one GGX reflection every reflecting lobe shares
-//! (metal, dielectric specular, coat, thin film): it takes its Fresnel term as a
-//! closure and adds Kulla–Conty multiple scattering (see [`super::albedo`]).
+//! and [`MicrofacetReflection`], the one GGX reflection the reflecting lobes share
+//! (metal, dielectric specular; a thin-film lobe plugs in its own Fresnel): it takes
+//! its Fresnel term as a closure and adds Kulla–Conty multiple scattering (see
+//! [`super::albedo`]). [`reflection_eval`] and [`reflection_sample`] are a whole
+//! lobe's eval and sample around it, smooth (delta) or rough.
 //!
 //! Visible-normal sampling: Heitz 2018, "Sampling the GGX Distribution of Visible
 //! Normals" (JCGT 7(4)), which handles anisotropy by stretching the view direction.

@@ -4,8 +4,10 @@
 //! Physically Based Shading at Imageworks"), the dielectric's mean Fresnel F_avg(η)
 //! in their F_ms. Reflection only: what it does not reflect enters the base, which the
 //! material attenuates with [`Specular::albedo`] and [`Specular::albedo_avg`] as
-//! base × (1 − E(μo))(1 − E(μi)) / (1 − E_avg), reciprocal, and exactly the energy
-//! left for a white base.
+//! base × (1 − E(μo))(1 − E(μi)) / (1 − E_avg), reciprocal, and for a white base the
+//! energy the layer leaves, up to the tables' accuracy (within 1 % in the furnace
+//! tests; anisotropic lobes under total internal reflection, η < 1, overestimate E on
+//! purpose and lose up to 45 % there).
 //!
 //! Its event is `RS2` (primary specular), or the lobe number it is given.
 
