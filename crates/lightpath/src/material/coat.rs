@@ -39,7 +39,7 @@ impl LobeModel for Coat {
         if self.alpha == 0.0 || wo.z <= 0.0 || wi.z <= 0.0 {
             return (Vec3A::ZERO, 0.0);
         }
-        let g = Ggx { alpha: self.alpha };
+        let g = Ggx::isotropic(self.alpha);
         let m = (wo + wi).normalize();
         let f = self.weight * fresnel_dielectric(wi.dot(m), self.eta) * g.d(m) * g.g(wo, wi)
             / (4.0 * wo.z);
@@ -61,7 +61,7 @@ impl LobeModel for Coat {
                 value: Some((Vec3A::splat(f / ctx.sel), ctx.sel, true)),
             });
         }
-        let m = Ggx { alpha: self.alpha }.sample_visible(wo, u);
+        let m = Ggx::isotropic(self.alpha).sample_visible(wo, u);
         let wi = reflect(wo, m);
         if wi.z <= 0.0 {
             return None;

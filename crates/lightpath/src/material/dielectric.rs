@@ -1,10 +1,20 @@
-//! Glass (RS8 + TS8): exact dielectric Fresnel; smooth, or rough (GGX, Walter et al.
-//! 2007, as pbrt-v4's DielectricBxDF). One lobe with two events, because rough glass
-//! chooses reflection or transmission per sampled microfacet.
+//! Glass (RS8 + TS8): exact dielectric Fresnel; smooth, or rough (anisotropic GGX,
+//! Walter et al. 2007, as pbrt-v4's DielectricBxDF). One lobe with two events, because
+//! rough glass chooses reflection or transmission per sampled microfacet.
+//!
+//! Rough glass compensates the energy single scattering loses as Turquin 2019
+//! ("Practical multiple scattering compensation for microfacet models") does for
+//! dielectrics: reflection and transmission are both scaled by 1/E(μo), E the albedo
+//! of single scattering (reflection + transmission, radiance compression left out)
+//! from `wo`'s side, tabulated entering and exiting ([`albedo::glass_e`]). A lossless
+//! interface then keeps all the energy from either side; the scale is not reciprocal,
+//! as in the paper. The tables are isotropic: anisotropic glass reads them at its
+//! smaller alpha, which undercompensates (see the furnace test) but never adds energy.
 
+use super::albedo;
 use super::fresnel::{fresnel_dielectric, reflect, refract};
 use super::lobe::{tag, LobeModel, LobeSample, LobeTag, SampleCtx};
-use super::microfacet::Ggx;
+use super::microfacet::{is_smooth, Ggx};
 use glam::{Vec2, Vec3A};
 use lpe::Scatter;
 
@@ -12,8 +22,8 @@ use lpe::Scatter;
 pub struct Dielectric {
     /// Inside / outside index of refraction.
     pub eta: f32,
-    /// GGX alpha; 0 is smooth.
-    pub alpha: f32,
+    /// GGX (αx along the tangent, αy); both 0 is smooth.
+    pub alpha: Vec2,
     pub tint: Vec3A,
 }
 
@@ -25,6 +35,17 @@ impl Dielectric {
         } else {
             1.0 / self.eta
         }
+    }
+
+    /// Turquin's energy scale 1/E(μo) for rough glass seen from `wo`.
+    fn compensation(&self, g: &Ggx, wo: Vec3A) -> f32 {
+        // Anisotropic glass reads the isotropic table at its smaller alpha: it then
+        // loses some energy, but never gains any.
+        let a = albedo::min_alpha(g);
+        let e = albedo::glass_e(wo.z.abs(), a, self.etap(wo));
+        // Exiting at α = 1 keeps 0.4 for η = 1.5, less for denser glass; the floor
+        // only guards against a broken table.
+        1.0 / e.max(0.02)
     }
 }
 
@@ -38,7 +59,7 @@ impl LobeModel for Dielectric {
             tag(false, Scatter::specular(8), false),
             tag(true, Scatter::specular(8), false),
         ];
-        if self.alpha == 0.0 {
+        if is_smooth(self.alpha) {
             &GLASS
         } else {
             &ROUGH_GLASS
@@ -47,17 +68,19 @@ impl LobeModel for Dielectric {
     /// The per-microfacet Fresnel choice is part of the pdf, so `sel` (always 1: glass
     /// is never layered) is not applied.
     fn eval(&self, sub: usize, wo: Vec3A, wi: Vec3A, _sel: f32) -> (Vec3A, f32) {
-        if self.alpha == 0.0 || wo.z == 0.0 || wi.z == 0.0 {
+        if is_smooth(self.alpha) || wo.z == 0.0 || wi.z == 0.0 {
             return (Vec3A::ZERO, 0.0);
         }
-        rough_eval(sub, self.eta, Ggx { alpha: self.alpha }, self.tint, wo, wi)
+        let g = Ggx::new(self.alpha);
+        let (f, pdf) = rough_eval(sub, self.eta, g, self.tint, wo, wi);
+        (f * self.compensation(&g, wo), pdf)
     }
     fn sample(&self, wo: Vec3A, ctx: SampleCtx, u: Vec2) -> Option<LobeSample> {
         if wo.z == 0.0 {
             return None;
         }
         let eta = self.eta;
-        if self.alpha == 0.0 {
+        if is_smooth(self.alpha) {
             let f = fresnel_dielectric(wo.z, eta);
             let n = if wo.z > 0.0 { Vec3A::Z } else { -Vec3A::Z };
             let etap = self.etap(wo);
@@ -79,7 +102,7 @@ impl LobeModel for Dielectric {
                 value: Some((self.tint / (etap * etap), 1.0 - f, true)),
             });
         }
-        let g = Ggx { alpha: self.alpha };
+        let g = Ggx::new(self.alpha);
         let flipz = if wo.z < 0.0 { -1.0 } else { 1.0 };
         let wo_up = wo * flipz;
         let m = g.sample_visible(wo_up, u) * flipz;
@@ -100,7 +123,7 @@ impl LobeModel for Dielectric {
             sub: k,
             wi,
             eta: if k == 1 { self.etap(wo) } else { 1.0 },
-            value: Some((fv / pdf, pdf, false)),
+            value: Some((fv * (self.compensation(&g, wo) / pdf), pdf, false)),
         })
     }
     fn selection_weight(&self, _: Vec3A) -> f32 {

@@ -6,13 +6,15 @@
 use super::coat::Coat;
 use super::fresnel::fresnel_dielectric;
 use super::fuzz::Fuzz;
+use super::specular::Specular;
 use glam::Vec3A;
 
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Layer {
-    /// Dielectric specular reflection (OpenPBR's specular over the opaque base): what it
-    /// does not reflect towards `wo` reaches the base. `weight` is `specular_weight`.
-    Specular { weight: f32, eta: f32 },
+    /// Dielectric specular reflection (OpenPBR's specular over the opaque base), at its
+    /// full weight: the base gets (1 − E(μo))(1 − E(μi)) / (1 − E_avg) of the light, E its
+    /// directional albedo (Kulla–Conty's reciprocal albedo scaling).
+    Specular(Specular),
     /// A clear coat: Fresnel transmission in and out, absorption by its colour over the
     /// path through it, and the darkening of light trapped beneath it.
     Coat {
@@ -43,9 +45,7 @@ impl Layer {
     /// (local frame, `wo.z > 0`).
     pub fn attenuation(&self, wo: Vec3A, wi: Vec3A) -> Vec3A {
         match *self {
-            Layer::Specular { weight, eta } => {
-                Vec3A::splat(1.0 - (weight * fresnel_dielectric(wo.z.abs(), eta)).min(1.0))
-            }
+            Layer::Specular(s) => Vec3A::splat(s.base_attenuation(wo, wi)),
             Layer::Coat {
                 coat,
                 color,
@@ -75,9 +75,7 @@ impl Layer {
     /// choosing between lobes).
     pub fn transmission_towards(&self, wo: Vec3A) -> f32 {
         match *self {
-            Layer::Specular { weight, eta } => {
-                1.0 - (weight * fresnel_dielectric(wo.z.abs(), eta)).min(1.0)
-            }
+            Layer::Specular(s) => 1.0 - s.albedo(wo),
             Layer::Coat { coat, .. } => {
                 1.0 - coat.weight * fresnel_dielectric(wo.z.abs(), coat.eta)
             }

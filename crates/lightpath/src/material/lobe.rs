@@ -7,8 +7,9 @@
 //! numbers them.
 
 use super::fuzz::Fuzz;
+use super::iridescence::Iridescence;
 use super::{
-    coat::Coat, conductor::Conductor, dielectric::Dielectric, lambert::Lambert,
+    coat::Coat, conductor::Conductor, dielectric::Dielectric, lambert::Lambert, specular::Specular,
     translucent::DiffuseTransmission,
 };
 use glam::{Vec2, Vec3A};
@@ -122,5 +123,7 @@ lobes!(
     Conductor,
     Dielectric,
     Coat,
-    Fuzz
+    Fuzz,
+    Iridescence,
+    Specular
 );

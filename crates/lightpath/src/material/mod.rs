@@ -14,21 +14,26 @@
 //! radiance by 1/η² (η the relative index crossed, reported as `BsdfSample::eta`).
 //!
 //! Layout: [`lobe`] defines the lobe interface ([`LobeModel`]) and the [`Lobe`] enum;
-//! one file per lobe kind; [`microfacet`] (GGX) and [`fresnel`] are shared. A [`Bsdf`]
+//! one file per lobe kind; [`microfacet`] (GGX and the reflection every specular lobe
+//! shares), [`fresnel`] and [`albedo`] (energy-compensation tables) are shared. A [`Bsdf`]
 //! holds up to [`MAX_LOBES`] lobes inline, optionally under a [`Coat`] layer.
 
+pub mod albedo;
+mod albedo_tables;
 mod coat;
 mod conductor;
 mod dielectric;
 pub mod fresnel;
 mod fuzz;
 mod fuzz_table;
+mod iridescence;
 mod lambert;
 pub mod layer;
 pub mod lobe;
 pub mod microfacet;
 pub mod openpbr;
 pub mod pbr;
+mod specular;
 pub mod texture;
 pub mod textured;
 pub mod thin_film;
@@ -46,10 +51,12 @@ pub use conductor::Conductor;
 pub use dielectric::Dielectric;
 pub use fresnel::fresnel_dielectric;
 pub use fuzz::Fuzz;
+pub use iridescence::Iridescence;
 pub use lambert::Lambert;
 pub use layer::Layer;
 pub use lobe::{Lobe, LobeModel, LobeTag};
 pub use pbr::PbrParams;
+pub use specular::Specular;
 pub use thin_film::{conductor_ior_from_colors, thin_film_fresnel, FilmBase};
 pub use translucent::DiffuseTransmission;
 
@@ -59,7 +66,7 @@ use lobe::SampleCtx;
 use openpbr::BsdfBuilder;
 
 /// Lobes a Bsdf can hold, and LPE events they can emit.
-pub const MAX_LOBES: usize = 8;
+pub const MAX_LOBES: usize = 10;
 const MAX_TAGS: usize = 2 * MAX_LOBES;
 /// Layers a Bsdf can hold (specular, coat, fuzz).
 pub const MAX_LAYERS: usize = 3;
@@ -162,10 +169,11 @@ impl Bsdf {
             tags: [lambert::RD2; MAX_TAGS],
             tag_lobe: [(0, 0); MAX_TAGS],
             n_tags: 0,
-            layers: [Layer::Specular {
+            layers: [Layer::Fuzz(Fuzz {
+                color: Vec3A::ZERO,
                 weight: 0.0,
-                eta: 1.0,
-            }; MAX_LAYERS],
+                roughness: 0.0,
+            }); MAX_LAYERS],
             layer_at: [0; MAX_LAYERS],
             n_layers: 0,
             albedo,
@@ -209,13 +217,14 @@ impl Bsdf {
         )
     }
 
-    /// Metal: a mirror (RS2) when `alpha` is 0, GGX (RS3) otherwise.
+    /// Metal (RS2): a mirror when `alpha` is 0, GGX otherwise; Schlick Fresnel.
     pub fn conductor(f0: Vec3A, alpha: f32) -> Bsdf {
-        Bsdf::layered(&[Conductor { f0, alpha }.into()], None, f0)
+        Bsdf::layered(&[Conductor::schlick(f0, alpha).into()], None, f0)
     }
 
     /// Glass (RS8 + TS8), smooth or rough.
     pub fn dielectric(eta: f32, alpha: f32, tint: Vec3A) -> Bsdf {
+        let alpha = Vec2::splat(alpha);
         Bsdf::layered(&[Dielectric { eta, alpha, tint }.into()], None, tint)
     }
 

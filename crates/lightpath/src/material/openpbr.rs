@@ -21,11 +21,13 @@
 //! dielectric base, coat, fuzz) attenuate everything beneath them by what they reflect
 //! (albedo scaling, as Cycles does), so a white, lossless material stays white.
 
+use super::iridescence::Iridescence;
 use super::layer::Layer;
 use super::lobe::Lobe;
-use super::pbr::dielectric_f0;
+use super::microfacet::roughness_anisotropy_to_alpha;
 use super::{
     roughness_to_alpha, Bsdf, Coat, Conductor, Dielectric, DiffuseTransmission, Fuzz, Lambert,
+    Specular,
 };
 use glam::Vec3A;
 
@@ -189,14 +191,8 @@ impl LobeSet {
     }
 }
 
-/// GGX alphas along the tangent and the bitangent for a roughness and an anisotropy,
-/// as the OpenPBR specification maps them.
-pub fn anisotropic_alpha(roughness: f32, anisotropy: f32) -> (f32, f32) {
-    let a = roughness_to_alpha(roughness);
-    let k = 1.0 - anisotropy.clamp(0.0, 1.0);
-    let ax = a * (2.0 / (1.0 + k * k)).sqrt();
-    (ax, k * ax)
-}
+/// Thin-film thickness in nanometres from OpenPBR's micrometres.
+const NM_PER_UM: f32 = 1000.0;
 
 impl Bsdf {
     /// The lobes of set `set` for parameters `p` (see the module's table).
@@ -208,7 +204,14 @@ impl Bsdf {
         let transmission = p.transmission_weight.clamp(0.0, 1.0);
         let opaque = dielectric * (1.0 - transmission);
         let sss = p.subsurface_weight.clamp(0.0, 1.0);
-        let spec_alpha = roughness_to_alpha(p.specular_roughness);
+        let film = if set.film {
+            p.thin_film_weight.clamp(0.0, 1.0)
+        } else {
+            0.0
+        };
+        let thickness = p.thin_film_thickness * NM_PER_UM;
+        let alpha =
+            roughness_anisotropy_to_alpha(p.specular_roughness, p.specular_roughness_anisotropy);
         let eta = p.specular_ior.max(1.0);
         // The opaque dielectric base: diffuse, and subsurface (translucency when thin).
         if set.diffuse {
@@ -228,21 +231,32 @@ impl Bsdf {
             });
         }
         if set.specular {
-            // The dielectric's reflection over the opaque base (by Fresnel at
-            // `specular_ior`, tinted by `specular_color`), which the base lies under.
+            // The dielectric's reflection over the opaque base, bare and filmed; the base
+            // lies under what the bare one reflects.
             let below = b.len();
-            b.push(Conductor {
-                f0: p.specular_color * (p.specular_weight * dielectric_f0(eta) * opaque),
-                alpha: spec_alpha,
+            let specular = Specular {
+                eta,
+                tint: p.specular_color,
+                weight: p.specular_weight,
+                alpha,
+                lobe: 2,
+            };
+            b.push(Specular {
+                weight: p.specular_weight * opaque * (1.0 - film),
+                ..specular
             });
+            if set.film {
+                b.push(Iridescence::on_dielectric(
+                    eta,
+                    p.thin_film_ior,
+                    thickness,
+                    p.specular_color,
+                    p.specular_weight * opaque * film,
+                    alpha,
+                ));
+            }
             if below > 0 {
-                b.layer(
-                    Layer::Specular {
-                        weight: p.specular_weight,
-                        eta,
-                    },
-                    below,
-                );
+                b.layer(Layer::Specular(specular), below);
             }
         }
         if set.glass {
@@ -255,15 +269,29 @@ impl Bsdf {
             };
             b.push(Dielectric {
                 eta,
-                alpha: spec_alpha,
+                alpha,
                 tint: tint * (dielectric * transmission),
             });
         }
         if set.metal {
+            let f0 = p.base_color * base_w;
             b.push(Conductor {
-                f0: p.base_color * (base_w * metalness),
-                alpha: spec_alpha,
+                f0,
+                f82_tint: p.specular_color,
+                weight: p.specular_weight * metalness * (1.0 - film),
+                alpha,
+                lobe: 2,
             });
+            if set.film {
+                b.push(Iridescence::on_metal(
+                    f0,
+                    p.specular_color,
+                    p.thin_film_ior,
+                    thickness,
+                    p.specular_weight * metalness * film,
+                    alpha,
+                ));
+            }
         }
         if set.coat {
             let below = b.len();

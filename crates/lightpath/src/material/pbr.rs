@@ -4,7 +4,7 @@
 //! | part | lobe | event |
 //! |---|---|---|
 //! | diffuse: base colour × (1 − metallic) × (1 − F0) | `Lambert` | `RD2` |
-//! | specular: GGX, Schlick Fresnel from F0 = mix(((ior−1)/(ior+1))², base, metallic) | `Conductor` | `RS3` (`RS2` when smooth) |
+//! | specular: GGX, Schlick Fresnel from F0 = mix(((ior−1)/(ior+1))², base, metallic) | `Conductor` | `RS2` |
 //! | transmission (glass) | `Dielectric` tinted by the base colour | `RS8`, `TS8` |
 //! | clearcoat (KHR_materials_clearcoat) | `Coat`, ior 1.5, weighted | `RS4` |
 //!
@@ -55,7 +55,7 @@ impl Bsdf {
             return Bsdf::layered(
                 &[Dielectric {
                     eta: p.ior,
-                    alpha: p.alpha,
+                    alpha: glam::Vec2::splat(p.alpha),
                     tint: base,
                 }
                 .into()],
@@ -70,11 +70,7 @@ impl Bsdf {
                     albedo: base * ((1.0 - metallic) * (1.0 - f0)),
                 }
                 .into(),
-                Conductor {
-                    f0: Vec3A::splat(f0).lerp(base, metallic),
-                    alpha: p.alpha,
-                }
-                .into(),
+                Conductor::schlick(Vec3A::splat(f0).lerp(base, metallic), p.alpha).into(),
             ],
             coat,
             base,

@@ -392,7 +392,8 @@ fn a_file_without_camera_or_lights_gets_defaults_and_warnings() {
 
 #[test]
 fn light_units_convert_as_blenders_importer_does() {
-    // A Lambertian plane (glTF base colour 0.5, metallic 0 → albedo 0.5 × (1 − F0)) under
+    // A Lambertian plane (glTF base colour 0.5, metallic 0: albedo 0.5 under the specular
+    // layer's attenuation, `material::Specular::base_attenuation`) under
     // a point light of 4 · 683 cd at 2 m: E = (4 · 683 / 683) / 2² = 1 W/m².
     let dir = temp_dir("units");
     let mut doc = Doc::new().with_cameras();
@@ -448,7 +449,14 @@ fn light_units_convert_as_blenders_importer_does() {
         .retain(|l| l.name.as_deref() == Some("bulbnode"));
     let (scene, film) = render_desc(&desc, 4, 4, vec![AovSpec::new("dd", "C<RD>[<L.>O]")]);
     let k = scene.aovs.iter().position(|a| a.name == "dd").unwrap();
-    let rho = 0.5 * (1.0 - 0.04);
+    let layer = lightpath::material::Specular {
+        eta: 1.5,
+        tint: Vec3A::ONE,
+        weight: 1.0,
+        alpha: glam::Vec2::ONE,
+        lobe: 2,
+    };
+    let rho = 0.5 * layer.base_attenuation(Vec3A::Z, Vec3A::Z);
     let want = rho / std::f32::consts::PI;
     let got = film.pixel(k, 2, 2).x;
     assert!((got - want).abs() < 2e-3 * want, "{got} vs {want}");

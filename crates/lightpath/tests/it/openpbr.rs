@@ -175,17 +175,18 @@ fn an_emissive_openpbr_glows() {
 fn openpbr_lobes_emit_renderman_events() {
     // A coated, metallic-and-dielectric, partly transmissive material: each lobe's
     // AOV sees light, and the standard partition still sums to the beauty.
-    let params = "base_color = [0.8, 0.3, 0.2]\nbase_metalness = 0.3\ntransmission_weight = 0.3\ncoat_weight = 0.5\ncoat_roughness = 0.2\nspecular_roughness = 0.4\nfuzz_weight = 0.5";
+    let params = "base_color = [0.8, 0.3, 0.2]\nbase_metalness = 0.3\ntransmission_weight = 0.3\ncoat_weight = 0.5\ncoat_roughness = 0.2\nspecular_roughness = 0.4\nfuzz_weight = 0.5\nthin_film_weight = 0.5";
     let text = FURNACE.replace("PARAMS", params);
     let extra = vec![
         AovSpec::new("coat", "C<RS4>.*[<L.>O]"),
-        AovSpec::new("spec", "C<R[S2 S3]>.*[<L.>O]"),
+        AovSpec::new("spec", "C<RS2>.*[<L.>O]"),
         AovSpec::new("glass", "C<[RT]S8>.*[<L.>O]"),
         AovSpec::new("diffuse", "C<RD2>.*[<L.>O]"),
         AovSpec::new("fuzz", "C<RS6>.*[<L.>O]"),
+        AovSpec::new("film", "C<RS5>.*[<L.>O]"),
     ];
     let mut aovs = extra;
-    aovs.extend(aov::standard());
+    aovs.extend(aov::standard().into_iter().filter(|a| a.name != "fuzz"));
     let (scene, film) = render_text(&text, 16, 8, aovs);
     let beauty = scene.aovs.iter().position(|a| a.name == "beauty").unwrap();
     let parts: Vec<usize> = lpe::BEAUTY_PARTITION
@@ -201,7 +202,7 @@ fn openpbr_lobes_emit_renderman_events() {
             assert!(err <= 1e-5, "partition off by {err} at {x},{y}");
         }
     }
-    for name in ["coat", "spec", "glass", "diffuse", "fuzz"] {
+    for name in ["coat", "spec", "glass", "diffuse", "fuzz", "film"] {
         let k = scene.aovs.iter().position(|a| a.name == name).unwrap();
         let sum: f32 = (0..16)
             .flat_map(|y| (0..16).map(move |x| (x, y)))
