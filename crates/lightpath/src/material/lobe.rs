@@ -8,7 +8,7 @@
 
 use super::{
     coat::Coat, conductor::Conductor, dielectric::Dielectric, lambert::Lambert,
-    translucent::DiffuseTransmission,
+    subsurface::Subsurface, translucent::DiffuseTransmission,
 };
 use glam::{Vec2, Vec3A};
 use lpe::Scatter;
@@ -115,4 +115,4 @@ macro_rules! lobes {
     };
 }
 
-lobes!(Lambert, DiffuseTransmission, Conductor, Dielectric, Coat);
+lobes!(Lambert, DiffuseTransmission, Conductor, Dielectric, Coat, Subsurface);

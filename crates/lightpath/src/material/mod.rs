@@ -27,6 +27,7 @@ pub mod microfacet;
 pub mod pbr;
 pub mod texture;
 pub mod textured;
+mod subsurface;
 mod translucent;
 
 #[cfg(test)]
@@ -39,6 +40,7 @@ pub use fresnel::fresnel_dielectric;
 pub use lambert::Lambert;
 pub use lobe::{Lobe, LobeModel, LobeTag};
 pub use pbr::PbrParams;
+pub use subsurface::Subsurface;
 pub use translucent::DiffuseTransmission;
 
 use crate::sampling::Frame;
@@ -152,7 +154,7 @@ impl Bsdf {
         Bsdf::layered(&[Lambert { albedo }.into()], None, albedo)
     }
 
-    /// Diffuse reflection (RD2) and diffuse transmission (TD3): thin translucent sheets.
+    /// Diffuse reflection (RD2) and diffuse transmission (TD2): thin translucent sheets.
     pub fn translucent(reflect: Vec3A, transmit: Vec3A) -> Bsdf {
         Bsdf::layered(
             &[
@@ -274,7 +276,12 @@ impl Bsdf {
         };
         let s = self.lobes[l].sample(wo, ctx, u)?;
         let k = self.tag_index(l, s.sub);
-        if let Some((weight, pdf, delta)) = s.value {
+        if let Some((mut weight, pdf, delta)) = s.value {
+            // Subsurface light crosses a coat going in (and its exit lobe is the
+            // integrator's, under no coat).
+            if let (Some(coat), Lobe::Subsurface(_)) = (&self.coat, &self.lobes[l]) {
+                weight *= coat.transmittance(wo, s.wi);
+            }
             return Some(BsdfSample {
                 lobe: k,
                 wi: sh.frame.to_world(s.wi),
@@ -296,6 +303,16 @@ impl Bsdf {
             delta: false,
             eta: s.eta,
         })
+    }
+
+    /// The subsurface lobe behind lobe event `k`, if it is one: a sample of it is the
+    /// entry of a random walk (integrator/subsurface.rs), not a direction to trace.
+    pub fn subsurface(&self, k: usize) -> Option<&Subsurface> {
+        let (l, _) = *self.tag_lobe[..self.n_tags].get(k)?;
+        match &self.lobes[l as usize] {
+            Lobe::Subsurface(s) => Some(s),
+            _ => None,
+        }
     }
 
     fn tag_index(&self, lobe: usize, sub: usize) -> usize {
