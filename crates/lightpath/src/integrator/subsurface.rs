@@ -139,10 +139,11 @@ pub fn single_scattering_albedo(a: f32, g: f32) -> f32 {
 
 impl Medium {
     /// The medium of a subsurface lobe. Bad parameters (negative, NaN) give a medium
-    /// that stays finite: radii are kept above a tiny length, g within (−0.99, 0.99).
+    /// that stays finite: radii are kept above a tiny length, g within [−0.95, 0.95]
+    /// (the fit's range of forward scattering, mirrored).
     pub fn of(s: &Subsurface) -> Medium {
         let g = if s.anisotropy.is_finite() {
-            s.anisotropy.clamp(-0.99, 0.99)
+            s.anisotropy.clamp(-0.95, 0.95)
         } else {
             0.0
         };
@@ -152,9 +153,19 @@ impl Medium {
         for c in 0..3 {
             let r = s.radius[c];
             let r = if r.is_finite() { r.max(1e-7) } else { 1e-7 };
-            sigma_t[c] = 1.0 / (r * (1.0 - g));
             let col = if s.color[c].is_finite() { s.color[c] } else { 0.0 };
-            let a = single_scattering_albedo(col, g);
+            let a = if g >= 0.0 {
+                sigma_t[c] = 1.0 / (r * (1.0 - g));
+                single_scattering_albedo(col, g)
+            } else {
+                // The fit covers forward scattering only. Backward scattering keeps
+                // the isotropic medium's absorption and reduced scattering (similarity
+                // theory: σs·(1 − g) and σa unchanged), so it reflects about as much.
+                let a0 = single_scattering_albedo(col, 0.0);
+                let sigma_s = a0 / (r * (1.0 - g));
+                sigma_t[c] = sigma_s + (1.0 - a0) / r;
+                sigma_s / sigma_t[c]
+            };
             if a < MIN_ALPHA {
                 scale[c] = a / MIN_ALPHA;
                 alpha[c] = MIN_ALPHA;
@@ -573,6 +584,34 @@ mod tests {
             for (s, want) in [(p1, g), (p2, g * g)] {
                 let (m, se) = s.mean_se(n);
                 assert!((m - want).abs() <= 5.0 * se + 1e-6, "g {g}: {m} vs {want} ± {se}");
+            }
+        }
+    }
+
+    /// The albedo inversion: a semi-infinite slab, index-matched, lit diffusely, reflects
+    /// the colour asked for. The fit (a fit to simulated walks) is held to 5 % of the
+    /// colour plus five standard errors; measured with 200 000 walks: within 1.3 % for
+    /// g = 0 and 3.7 % for g = 0.8 at colours 0.1–0.8. Brighter colours lose more to the
+    /// step cap (g = 0, colour 1 reflects 0.92), which this test does not cover.
+    #[test]
+    fn a_thick_slab_reflects_the_colour() {
+        let n = 50_000;
+        for g in [0.0, 0.8] {
+            let color = Vec3A::new(0.1, 0.5, 0.8);
+            let lobe = Subsurface {
+                color,
+                radius: Vec3A::new(1.0, 0.3, 2.0),
+                ..test_lobe(g)
+            };
+            let walked = walk_slab(&Medium::of(&lobe), f32::INFINITY, n, 21);
+            for c in 0..3 {
+                let (m, se) = walked[0][c].mean_se(n);
+                let want = f64::from(color[c]);
+                assert!(
+                    (m - want).abs() <= 0.05 * want + 5.0 * se,
+                    "g {g} colour {want}: reflects {m:.4} ± {se:.4}"
+                );
+                assert_eq!(walked[1][c].sum, 0.0, "nothing crosses a semi-infinite slab");
             }
         }
     }
