@@ -23,15 +23,6 @@ impl Coat {
         (1.0 - self.weight * fresnel_dielectric(wo.z, self.eta))
             * (1.0 - self.weight * fresnel_dielectric(wi.z, self.eta))
     }
-
-    /// Probability of choosing the coat over a base whose selection weights sum to
-    /// `base`: its Fresnel share of the reflected energy, kept within [0.1, 0.9] so
-    /// neither layer starves.
-    pub fn selection(&self, wo: Vec3A, base: f32) -> f32 {
-        let f = self.weight * fresnel_dielectric(wo.z.abs(), self.eta);
-        let d = (1.0 - f) * base;
-        (f / (f + d).max(1e-6)).clamp(0.1, 0.9)
-    }
 }
 
 impl LobeModel for Coat {
@@ -77,8 +68,8 @@ impl LobeModel for Coat {
         }
         LobeSample::direction(0, wi)
     }
-    /// Unused: a coat's share comes from [`Coat::selection`].
-    fn selection_weight(&self, _: Vec3A) -> f32 {
-        1.0
+    /// What it reflects towards `wo`.
+    fn selection_weight(&self, wo: Vec3A) -> f32 {
+        self.weight * fresnel_dielectric(wo.z.abs(), self.eta)
     }
 }

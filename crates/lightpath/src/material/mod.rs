@@ -22,8 +22,10 @@ mod conductor;
 mod dielectric;
 pub mod fresnel;
 mod lambert;
+pub mod layer;
 pub mod lobe;
 pub mod microfacet;
+pub mod openpbr;
 pub mod pbr;
 pub mod texture;
 pub mod textured;
@@ -38,6 +40,7 @@ pub use conductor::Conductor;
 pub use dielectric::Dielectric;
 pub use fresnel::fresnel_dielectric;
 pub use lambert::Lambert;
+pub use layer::Layer;
 pub use lobe::{Lobe, LobeModel, LobeTag};
 pub use pbr::PbrParams;
 pub use subsurface::Subsurface;
@@ -46,13 +49,16 @@ pub use translucent::DiffuseTransmission;
 use crate::sampling::Frame;
 use glam::{Vec2, Vec3A};
 use lobe::SampleCtx;
+use openpbr::BsdfBuilder;
 
 /// Lobes a Bsdf can hold, and LPE events they can emit.
-pub const MAX_LOBES: usize = 4;
+pub const MAX_LOBES: usize = 8;
 const MAX_TAGS: usize = 2 * MAX_LOBES;
+/// Layers a Bsdf can hold (specular, coat, fuzz).
+pub const MAX_LAYERS: usize = 3;
 
-/// A fixed-capacity list of lobes; when `coat` is set, the last lobe is that coat and
-/// the ones before it are the base it attenuates.
+/// A fixed-capacity list of lobes, bottom up, and the layers among them: layer `j` is
+/// lobe `layer_at[j]`, and attenuates every lobe before it.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Bsdf {
     lobes: [Lobe; MAX_LOBES],
@@ -61,7 +67,9 @@ pub struct Bsdf {
     /// For each event: (lobe index, `sub` within the lobe).
     tag_lobe: [(u8, u8); MAX_TAGS],
     n_tags: usize,
-    coat: Option<Coat>,
+    layers: [Layer; MAX_LAYERS],
+    layer_at: [u8; MAX_LAYERS],
+    n_layers: usize,
     albedo: Vec3A,
     two_sided: bool,
 }
@@ -120,6 +128,24 @@ impl Bsdf {
     /// # Panics
     /// With no lobes or more than [`MAX_LOBES`] (a bug in a constructor below).
     pub fn layered(base: &[Lobe], coat: Option<Coat>, albedo: Vec3A) -> Bsdf {
+        let mut b = BsdfBuilder {
+            lobes: base.to_vec(),
+            layers: Vec::new(),
+        };
+        if let Some(coat) = coat {
+            b.layers
+                .push((Layer::coat(coat, Vec3A::ONE, 0.0, 0.0), b.lobes.len()));
+            b.lobes.push(coat.into());
+        }
+        Bsdf::from_builder(b, albedo)
+    }
+
+    /// The Bsdf of lobes and layers assembled by a builder.
+    ///
+    /// # Panics
+    /// With no lobes, more than [`MAX_LOBES`] or more than [`MAX_LAYERS`] (a bug in a
+    /// constructor).
+    fn from_builder(b: BsdfBuilder, albedo: Vec3A) -> Bsdf {
         let filler = Lobe::Lambert(Lambert {
             albedo: Vec3A::ZERO,
         });
@@ -129,13 +155,18 @@ impl Bsdf {
             tags: [lambert::RD2; MAX_TAGS],
             tag_lobe: [(0, 0); MAX_TAGS],
             n_tags: 0,
-            coat,
+            layers: [Layer::Specular {
+                weight: 0.0,
+                eta: 1.0,
+            }; MAX_LAYERS],
+            layer_at: [0; MAX_LAYERS],
+            n_layers: 0,
             albedo,
             two_sided: true,
         };
-        let all = base.iter().copied().chain(coat.map(Lobe::Coat));
-        for lobe in all {
-            assert!(bsdf.n_lobes < MAX_LOBES, "too many lobes");
+        assert!(b.lobes.len() <= MAX_LOBES, "too many lobes");
+        assert!(b.layers.len() <= MAX_LAYERS, "too many layers");
+        for lobe in b.lobes {
             for (sub, t) in lobe.tags().iter().enumerate() {
                 bsdf.tags[bsdf.n_tags] = *t;
                 bsdf.tag_lobe[bsdf.n_tags] = (bsdf.n_lobes as u8, sub as u8);
@@ -144,6 +175,11 @@ impl Bsdf {
             bsdf.two_sided &= lobe.two_sided();
             bsdf.lobes[bsdf.n_lobes] = lobe;
             bsdf.n_lobes += 1;
+        }
+        for (layer, at) in b.layers {
+            bsdf.layers[bsdf.n_layers] = layer;
+            bsdf.layer_at[bsdf.n_layers] = at as u8;
+            bsdf.n_layers += 1;
         }
         assert!(bsdf.n_lobes > 0, "a Bsdf needs a lobe");
         bsdf
@@ -199,40 +235,47 @@ impl Bsdf {
         self.albedo
     }
 
-    fn n_base(&self) -> usize {
-        self.n_lobes - usize::from(self.coat.is_some())
-    }
-
-    /// Probability of choosing each lobe when sampling: base lobes in proportion to
-    /// their selection weights (uniformly if those are all zero), the coat by its own
-    /// rule, taking its share from the base.
+    /// Probability of choosing each lobe when sampling: in proportion to each lobe's
+    /// selection weight times what the layers above it let through towards `wo`, mixed
+    /// with a uniform choice (one tenth) so that no lobe with a small estimate starves.
     fn selection(&self, wo: Vec3A) -> [f32; MAX_LOBES] {
         let mut p = [0.0; MAX_LOBES];
-        if self.n_lobes == 1 {
+        let n = self.n_lobes;
+        if n == 1 {
             p[0] = 1.0;
             return p;
         }
-        let n_base = self.n_base();
         let mut sum = 0.0;
-        for (pk, lobe) in p.iter_mut().zip(&self.lobes[..n_base]) {
-            *pk = lobe.selection_weight(wo);
+        for (l, (pk, lobe)) in p.iter_mut().zip(&self.lobes[..n]).enumerate() {
+            let mut w = lobe.selection_weight(wo);
+            for j in 0..self.n_layers {
+                if l < self.layer_at[j] as usize {
+                    w *= self.layers[j].transmission_towards(wo);
+                }
+            }
+            *pk = w.max(0.0);
             sum += *pk;
         }
-        for pk in &mut p[..n_base] {
-            *pk = if sum <= 0.0 {
-                1.0 / n_base as f32
+        let uniform = 1.0 / n as f32;
+        for pk in &mut p[..n] {
+            *pk = if sum > 0.0 {
+                0.9 * *pk / sum + 0.1 * uniform
             } else {
-                *pk / sum
+                uniform
             };
         }
-        if let Some(coat) = &self.coat {
-            let spec = coat.selection(wo, sum);
-            for pk in &mut p[..n_base] {
-                *pk *= 1.0 - spec;
-            }
-            p[n_base] = spec;
-        }
         p
+    }
+
+    /// The product of the attenuations of the layers above lobe `l`.
+    fn attenuation(&self, l: usize, wo: Vec3A, wi: Vec3A) -> Vec3A {
+        let mut a = Vec3A::ONE;
+        for j in 0..self.n_layers {
+            if l < self.layer_at[j] as usize {
+                a *= self.layers[j].attenuation(wo, wi);
+            }
+        }
+        a
     }
 
     /// `f · |cos θi|` of lobe event `k` for the local directions, and its pdf
@@ -242,13 +285,8 @@ impl Bsdf {
         let sel = self.selection(wo);
         let (l, sub) = self.tag_lobe[k];
         let l = l as usize;
-        let (mut f, pdf) = self.lobes[l].eval(sub as usize, wo, wi, sel[l]);
-        if let Some(coat) = &self.coat {
-            if l < self.n_base() {
-                f *= coat.transmittance(wo, wi);
-            }
-        }
-        (f, pdf)
+        let (f, pdf) = self.lobes[l].eval(sub as usize, wo, wi, sel[l]);
+        (f * self.attenuation(l, wo, wi), pdf)
     }
 
     /// Samples a lobe and a direction: `u_lobe` chooses the lobe, `u` the direction.
@@ -272,7 +310,7 @@ impl Bsdf {
         let ctx = SampleCtx {
             sel: sel[l],
             u_lobe: u_rest,
-            alone: self.n_lobes == 1 && self.coat.is_none(),
+            alone: self.n_lobes == 1,
         };
         let s = self.lobes[l].sample(wo, ctx, u)?;
         let k = self.tag_index(l, s.sub);
@@ -285,7 +323,7 @@ impl Bsdf {
             return Some(BsdfSample {
                 lobe: k,
                 wi: sh.frame.to_world(s.wi),
-                weight,
+                weight: weight * self.attenuation(l, wo, s.wi),
                 pdf,
                 delta,
                 eta: s.eta,

@@ -3,42 +3,23 @@
 //! stored material's: a texture changes values, never the list of lobes (a textured
 //! roughness stays at least [`MIN_TEXTURED_ROUGHNESS`] so rough lobes stay rough).
 
-use super::pbr::{PbrParams, MIN_TEXTURED_ROUGHNESS};
+use super::openpbr::{InputMut, LobeSet, OpenPbr};
+use super::pbr::MIN_TEXTURED_ROUGHNESS;
 use super::texture::Texture;
-use super::{roughness_to_alpha, Bsdf};
+use super::Bsdf;
 use crate::geometry::SurfaceUv;
 use glam::{Vec2, Vec3A, Vec4Swizzles};
 
-/// A material's constructor and its untextured parameters.
+/// Sets or borrows one OpenPBR parameter (an entry of `openpbr::INPUTS`).
+pub type InputRef = fn(&mut OpenPbr) -> InputMut<'_>;
+
+/// A material's untextured parameters and the lobes it has everywhere.
 #[derive(Clone, Debug, PartialEq)]
-pub enum ShadeModel {
-    Diffuse {
-        albedo: Vec3A,
-    },
-    Translucent {
-        reflect: Vec3A,
-        transmit: Vec3A,
-    },
-    Conductor {
-        f0: Vec3A,
-        roughness: f32,
-    },
-    Dielectric {
-        eta: f32,
-        roughness: f32,
-        tint: Vec3A,
-    },
-    Plastic {
-        albedo: Vec3A,
-        eta: f32,
-        roughness: f32,
-    },
-    /// Roughness lives in `params.alpha`'s place as artists write it: see `roughness`.
-    Pbr {
-        params: PbrParams,
-        roughness: f32,
-        clearcoat_roughness: f32,
-    },
+pub struct ShadeModel {
+    pub params: OpenPbr,
+    pub lobes: LobeSet,
+    /// The colour inputs the base-colour texture and vertex colours multiply.
+    pub color_targets: Vec<InputRef>,
 }
 
 /// The textures of a material; each multiplies the parameter it names.
@@ -52,6 +33,8 @@ pub struct MaterialTextures {
     pub normal: Option<(Texture, f32)>,
     /// Emission colour (sRGB-decoded).
     pub emissive: Option<Texture>,
+    /// OpenPBR inputs, each with its texture and, for numbers, the channel read.
+    pub inputs: Vec<(InputRef, Texture, u8)>,
 }
 
 /// A textured material: evaluated at each hit.
@@ -61,63 +44,48 @@ pub struct Textured {
     pub textures: MaterialTextures,
 }
 
-fn alpha(roughness: f32, textured: bool) -> f32 {
-    if textured {
-        roughness_to_alpha(roughness.max(MIN_TEXTURED_ROUGHNESS))
-    } else {
-        roughness_to_alpha(roughness)
-    }
-}
-
 impl Textured {
     /// The BSDF at texture coordinate `uv`, for a footprint `width` wide in UV units,
     /// with `vertex` (the interpolated vertex colour; white without one) on the base
     /// colour as the texture is.
     pub fn bsdf(&self, uv: Vec2, width: f32, vertex: Vec3A) -> Bsdf {
         let t = &self.textures;
-        let color = |c: Vec3A| match &t.base_color {
-            Some(tex) => c * vertex * Vec3A::from(tex.eval(uv, width).xyz()),
-            None => c * vertex,
+        let mut p = self.model.params;
+        let color = match &t.base_color {
+            Some(tex) => vertex * Vec3A::from(tex.eval(uv, width).xyz()),
+            None => vertex,
         };
-        // (roughness, metallic) factors from the green and blue channels.
-        let (r_scale, m_scale) = match &t.metallic_roughness {
-            Some(tex) => {
-                let v = tex.eval(uv, width);
-                (v.y, v.z)
+        if color != Vec3A::ONE {
+            for target in &self.model.color_targets {
+                if let InputMut::Color(c) = target(&mut p) {
+                    *c *= color;
+                }
             }
-            None => (1.0, 1.0),
-        };
-        let rough_tex = t.metallic_roughness.is_some();
-        match &self.model {
-            ShadeModel::Diffuse { albedo } => Bsdf::diffuse(color(*albedo)),
-            ShadeModel::Translucent { reflect, transmit } => {
-                Bsdf::translucent(color(*reflect), color(*transmit))
-            }
-            ShadeModel::Conductor { f0, roughness } => {
-                Bsdf::conductor(color(*f0), alpha(roughness * r_scale, rough_tex))
-            }
-            ShadeModel::Dielectric {
-                eta,
-                roughness,
-                tint,
-            } => Bsdf::dielectric(*eta, alpha(roughness * r_scale, rough_tex), color(*tint)),
-            ShadeModel::Plastic {
-                albedo,
-                eta,
-                roughness,
-            } => Bsdf::plastic(color(*albedo), *eta, alpha(roughness * r_scale, rough_tex)),
-            ShadeModel::Pbr {
-                params,
-                roughness,
-                clearcoat_roughness,
-            } => Bsdf::pbr(&PbrParams {
-                base: color(params.base),
-                metallic: params.metallic * m_scale,
-                alpha: alpha(roughness * r_scale, rough_tex),
-                clearcoat_alpha: alpha(*clearcoat_roughness, false),
-                ..*params
-            }),
         }
+        if let Some(tex) = &t.metallic_roughness {
+            let v = tex.eval(uv, width);
+            p.specular_roughness *= v.y;
+            p.base_metalness *= v.z;
+        }
+        for (input, tex, channel) in &t.inputs {
+            let v = tex.eval(uv, width);
+            match input(&mut p) {
+                InputMut::Scalar(x) => *x *= v[usize::from(*channel).min(3)],
+                InputMut::Color(c) => *c *= Vec3A::from(v.xyz()),
+                InputMut::Bool(_) => {}
+            }
+        }
+        // A lobe rough somewhere stays rough everywhere (its events are fixed).
+        let floor = |r: f32, base: f32| {
+            if base > 0.0 {
+                r.max(MIN_TEXTURED_ROUGHNESS)
+            } else {
+                r
+            }
+        };
+        p.specular_roughness = floor(p.specular_roughness, self.model.params.specular_roughness);
+        p.coat_roughness = floor(p.coat_roughness, self.model.params.coat_roughness);
+        Bsdf::openpbr(&p, &self.model.lobes)
     }
 
     /// The shading normal after the normal map (unit, world space), or `ns` without one.

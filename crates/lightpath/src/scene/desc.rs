@@ -160,6 +160,9 @@ pub enum MaterialKind {
         clearcoat: f32,
         clearcoat_roughness: f32,
     },
+    /// OpenPBR Surface (`material::openpbr`): every parameter, the specification's
+    /// default where the scene gives none. The material's `roughness` is not used.
+    OpenPbr(Box<crate::material::openpbr::OpenPbr>),
 }
 
 /// Where an image comes from: a file, or bytes inside a scene file (glTF buffers, data
@@ -203,6 +206,20 @@ pub struct TexturesDesc {
     pub normal: Option<(TextureDesc, f32)>,
     /// Multiplies the object's emission (sRGB-decoded).
     pub emissive: Option<TextureDesc>,
+    /// OpenPBR inputs, each multiplied by a texture.
+    pub inputs: Vec<InputTexture>,
+}
+
+/// A texture on one OpenPBR input: colours take its RGB (sRGB-decoded when `srgb`), numbers
+/// one channel.
+#[derive(Clone, Debug)]
+pub struct InputTexture {
+    /// The input's name, as `material::openpbr::INPUTS` has it.
+    pub input: &'static str,
+    pub texture: TextureDesc,
+    /// The channel a number is read from (0 red … 3 alpha); unused for colours.
+    pub channel: u8,
+    pub srgb: bool,
 }
 
 #[derive(Clone, Debug)]

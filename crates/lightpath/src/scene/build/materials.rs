@@ -1,9 +1,10 @@
 //! Materials: each description becomes a BSDF (a list of lobes) and a user colour.
 
-use crate::material::pbr::{PbrParams, MIN_TEXTURED_ROUGHNESS};
+use crate::material::openpbr::{self, InputKind, InputMut, LobeSet, OpenPbr};
+use crate::material::pbr::MIN_TEXTURED_ROUGHNESS;
 use crate::material::texture::{ColorSpace, MipMap, Texture, UvTransform, Wrap};
-use crate::material::textured::{MaterialTextures, ShadeModel, Textured};
-use crate::material::{roughness_to_alpha, Bsdf};
+use crate::material::textured::{InputRef, MaterialTextures, ShadeModel, Textured};
+use crate::material::Bsdf;
 use crate::scene::desc::{
     ImageSource, MaterialDesc, MaterialKind, NameRef, SceneDesc, ShapeDesc, TextureDesc,
     TextureRef, TexturesDesc,
@@ -51,30 +52,38 @@ pub fn build(desc: &SceneDesc) -> Result<(Vec<Material>, HashMap<String, u32>), 
     let colored = colored_materials(desc);
     for (name, m) in &desc.materials {
         ids.insert(name.clone(), materials.len() as u32);
-        let mut built = material(name, m, &mut images, colored.contains(name.as_str()))?;
-        let roughness = desc.render.regularize;
+        let (mut built, model) = material(name, m, &mut images, colored.contains(name.as_str()))?;
         // A textured material makes its BSDF at each hit, unregularised.
-        if built.textured.is_none()
-            && roughness > m.roughness
-            && !matches!(m.kind, MaterialKind::Diffuse { .. })
-        {
-            let rough = MaterialDesc {
-                roughness,
-                ..m.clone()
-            };
-            let bsdf = material(name, &rough, &mut images, false)?.bsdf;
-            // Regularising changes how lobes scatter, never which events they emit.
-            let same_events = bsdf.lobes().len() == built.bsdf.lobes().len()
-                && bsdf
-                    .lobes()
-                    .iter()
-                    .zip(built.bsdf.lobes())
-                    .all(|(a, b)| (a.transmit, a.scatter) == (b.transmit, b.scatter));
-            built.regularized = same_events.then_some(bsdf);
+        if built.textured.is_none() {
+            built.regularized = regularized(&model, desc.render.regularize);
         }
         materials.push(built);
     }
     Ok((materials, ids))
+}
+
+/// The material with its specular and coat at least `roughness` rough, if that changes
+/// it and keeps its events (regularising changes how lobes scatter, never which events
+/// they emit).
+fn regularized(model: &ShadeModel, roughness: f32) -> Option<Bsdf> {
+    let p = &model.params;
+    let rough = OpenPbr {
+        specular_roughness: p.specular_roughness.max(roughness),
+        coat_roughness: p.coat_roughness.max(roughness),
+        ..*p
+    };
+    if rough == *p {
+        return None;
+    }
+    let bsdf = Bsdf::openpbr(&rough, &model.lobes);
+    let before = Bsdf::openpbr(p, &model.lobes);
+    let same_events = bsdf.lobes().len() == before.lobes().len()
+        && bsdf
+            .lobes()
+            .iter()
+            .zip(before.lobes())
+            .all(|(a, b)| (a.transmit, a.scatter) == (b.transmit, b.scatter));
+    same_events.then_some(bsdf)
 }
 
 /// The materials of objects whose meshes have vertex colours: those shade through the
@@ -121,56 +130,161 @@ pub fn find(
     }
 }
 
-/// Material `name`; `colored`: some object using it has vertex colours, so it is made
-/// textured (evaluated at each hit) even without a texture.
+/// Material `name` and the model it was made from; `colored`: some object using it has
+/// vertex colours, so it is made textured (evaluated at each hit) even without a texture.
 fn material(
     name: &str,
     m: &MaterialDesc,
     images: &mut Images,
     colored: bool,
-) -> Result<Material, SceneError> {
+) -> Result<(Material, ShadeModel), SceneError> {
     check_parameters(name, m)?;
+    let eta = index_of_refraction(name, m)?;
     let t = &textures_of(m);
+    let (mut params, color_targets) = preset(m, eta);
+    check_openpbr(name, m, &params)?;
+    let rough_textured = t.metallic_roughness.is_some();
+    let colors_vary = t.base_color.is_some() || colored;
+    let is_textured = |input: &str| {
+        t.inputs.iter().any(|i| i.input == input)
+            || (rough_textured && matches!(input, "specular_roughness" | "base_metalness"))
+            || (colors_vary && color_targets.contains(&input))
+    };
+    let lobes = LobeSet::of(&params, is_textured);
+    // A roughness texture keeps the lobes rough everywhere (their events are fixed).
+    if is_textured("specular_roughness") {
+        params.specular_roughness = params.specular_roughness.max(MIN_TEXTURED_ROUGHNESS);
+    }
+    if is_textured("coat_roughness") {
+        params.coat_roughness = params.coat_roughness.max(MIN_TEXTURED_ROUGHNESS);
+    }
     let textured = colored
         || t.base_color.is_some()
         || t.metallic_roughness.is_some()
         || t.normal.is_some()
-        || t.emissive.is_some();
-    // A roughness texture keeps the lobes rough everywhere (their events are fixed).
-    let roughness = if t.metallic_roughness.is_some() {
-        m.roughness.max(MIN_TEXTURED_ROUGHNESS)
-    } else {
-        m.roughness
-    };
-    let alpha = roughness_to_alpha(roughness);
-    let eta = index_of_refraction(name, m)?;
-    let v3 = Vec3A::from;
-    let bsdf = match &m.kind {
-        MaterialKind::Diffuse { albedo } => Bsdf::diffuse(v3(*albedo)),
-        MaterialKind::Translucent { reflect, transmit } => {
-            Bsdf::translucent(v3(*reflect), v3(*transmit))
-        }
-        MaterialKind::Conductor { f0 } => Bsdf::conductor(v3(*f0), alpha),
-        MaterialKind::Dielectric { tint, .. } => {
-            Bsdf::dielectric(eta, alpha, tint.map(v3).unwrap_or(Vec3A::ONE))
-        }
-        MaterialKind::Plastic { albedo, .. } => Bsdf::plastic(v3(*albedo), eta, alpha),
-        MaterialKind::Pbr { .. } => Bsdf::pbr(&pbr_params(m, alpha, eta)),
+        || t.emissive.is_some()
+        || !t.inputs.is_empty();
+    let model = ShadeModel {
+        params,
+        lobes,
+        color_targets: color_targets.iter().map(|n| input_ref(n)).collect(),
     };
     let textured = if textured {
         Some(Box::new(Textured {
-            model: shade_model(m, roughness, alpha, eta),
+            model: model.clone(),
             textures: material_textures(t, images)?,
         }))
     } else {
         None
     };
-    Ok(Material {
-        bsdf,
+    let material = Material {
+        bsdf: Bsdf::openpbr(&params, &lobes),
         regularized: None,
-        user_color: m.user_color.map(v3),
+        user_color: m.user_color.map(Vec3A::from),
         textured,
-    })
+    };
+    Ok((material, model))
+}
+
+/// The accessor of OpenPBR input `name` (a name from the table).
+fn input_ref(name: &str) -> InputRef {
+    openpbr::input(name)
+        .expect("presets name OpenPBR inputs")
+        .get
+}
+
+/// The OpenPBR parameters of a material, and the colour inputs its colour texture (and
+/// vertex colours) multiply. The older material types are presets of OpenPBR.
+pub fn preset(m: &MaterialDesc, eta: f32) -> (OpenPbr, &'static [&'static str]) {
+    let v3 = Vec3A::from;
+    let mut p = OpenPbr {
+        specular_roughness: m.roughness.min(1.0),
+        specular_ior: eta,
+        ..OpenPbr::default()
+    };
+    let targets: &'static [&'static str] = match &m.kind {
+        MaterialKind::Diffuse { albedo } => {
+            p.base_color = v3(*albedo);
+            p.specular_weight = 0.0;
+            &["base_color"]
+        }
+        MaterialKind::Translucent { reflect, transmit } => {
+            // A thin sheet: diffuse reflection and transmission, split by their share.
+            let (r, t) = (v3(*reflect), v3(*transmit));
+            let (lr, lt) = (crate::light::luminance(r), crate::light::luminance(t));
+            let w = if lr + lt > 0.0 { lt / (lr + lt) } else { 0.0 };
+            p.geometry_thin_walled = true;
+            p.specular_weight = 0.0;
+            p.subsurface_weight = w;
+            p.base_color = if w < 1.0 { r / (1.0 - w) } else { Vec3A::ZERO };
+            p.subsurface_color = if w > 0.0 { t / w } else { Vec3A::ZERO };
+            &["base_color", "subsurface_color"]
+        }
+        MaterialKind::Conductor { f0 } => {
+            p.base_color = v3(*f0);
+            p.base_metalness = 1.0;
+            &["base_color"]
+        }
+        MaterialKind::Dielectric { tint, .. } => {
+            let tint = tint.map(v3).unwrap_or(Vec3A::ONE);
+            p.base_color = tint;
+            p.transmission_weight = 1.0;
+            p.transmission_color = tint;
+            &["base_color", "transmission_color"]
+        }
+        MaterialKind::Plastic { albedo, .. } => {
+            p.base_color = v3(*albedo);
+            &["base_color"]
+        }
+        MaterialKind::Pbr {
+            base_color,
+            metallic,
+            transmission,
+            clearcoat,
+            clearcoat_roughness,
+            ..
+        } => {
+            // glTF: transmission is tinted by the base colour; KHR_materials_clearcoat's
+            // coat has index 1.5.
+            p.base_color = v3(*base_color);
+            p.base_metalness = *metallic;
+            p.transmission_weight = *transmission;
+            p.transmission_color = v3(*base_color);
+            p.coat_weight = *clearcoat;
+            p.coat_roughness = *clearcoat_roughness;
+            p.coat_ior = 1.5;
+            &["base_color", "transmission_color"]
+        }
+        MaterialKind::OpenPbr(params) => {
+            p = **params;
+            &["base_color"]
+        }
+    };
+    (p, targets)
+}
+
+/// Every OpenPBR parameter within its range (a loader that builds them directly, such
+/// as glTF's, is checked here as the TOML loader checks what it reads).
+fn check_openpbr(name: &str, m: &MaterialDesc, p: &OpenPbr) -> Result<(), SceneError> {
+    let mut p = *p;
+    for input in openpbr::INPUTS {
+        let ok = match (input.kind, (input.get)(&mut p)) {
+            (InputKind::Scalar { min, max, .. }, InputMut::Scalar(v)) => {
+                v.is_finite() && (min..=max).contains(v)
+            }
+            (InputKind::Color { .. }, InputMut::Color(c)) => {
+                c.is_finite() && c.cmpge(Vec3A::ZERO).all()
+            }
+            _ => true,
+        };
+        if !ok {
+            return Err(m.origin.error(format!(
+                "material '{name}': OpenPBR {} is out of its range",
+                input.name
+            )));
+        }
+    }
+    Ok(())
 }
 
 /// Colours finite and not negative, weights from 0 to 1, roughness from 0 up.
@@ -185,6 +299,8 @@ fn check_parameters(name: &str, m: &MaterialDesc) -> Result<(), SceneError> {
         MaterialKind::Conductor { f0 } => vec![("f0", *f0)],
         MaterialKind::Dielectric { tint, .. } => tint.map(|t| ("tint", t)).into_iter().collect(),
         MaterialKind::Pbr { base_color, .. } => vec![("base_color", *base_color)],
+        // Checked against OpenPBR's table after the preset.
+        MaterialKind::OpenPbr(_) => vec![],
     };
     colors.extend(m.user_color.map(|c| ("user_color", c)));
     for (what, c) in colors {
@@ -225,7 +341,8 @@ fn check_parameters(name: &str, m: &MaterialDesc) -> Result<(), SceneError> {
 fn index_of_refraction(name: &str, m: &MaterialDesc) -> Result<f32, SceneError> {
     let given = match &m.kind {
         MaterialKind::Dielectric { ior, .. } | MaterialKind::Plastic { ior, .. } => *ior,
-        MaterialKind::Pbr { .. } => pbr_ior(m),
+        MaterialKind::Pbr { ior, .. } => *ior,
+        MaterialKind::OpenPbr(p) => Some(p.specular_ior),
         _ => None,
     };
     match given.unwrap_or(1.5) {
@@ -233,42 +350,6 @@ fn index_of_refraction(name: &str, m: &MaterialDesc) -> Result<f32, SceneError> 
         eta => Err(m.origin.error(format!(
             "material '{name}': ior must be positive, got {eta}"
         ))),
-    }
-}
-
-/// What a textured material evaluates at each hit, before its textures.
-fn shade_model(m: &MaterialDesc, roughness: f32, alpha: f32, eta: f32) -> ShadeModel {
-    let v3 = Vec3A::from;
-    match &m.kind {
-        MaterialKind::Diffuse { albedo } => ShadeModel::Diffuse {
-            albedo: v3(*albedo),
-        },
-        MaterialKind::Translucent { reflect, transmit } => ShadeModel::Translucent {
-            reflect: v3(*reflect),
-            transmit: v3(*transmit),
-        },
-        MaterialKind::Conductor { f0 } => ShadeModel::Conductor {
-            f0: v3(*f0),
-            roughness,
-        },
-        MaterialKind::Dielectric { tint, .. } => ShadeModel::Dielectric {
-            eta,
-            roughness,
-            tint: tint.map(v3).unwrap_or(Vec3A::ONE),
-        },
-        MaterialKind::Plastic { albedo, .. } => ShadeModel::Plastic {
-            albedo: v3(*albedo),
-            eta,
-            roughness,
-        },
-        MaterialKind::Pbr {
-            clearcoat_roughness,
-            ..
-        } => ShadeModel::Pbr {
-            params: pbr_params(m, alpha, eta),
-            roughness,
-            clearcoat_roughness: *clearcoat_roughness,
-        },
     }
 }
 
@@ -288,6 +369,22 @@ fn material_textures(
             None => None,
         },
         emissive: tex(images, &t.emissive, ColorSpace::Srgb)?,
+        inputs: t
+            .inputs
+            .iter()
+            .map(|i| {
+                let space = if i.srgb {
+                    ColorSpace::Srgb
+                } else {
+                    ColorSpace::Linear
+                };
+                Ok((
+                    input_ref(i.input),
+                    images.texture(&i.texture, space)?,
+                    i.channel,
+                ))
+            })
+            .collect::<Result<_, SceneError>>()?,
     })
 }
 
@@ -311,35 +408,4 @@ fn textures_of(m: &MaterialDesc) -> TexturesDesc {
         t.normal = m.normal_map.as_ref().map(|r| (from_map(r), r.scale));
     }
     t
-}
-
-fn pbr_ior(m: &MaterialDesc) -> Option<f32> {
-    match &m.kind {
-        MaterialKind::Pbr { ior, .. } => *ior,
-        _ => None,
-    }
-}
-
-/// The untextured parameters of a metallic-roughness material.
-fn pbr_params(m: &MaterialDesc, alpha: f32, ior: f32) -> PbrParams {
-    let MaterialKind::Pbr {
-        base_color,
-        metallic,
-        transmission,
-        clearcoat,
-        clearcoat_roughness,
-        ..
-    } = &m.kind
-    else {
-        unreachable!("pbr_params of a metallic-roughness material")
-    };
-    PbrParams {
-        base: Vec3A::from(*base_color),
-        metallic: *metallic,
-        alpha,
-        ior,
-        glass: *transmission >= 0.5,
-        clearcoat: *clearcoat,
-        clearcoat_alpha: roughness_to_alpha(*clearcoat_roughness),
-    }
 }

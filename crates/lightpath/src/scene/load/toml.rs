@@ -136,8 +136,10 @@ fn settings(src: &Source, file: &SceneFile) -> Result<d::RenderDesc, SceneError>
     Ok(render)
 }
 
+/// A `[materials.NAME]` table. The keys of the older types are fields; an `openpbr`
+/// material's parameters (and `<parameter>_texture` keys) are collected in `inputs` and
+/// checked against OpenPBR's table, which also rejects unknown keys of the other types.
 #[derive(Debug, Deserialize, Clone)]
-#[serde(deny_unknown_fields)]
 struct MaterialDesc {
     #[serde(rename = "type")]
     kind: Spanned<String>,
@@ -147,22 +149,17 @@ struct MaterialDesc {
     transmit: Option<[f32; 3]>,
     /// Conductor: reflectance at normal incidence.
     f0: Option<[f32; 3]>,
-    #[serde(default)]
-    roughness: f32,
+    roughness: Option<f32>,
     ior: Option<f32>,
     tint: Option<[f32; 3]>,
     /// Colour reported by the `U4` user lobe.
     user_color: Option<[f32; 3]>,
-    /// pbr: glTF's metallic-roughness parameters.
+    /// pbr: glTF's metallic-roughness parameters (and openpbr's base colour).
     base_color: Option<[f32; 3]>,
-    #[serde(default)]
-    metallic: f32,
-    #[serde(default)]
-    transmission: f32,
-    #[serde(default)]
-    clearcoat: f32,
-    #[serde(default)]
-    clearcoat_roughness: f32,
+    metallic: Option<f32>,
+    transmission: Option<f32>,
+    clearcoat: Option<f32>,
+    clearcoat_roughness: Option<f32>,
     /// Textures (paths relative to the scene file): colour multiplies albedo, f0, tint
     /// or base colour; metallic-roughness is glTF's layout (green, blue).
     color_texture: Option<Spanned<String>>,
@@ -173,6 +170,9 @@ struct MaterialDesc {
     emission_texture: Option<Spanned<String>>,
     /// repeat | clamp | mirror, for all the material's textures.
     texture_wrap: Option<Spanned<String>>,
+    /// Every other key: OpenPBR parameters, or mistakes.
+    #[serde(flatten)]
+    inputs: BTreeMap<String, toml::Value>,
 }
 
 /// Object-to-world placement: scale, then rotate (degrees about X, then Y, then Z), then
@@ -456,7 +456,20 @@ fn material(
             )
         })
     };
-    let kind = match m.kind.get_ref().as_str() {
+    let kind_name = m.kind.get_ref().as_str();
+    if kind_name != "openpbr" {
+        if let Some(key) = m.inputs.keys().next() {
+            return Err(src.error(
+                key_span(src, &span, key),
+                format!(
+                    "material '{name}': unknown key '{key}' for type '{kind_name}'{}",
+                    hint_openpbr(key)
+                ),
+            ));
+        }
+    }
+    let metallic = m.metallic.unwrap_or(0.0);
+    let kind = match kind_name {
         "diffuse" => d::MaterialKind::Diffuse { albedo: need(m.albedo, "albedo")? },
         "translucent" => d::MaterialKind::Translucent { reflect: need(m.reflect, "reflect")?, transmit: need(m.transmit, "transmit")? },
         "conductor" => d::MaterialKind::Conductor { f0: need(m.f0, "f0")? },
@@ -464,35 +477,200 @@ fn material(
         "plastic" => d::MaterialKind::Plastic { albedo: need(m.albedo, "albedo")?, ior: m.ior },
         "pbr" => d::MaterialKind::Pbr {
             base_color: need(m.base_color, "base_color")?,
-            metallic: m.metallic,
+            metallic,
             ior: m.ior,
-            transmission: m.transmission,
-            clearcoat: m.clearcoat,
-            clearcoat_roughness: m.clearcoat_roughness,
+            transmission: m.transmission.unwrap_or(0.0),
+            clearcoat: m.clearcoat.unwrap_or(0.0),
+            clearcoat_roughness: m.clearcoat_roughness.unwrap_or(0.0),
         },
+        "openpbr" => d::MaterialKind::OpenPbr(Box::new(openpbr(src, name, &span, m)?)),
         other => {
             return Err(src.error(
                 Some(m.kind.span()),
-                format!("unknown material type '{other}': expected diffuse, translucent, conductor, dielectric, plastic or pbr"),
+                format!("unknown material type '{other}': expected openpbr, diffuse, translucent, conductor, dielectric, plastic or pbr"),
             ))
         }
     };
     Ok(d::MaterialDesc {
         kind,
-        roughness: m.roughness,
+        roughness: m.roughness.unwrap_or(0.0),
         user_color: m.user_color,
-        textures: textures(src, name, m)?,
+        textures: textures(src, name, &span, m)?,
         base_color_map: None,
         normal_map: None,
         origin: src.origin(Some(span)),
     })
 }
 
+/// Where `key` is written inside the table at `table`: its own position when it can be
+/// found, else the table's.
+fn key_span(src: &Source, table: &Range<usize>, key: &str) -> Option<Range<usize>> {
+    let text = src.text.get(table.clone())?;
+    let mut from = 0;
+    while let Some(i) = text[from..].find(key) {
+        let at = from + i;
+        let before_ok = at == 0
+            || !text.as_bytes()[at - 1].is_ascii_alphanumeric() && text.as_bytes()[at - 1] != b'_';
+        let rest = text[at + key.len()..].trim_start_matches([' ', '\t', '"']);
+        if before_ok && rest.starts_with('=') {
+            return Some(table.start + at..table.start + at + key.len());
+        }
+        from = at + key.len();
+    }
+    Some(table.clone())
+}
+
+/// A hint for a key that is an OpenPBR parameter written on another type.
+fn hint_openpbr(key: &str) -> String {
+    use crate::material::openpbr;
+    if openpbr::input(key.trim_end_matches("_texture")).is_some() {
+        return " (it is an OpenPBR parameter: write type = \"openpbr\")".to_string();
+    }
+    let names = openpbr::INPUTS
+        .iter()
+        .map(|i| i.name)
+        .chain(LEGACY_KEYS.iter().copied());
+    crate::suggest::did_you_mean(key, names)
+}
+
+/// The keys of the older material types.
+const LEGACY_KEYS: &[&str] = &[
+    "type",
+    "albedo",
+    "reflect",
+    "transmit",
+    "f0",
+    "roughness",
+    "ior",
+    "tint",
+    "user_color",
+    "base_color",
+    "metallic",
+    "transmission",
+    "clearcoat",
+    "clearcoat_roughness",
+    "color_texture",
+    "metallic_roughness_texture",
+    "normal_texture",
+    "normal_scale",
+    "emission_texture",
+    "texture_wrap",
+];
+
+/// An `openpbr` material's parameters: the specification's defaults, then each key
+/// written, checked against its kind and range.
+fn openpbr(
+    src: &Source,
+    name: &str,
+    span: &Range<usize>,
+    m: &MaterialDesc,
+) -> Result<crate::material::openpbr::OpenPbr, SceneError> {
+    use crate::material::openpbr::{self, InputKind, InputMut, OpenPbr};
+    let legacy = [
+        ("albedo", m.albedo.is_some(), "base_color"),
+        ("reflect", m.reflect.is_some(), "base_color"),
+        ("transmit", m.transmit.is_some(), "subsurface_color"),
+        ("f0", m.f0.is_some(), "base_color with base_metalness = 1"),
+        ("roughness", m.roughness.is_some(), "specular_roughness"),
+        ("ior", m.ior.is_some(), "specular_ior"),
+        ("tint", m.tint.is_some(), "transmission_color"),
+        ("metallic", m.metallic.is_some(), "base_metalness"),
+        (
+            "transmission",
+            m.transmission.is_some(),
+            "transmission_weight",
+        ),
+        ("clearcoat", m.clearcoat.is_some(), "coat_weight"),
+        (
+            "clearcoat_roughness",
+            m.clearcoat_roughness.is_some(),
+            "coat_roughness",
+        ),
+    ];
+    if let Some((key, _, instead)) = legacy.iter().find(|l| l.1) {
+        return Err(src.error(
+            key_span(src, span, key),
+            format!("material '{name}': '{key}' is not an OpenPBR parameter: write {instead}"),
+        ));
+    }
+    let mut p = OpenPbr::default();
+    if let Some(c) = m.base_color {
+        p.base_color = glam::Vec3A::from(c);
+    }
+    for (key, value) in &m.inputs {
+        if key.ends_with("_texture") && openpbr::input(key.trim_end_matches("_texture")).is_some() {
+            continue;
+        }
+        let at = || key_span(src, span, key);
+        let Some(input) = openpbr::input(key) else {
+            let names = openpbr::INPUTS
+                .iter()
+                .map(|i| i.name)
+                .chain(LEGACY_KEYS.iter().copied());
+            let hint = crate::suggest::did_you_mean(key, names);
+            return Err(src.error(
+                at(),
+                format!("material '{name}': unknown OpenPBR parameter '{key}'{hint}"),
+            ));
+        };
+        let number = |v: &toml::Value| match v {
+            toml::Value::Float(f) => Some(*f as f32),
+            toml::Value::Integer(i) => Some(*i as f32),
+            _ => None,
+        };
+        match (input.kind, (input.get)(&mut p)) {
+            (InputKind::Scalar { min, max, .. }, InputMut::Scalar(slot)) => {
+                let v = number(value)
+                    .filter(|v| v.is_finite() && (min..=max).contains(v))
+                    .ok_or_else(|| {
+                        let range = if max == f32::MAX {
+                            format!("from {min} up")
+                        } else {
+                            format!("from {min} to {max}")
+                        };
+                        src.error(
+                            at(),
+                            format!(
+                                "material '{name}': {key} must be a number {range}, got {value}"
+                            ),
+                        )
+                    })?;
+                *slot = v;
+            }
+            (InputKind::Color { .. }, InputMut::Color(slot)) => {
+                let c = value
+                    .as_array()
+                    .filter(|a| a.len() == 3)
+                    .and_then(|a| Some([number(&a[0])?, number(&a[1])?, number(&a[2])?]))
+                    .filter(|c| c.iter().all(|v| v.is_finite() && *v >= 0.0))
+                    .ok_or_else(|| src.error(at(), format!("material '{name}': {key} must be [r, g, b] of finite, non-negative numbers, got {value}")))?;
+                *slot = glam::Vec3A::from(c);
+            }
+            (InputKind::Bool { .. }, InputMut::Bool(slot)) => {
+                *slot = value.as_bool().ok_or_else(|| {
+                    src.error(
+                        at(),
+                        format!("material '{name}': {key} must be true or false, got {value}"),
+                    )
+                })?;
+            }
+            _ => unreachable!("an input's kind matches its value"),
+        }
+    }
+    Ok(p)
+}
+
 /// The OBJ files a scene has loaded, by path.
 type ObjFiles = HashMap<std::path::PathBuf, std::sync::Arc<Vec<d::MeshData>>>;
 
 /// A material's textures, their paths resolved against the scene file's directory.
-fn textures(src: &Source, name: &str, m: &MaterialDesc) -> Result<d::TexturesDesc, SceneError> {
+fn textures(
+    src: &Source,
+    name: &str,
+    span: &Range<usize>,
+    m: &MaterialDesc,
+) -> Result<d::TexturesDesc, SceneError> {
+    use crate::material::openpbr::{self, InputKind};
     use crate::material::texture::{UvTransform, Wrap};
     let wrap = match m.texture_wrap.as_ref().map(|w| (w.get_ref().as_str(), w.span())) {
         None | Some(("repeat", _)) => Wrap::Repeat,
@@ -513,11 +691,38 @@ fn textures(src: &Source, name: &str, m: &MaterialDesc) -> Result<d::TexturesDes
             origin: src.origin(Some(t.span())),
         })
     };
+    let mut inputs = Vec::new();
+    for (key, value) in &m.inputs {
+        let Some(input) = key.strip_suffix("_texture").and_then(openpbr::input) else {
+            continue;
+        };
+        let at = key_span(src, span, key);
+        let Some(path) = value.as_str() else {
+            return Err(src.error(
+                at,
+                format!("material '{name}': {key} must be an image file's path, got {value}"),
+            ));
+        };
+        let color = matches!(input.kind, InputKind::Color { .. });
+        inputs.push(d::InputTexture {
+            input: input.name,
+            texture: d::TextureDesc {
+                image: d::ImageSource::File(src.dir.join(path)),
+                wrap: [wrap; 2],
+                transform: UvTransform::default(),
+                origin: src.origin(at),
+            },
+            // Numbers from the red channel (a grey image's every channel).
+            channel: 0,
+            srgb: color,
+        });
+    }
     Ok(d::TexturesDesc {
         base_color: tex(&m.color_texture),
         metallic_roughness: tex(&m.metallic_roughness_texture),
         normal: tex(&m.normal_texture).map(|t| (t, m.normal_scale)),
         emissive: tex(&m.emission_texture),
+        inputs,
     })
 }
 
