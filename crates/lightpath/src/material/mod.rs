@@ -314,16 +314,18 @@ impl Bsdf {
         };
         let s = self.lobes[l].sample(wo, ctx, u)?;
         let k = self.tag_index(l, s.sub);
-        if let Some((mut weight, pdf, delta)) = s.value {
-            // Subsurface light crosses a coat going in (and its exit lobe is the
-            // integrator's, under no coat).
-            if let (Some(coat), Lobe::Subsurface(_)) = (&self.coat, &self.lobes[l]) {
-                weight *= coat.transmittance(wo, s.wi);
-            }
+        if let Some((weight, pdf, delta)) = s.value {
+            // A subsurface walk comes back out on the side it went in: the layers above
+            // see it leave there (the inward direction mirrored stands for the exit's,
+            // both cosine-distributed), and its exit lobe is under none of them.
+            let wi_layers = match self.lobes[l] {
+                Lobe::Subsurface(_) => Vec3A::new(s.wi.x, s.wi.y, -s.wi.z),
+                _ => s.wi,
+            };
             return Some(BsdfSample {
                 lobe: k,
                 wi: sh.frame.to_world(s.wi),
-                weight: weight * self.attenuation(l, wo, s.wi),
+                weight: weight * self.attenuation(l, wo, wi_layers),
                 pdf,
                 delta,
                 eta: s.eta,

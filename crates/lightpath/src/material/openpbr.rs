@@ -24,7 +24,10 @@
 use super::layer::Layer;
 use super::lobe::Lobe;
 use super::pbr::dielectric_f0;
-use super::{roughness_to_alpha, Bsdf, Coat, Conductor, Dielectric, DiffuseTransmission, Lambert};
+use super::{
+    roughness_to_alpha, Bsdf, Coat, Conductor, Dielectric, DiffuseTransmission, Lambert,
+    Subsurface,
+};
 use glam::Vec3A;
 
 /// What a parameter holds.
@@ -220,9 +223,12 @@ impl Bsdf {
             });
         }
         if set.subsurface {
-            // Until the random walk lands, subsurface scatters as diffuse transmission.
-            b.push(DiffuseTransmission {
-                transmit: p.subsurface_color * (base_w * opaque * sss),
+            b.push(Subsurface {
+                weight: base_w * opaque * sss,
+                color: p.subsurface_color,
+                radius: p.subsurface_radius_scale * p.subsurface_radius,
+                anisotropy: p.subsurface_scatter_anisotropy,
+                ior: eta,
             });
         }
         if set.specular {
