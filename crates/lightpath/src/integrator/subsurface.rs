@@ -153,7 +153,11 @@ impl Medium {
         for c in 0..3 {
             let r = s.radius[c];
             let r = if r.is_finite() { r.max(1e-7) } else { 1e-7 };
-            let col = if s.color[c].is_finite() { s.color[c] } else { 0.0 };
+            let col = if s.color[c].is_finite() {
+                s.color[c]
+            } else {
+                0.0
+            };
             let a = if g >= 0.0 {
                 sigma_t[c] = 1.0 / (r * (1.0 - g));
                 single_scattering_albedo(col, g)
@@ -335,9 +339,8 @@ impl Tracer<'_> {
         u: [f32; 3],
     ) -> Option<Ray> {
         let scene = self.scene;
-        let seed = splitmix64(
-            u64::from(u[0].to_bits()) | (u64::from(u[1].to_bits()) << 32),
-        ) ^ u64::from(u[2].to_bits());
+        let seed = splitmix64(u64::from(u[0].to_bits()) | (u64::from(u[1].to_bits()) << 32))
+            ^ u64::from(u[2].to_bits());
         let mut rng = Rng::for_sample(seed, u64::from(v.hit.object), u64::from(path.depth));
         let boundary = ObjectBoundary {
             accel: &scene.accel,
@@ -504,7 +507,8 @@ mod tests {
                 };
                 let sin = (1.0 - cos * cos).max(0.0).sqrt();
                 let phi = 2.0 * std::f64::consts::PI * u();
-                mu = (mu * cos + (1.0 - mu * mu).max(0.0).sqrt() * sin * phi.cos()).clamp(-1.0, 1.0);
+                mu =
+                    (mu * cos + (1.0 - mu * mu).max(0.0).sqrt() * sin * phi.cos()).clamp(-1.0, 1.0);
             }
         }
         [r as f64 / n as f64, t as f64 / n as f64]
@@ -583,7 +587,10 @@ mod tests {
             let g = f64::from(g);
             for (s, want) in [(p1, g), (p2, g * g)] {
                 let (m, se) = s.mean_se(n);
-                assert!((m - want).abs() <= 5.0 * se + 1e-6, "g {g}: {m} vs {want} ± {se}");
+                assert!(
+                    (m - want).abs() <= 5.0 * se + 1e-6,
+                    "g {g}: {m} vs {want} ± {se}"
+                );
             }
         }
     }
@@ -611,7 +618,10 @@ mod tests {
                     (m - want).abs() <= 0.05 * want + 5.0 * se,
                     "g {g} colour {want}: reflects {m:.4} ± {se:.4}"
                 );
-                assert_eq!(walked[1][c].sum, 0.0, "nothing crosses a semi-infinite slab");
+                assert_eq!(
+                    walked[1][c].sum, 0.0,
+                    "nothing crosses a semi-infinite slab"
+                );
             }
         }
     }

@@ -115,4 +115,11 @@ macro_rules! lobes {
     };
 }
 
-lobes!(Lambert, DiffuseTransmission, Conductor, Dielectric, Coat, Subsurface);
+lobes!(
+    Lambert,
+    DiffuseTransmission,
+    Conductor,
+    Dielectric,
+    Coat,
+    Subsurface
+);

@@ -27,9 +27,9 @@ pub mod lobe;
 pub mod microfacet;
 pub mod openpbr;
 pub mod pbr;
+mod subsurface;
 pub mod texture;
 pub mod textured;
-mod subsurface;
 mod translucent;
 
 #[cfg(test)]

@@ -25,8 +25,7 @@ use super::layer::Layer;
 use super::lobe::Lobe;
 use super::pbr::dielectric_f0;
 use super::{
-    roughness_to_alpha, Bsdf, Coat, Conductor, Dielectric, DiffuseTransmission, Lambert,
-    Subsurface,
+    roughness_to_alpha, Bsdf, Coat, Conductor, Dielectric, DiffuseTransmission, Lambert, Subsurface,
 };
 use glam::Vec3A;
 
