@@ -78,9 +78,9 @@ pub fn single_scattering_albedo(a: f32, g: f32) -> f32 {
                 31.149_158_143_3,
                 -201.847_017_512,
                 841.576_016_723,
-                -2018.092_885_05,
-                2731.715_602_86,
-                -1935.414_242_44,
+                -2_018.092_885_05,
+                2_731.715_602_86,
+                -1_935.414_242_44,
                 559.009_054_474,
             ])
             .exp();
@@ -110,11 +110,11 @@ pub fn single_scattering_albedo(a: f32, g: f32) -> f32 {
                 0.0,
                 76.731_625_395_2,
                 -594.356_773_233,
-                2448.883_420_3,
-                -5576.685_289_98,
-                7116.601_719_12,
-                -4763.544_678_87,
-                1303.531_805_5,
+                2_448.883_420_3,
+                -5_576.685_289_98,
+                7_116.601_719_12,
+                -4_763.544_678_87,
+                1_303.531_805_5,
             ])
             .exp();
     let cf = poly([
@@ -544,10 +544,10 @@ mod tests {
                 n,
                 100 + c as u64,
             );
-            for side in 0..2 {
-                let (m, se) = walked[side][c].mean_se(n);
-                let b = brute[side] * scale;
-                let se_b = scale * (brute[side] * (1.0 - brute[side]) / n as f64).sqrt();
+            for (side, (walked, brute)) in walked.iter().zip(brute).enumerate() {
+                let (m, se) = walked[c].mean_se(n);
+                let b = brute * scale;
+                let se_b = scale * (brute * (1.0 - brute) / n as f64).sqrt();
                 let tol = 5.0 * (se * se + se_b * se_b).sqrt();
                 assert!(
                     (m - b).abs() <= tol,
