@@ -61,3 +61,56 @@ impl LobeModel for Subsurface {
         self.weight * luminance(self.color)
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::material::{Bsdf, Lambert, Shading};
+
+    /// Light sampling never reaches subsurface at the entry; a sample goes into the
+    /// surface with weight `weight / selection`, and the Bsdf names the lobe as
+    /// subsurface so the integrator walks.
+    #[test]
+    fn samples_go_inside_and_the_bsdf_says_walk() {
+        let lobe = Subsurface {
+            weight: 0.7,
+            color: Vec3A::new(0.9, 0.5, 0.2),
+            radius: Vec3A::ONE,
+            anisotropy: 0.0,
+            ior: 1.4,
+        };
+        let bsdf = Bsdf::layered(
+            &[
+                Lambert {
+                    albedo: Vec3A::splat(0.3),
+                }
+                .into(),
+                lobe.into(),
+            ],
+            None,
+            Vec3A::ONE,
+        );
+        assert_eq!(bsdf.lobes(), &[crate::material::lambert::RD2, TD3]);
+        assert!(bsdf.subsurface(0).is_none());
+        assert_eq!(bsdf.subsurface(1), Some(&lobe));
+        assert!(bsdf.subsurface(2).is_none());
+        let n = Vec3A::new(0.2, 0.3, 0.9).normalize();
+        let sh = Shading::new(&bsdf, n, n, Vec3A::new(0.0, 0.6, 0.8));
+        let mut walks = 0;
+        for i in 0..64 {
+            let u = (i as f32 + 0.5) / 64.0;
+            let s = bsdf
+                .sample(&sh, u, Vec2::new(u, 1.0 - u))
+                .expect("a sample");
+            let wi = sh.frame.to_local(s.wi);
+            assert_eq!(bsdf.eval_lobe(1, &sh, wi).0, Vec3A::ZERO);
+            if s.lobe == 1 {
+                walks += 1;
+                assert!(wi.z < 0.0, "into the surface: {wi}");
+                let sel = s.pdf / cosine_hemisphere_pdf(-wi.z);
+                assert!((s.weight - Vec3A::splat(0.7 / sel)).abs().max_element() < 1e-4);
+            }
+        }
+        assert!(walks > 0);
+    }
+}
