@@ -47,7 +47,7 @@ mod tests {
 
     #[test]
     fn typos_find_their_word_and_strangers_find_nothing() {
-        let scenes = ["cornell", "cornell-classic", "many-lights"];
+        let scenes = ["cornell", "cornell-classic", "materials", "many-lights"];
         assert_eq!(did_you_mean("cornel", scenes), " (did you mean 'cornell'?)");
         assert_eq!(
             did_you_mean("many-light", scenes),

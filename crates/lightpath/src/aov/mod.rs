@@ -69,23 +69,42 @@ pub const STANDARD_DATA: [(&str, &str); 2] = [
     ),
 ];
 
+/// Lightpath's standard AOVs of single specular lobes (docs/lpe.md#standard-aovs): light
+/// that left the camera's first surface by that lobe. They overlap `directSpecular` and
+/// `indirectSpecular`, so they are beside the partition, not in it. `sheen` is `fuzz`.
+pub const STANDARD_LOBES: [(&str, &str); 4] = [
+    ("coat", "C<RS4>[DS]*[<L.>O]"),
+    ("iridescence", "C<RS5>[DS]*[<L.>O]"),
+    ("fuzz", "C<RS6>[DS]*[<L.>O]"),
+    ("sheen", "C<RS6>[DS]*[<L.>O]"),
+];
+
 /// A definition with Lightpath's own standard names resolved: `lpe:normal` and
-/// `lpe:depth` name the renderer's data AOVs, which the language (and so the `lpe` crate)
-/// does not know; every other definition is returned as written.
+/// `lpe:depth` name the renderer's data AOVs, `lpe:coat`, `lpe:iridescence` and
+/// `lpe:fuzz` its lobe AOVs, which the language (and so the `lpe` crate) does not know;
+/// every other definition is returned as written.
 pub fn resolve_definition(definition: &str) -> &str {
     let word = definition.trim().strip_prefix("lpe:").unwrap_or("");
     STANDARD_DATA
         .iter()
+        .chain(&STANDARD_LOBES)
         .find(|(n, _)| n.eq_ignore_ascii_case(word))
         .map_or(definition, |(_, d)| d)
 }
 
-/// The standard AOVs of docs/lpe.md#standard-aovs other than beauty, then `normal` and `depth`.
+/// The standard AOVs of docs/lpe.md#standard-aovs other than beauty, then the lobe AOVs
+/// `coat`, `iridescence` and `fuzz`, then `normal` and `depth`.
 pub fn standard() -> Vec<AovSpec> {
     STANDARD_NAMES
         .iter()
         .filter(|(n, _)| *n != BEAUTY)
         .map(|(n, _)| AovSpec::new(*n, format!("lpe:{n}")))
+        .chain(
+            STANDARD_LOBES
+                .iter()
+                .filter(|(n, _)| *n != "sheen")
+                .map(|(n, _)| AovSpec::new(*n, format!("lpe:{n}"))),
+        )
         .chain(STANDARD_DATA.iter().map(|(n, d)| AovSpec::new(*n, *d)))
         .collect()
 }
@@ -173,6 +192,11 @@ mod tests {
         assert_eq!(resolve_definition("lpe:normal"), STANDARD_DATA[0].1);
         assert_eq!(resolve_definition(" lpe:depth"), STANDARD_DATA[1].1);
         assert_eq!(resolve_definition("lpe:diffuse"), "lpe:diffuse");
+        assert_eq!(
+            resolve_definition("lpe:sheen"),
+            resolve_definition("lpe:fuzz")
+        );
+        assert_eq!(resolve_definition("lpe:coat"), "C<RS4>[DS]*[<L.>O]");
         assert_eq!(resolve_definition("normal"), "normal");
         let mut compiler = lpe::Compiler::new().profile(crate::events::profile());
         for (name, _) in STANDARD_DATA {

@@ -5,6 +5,7 @@
 
 use super::coat::Coat;
 use super::fresnel::fresnel_dielectric;
+use super::fuzz::Fuzz;
 use glam::Vec3A;
 
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -20,6 +21,9 @@ pub enum Layer {
         /// The factor of coat darkening, constant over directions.
         darken: f32,
     },
+    /// A fuzz (sheen) layer: what its fibres scatter towards `wo` (their directional
+    /// albedo, Zeltner et al.'s table) does not reach beneath.
+    Fuzz(Fuzz),
 }
 
 impl Layer {
@@ -63,6 +67,7 @@ impl Layer {
                 };
                 fresnel * tint * darken
             }
+            Layer::Fuzz(fuzz) => Vec3A::splat(1.0 - fuzz.albedo(wo.z.abs()).min(1.0)),
         }
     }
 
@@ -76,6 +81,7 @@ impl Layer {
             Layer::Coat { coat, .. } => {
                 1.0 - coat.weight * fresnel_dielectric(wo.z.abs(), coat.eta)
             }
+            Layer::Fuzz(fuzz) => 1.0 - fuzz.albedo(wo.z.abs()).min(1.0),
         }
     }
 }

@@ -6,6 +6,7 @@
 //! transmission inside its own sampling (glass, per microfacet) emits two, and `sub`
 //! numbers them.
 
+use super::fuzz::Fuzz;
 use super::{
     coat::Coat, conductor::Conductor, dielectric::Dielectric, lambert::Lambert,
     subsurface::Subsurface, translucent::DiffuseTransmission,
@@ -121,5 +122,6 @@ lobes!(
     Conductor,
     Dielectric,
     Coat,
-    Subsurface
+    Subsurface,
+    Fuzz
 );

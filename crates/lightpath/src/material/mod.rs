@@ -21,6 +21,8 @@ mod coat;
 mod conductor;
 mod dielectric;
 pub mod fresnel;
+mod fuzz;
+mod fuzz_table;
 mod lambert;
 pub mod layer;
 pub mod lobe;
@@ -30,20 +32,27 @@ pub mod pbr;
 mod subsurface;
 pub mod texture;
 pub mod textured;
+pub mod thin_film;
 mod translucent;
 
 #[cfg(test)]
 mod tests;
+#[cfg(test)]
+mod tests_fuzz;
+#[cfg(test)]
+mod tests_thin_film;
 
 pub use coat::Coat;
 pub use conductor::Conductor;
 pub use dielectric::Dielectric;
 pub use fresnel::fresnel_dielectric;
+pub use fuzz::Fuzz;
 pub use lambert::Lambert;
 pub use layer::Layer;
 pub use lobe::{Lobe, LobeModel, LobeTag};
 pub use pbr::PbrParams;
 pub use subsurface::Subsurface;
+pub use thin_film::{conductor_ior_from_colors, thin_film_fresnel, FilmBase};
 pub use translucent::DiffuseTransmission;
 
 use crate::sampling::Frame;

@@ -25,7 +25,8 @@ use super::layer::Layer;
 use super::lobe::Lobe;
 use super::pbr::dielectric_f0;
 use super::{
-    roughness_to_alpha, Bsdf, Coat, Conductor, Dielectric, DiffuseTransmission, Lambert, Subsurface,
+    roughness_to_alpha, Bsdf, Coat, Conductor, Dielectric, DiffuseTransmission, Fuzz, Lambert,
+    Subsurface,
 };
 use glam::Vec3A;
 
@@ -249,10 +250,17 @@ impl Bsdf {
             }
         }
         if set.glass {
+            // With a depth, the colour is the interior's absorption (a medium's), not a
+            // tint of the interface.
+            let tint = if p.transmission_depth > 0.0 {
+                Vec3A::ONE
+            } else {
+                p.transmission_color
+            };
             b.push(Dielectric {
                 eta,
                 alpha: spec_alpha,
-                tint: p.transmission_color * (dielectric * transmission),
+                tint: tint * (dielectric * transmission),
             });
         }
         if set.metal {
@@ -274,6 +282,16 @@ impl Bsdf {
                 Layer::coat(coat, p.coat_color, p.coat_darkening, base_albedo),
                 below,
             );
+        }
+        if set.fuzz {
+            let below = b.len();
+            let fuzz = Fuzz {
+                color: p.fuzz_color,
+                weight: p.fuzz_weight.clamp(0.0, 1.0),
+                roughness: p.fuzz_roughness.clamp(0.0, 1.0),
+            };
+            b.push(fuzz);
+            b.layer(Layer::Fuzz(fuzz), below);
         }
         // The `U2` albedo: the colours of the lobes by their weights.
         let albedo = base_w

@@ -551,15 +551,13 @@ fn extensions_we_lack_are_errors_when_required_and_warnings_when_used() {
         "{w}"
     );
     let m = desc.materials.values().next().unwrap();
-    let MaterialKind::Pbr {
-        clearcoat,
-        clearcoat_roughness,
-        ..
-    } = m.kind
-    else {
-        panic!("a metallic-roughness material");
+    let MaterialKind::OpenPbr(p) = &m.kind else {
+        panic!("an OpenPBR material");
     };
-    assert_eq!((clearcoat, clearcoat_roughness), (0.75, 0.25));
+    assert_eq!(
+        (p.coat_weight, p.coat_roughness, p.coat_ior),
+        (0.75, 0.25, 1.5)
+    );
     let _ = std::fs::remove_dir_all(&dir);
 }
 
@@ -961,17 +959,25 @@ fn material_extensions_and_textures_map_to_the_pbr_material() {
         desc.warnings
     );
     let m = &desc.materials;
+    let openpbr = |name: &str| match &m[name].kind {
+        MaterialKind::OpenPbr(p) => **p,
+        other => panic!("{name}: {other:?}"),
+    };
+    let glass = openpbr("glass");
     assert!(
-        matches!(m["glass"].kind, MaterialKind::Pbr { transmission, ior: Some(ior), base_color, .. }
-            if transmission == 1.0 && (ior - 1.33).abs() < 1e-6 && base_color == [0.9, 1.0, 0.9]),
-        "{:?}",
-        m["glass"].kind
+        glass.transmission_weight == 1.0
+            && (glass.specular_ior - 1.33).abs() < 1e-6
+            && glass.base_color == Vec3A::new(0.9, 1.0, 0.9)
+            && glass.transmission_color == glass.base_color,
+        "{glass:?}"
     );
+    let coated = openpbr("coated");
     assert!(
-        matches!(m["coated"].kind, MaterialKind::Pbr { metallic, clearcoat, clearcoat_roughness, .. }
-            if metallic == 0.25 && clearcoat == 0.7 && clearcoat_roughness == 0.2),
-        "{:?}",
-        m["coated"].kind
+        coated.base_metalness == 0.25
+            && coated.coat_weight == 0.7
+            && coated.coat_roughness == 0.2
+            && coated.specular_roughness == 0.4,
+        "{coated:?}"
     );
     assert!((m["coated"].roughness - 0.4).abs() < 1e-6);
     let t = &m["coated"].textures;
@@ -999,5 +1005,106 @@ fn material_extensions_and_textures_map_to_the_pbr_material() {
     );
     assert!(aov_sum(&scene, &film, "through") > 0.0);
     assert_eq!(aov_sum(&scene, &film, "diffuseFirst"), 0.0);
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn khr_material_extensions_map_to_openpbr_as_blender_does() {
+    let dir = temp_dir("openpbr");
+    let mut doc = Doc::new();
+    let png = png_2x2();
+    let view = doc.view(&png);
+    doc.json["images"] = json!([{"bufferView": view, "mimeType": "image/png"}]);
+    doc.json["textures"] = json!([{"source": 0}]);
+    doc.json["materials"] = json!([
+        {"name": "velvet", "extensions": {"KHR_materials_sheen": {"sheenColorFactor": [0.5, 0.1, 0.2],
+            "sheenRoughnessFactor": 0.6, "sheenRoughnessTexture": {"index": 0}}}},
+        {"name": "tinted", "extensions": {"KHR_materials_specular": {"specularFactor": 0.5,
+            "specularColorFactor": [1.0, 0.5, 0.25], "specularColorTexture": {"index": 0,
+            "extensions": {"KHR_texture_transform": {"scale": [2.0, 2.0]}}}}}},
+        {"name": "bubble", "extensions": {"KHR_materials_iridescence": {"iridescenceFactor": 1.0,
+            "iridescenceIor": 1.33, "iridescenceThicknessMaximum": 600.0}}},
+        {"name": "leaf", "extensions": {"KHR_materials_diffuse_transmission": {
+            "diffuseTransmissionFactor": 0.4, "diffuseTransmissionColorFactor": [0.2, 0.9, 0.1]}}},
+        {"name": "brushed", "pbrMetallicRoughness": {"metallicFactor": 1.0},
+         "extensions": {"KHR_materials_anisotropy": {"anisotropyStrength": 0.7}}},
+    ]);
+    doc.json["extensionsUsed"] = json!([
+        "KHR_materials_sheen",
+        "KHR_materials_specular",
+        "KHR_materials_iridescence",
+        "KHR_materials_diffuse_transmission",
+        "KHR_materials_anisotropy",
+        "KHR_texture_transform"
+    ]);
+    for (i, name) in ["velvet", "tinted", "bubble", "leaf", "brushed"]
+        .iter()
+        .enumerate()
+    {
+        let mesh = doc.square(1.0, 1.0, Some(i));
+        let n = doc
+            .node(json!({"name": name, "mesh": mesh, "translation": [i as f32 * 3.0, 0.0, 0.0]}));
+        doc.root(n);
+    }
+    let desc = load(&doc.write(&dir, "openpbr"));
+    let m = &desc.materials;
+    let openpbr = |name: &str| match &m[name].kind {
+        MaterialKind::OpenPbr(p) => **p,
+        other => panic!("{name}: {other:?}"),
+    };
+    let velvet = openpbr("velvet");
+    assert_eq!(
+        (velvet.fuzz_weight, velvet.fuzz_color, velvet.fuzz_roughness),
+        (1.0, Vec3A::new(0.5, 0.1, 0.2), 0.6)
+    );
+    let t = &m["velvet"].textures.inputs;
+    assert!(
+        t.len() == 1 && t[0].input == "fuzz_roughness" && t[0].channel == 3,
+        "{t:?}"
+    );
+    let tinted = openpbr("tinted");
+    assert_eq!(
+        (tinted.specular_weight, tinted.specular_color),
+        (0.5, Vec3A::new(1.0, 0.5, 0.25))
+    );
+    let t = &m["tinted"].textures.inputs;
+    assert!(t[0].input == "specular_color" && t[0].srgb, "{t:?}");
+    assert_ne!(
+        t[0].texture.transform,
+        Default::default(),
+        "the texture transform is read"
+    );
+    let bubble = openpbr("bubble");
+    assert_eq!(
+        (
+            bubble.thin_film_weight,
+            bubble.thin_film_ior,
+            bubble.thin_film_thickness
+        ),
+        (1.0, 1.33, 0.6)
+    );
+    let leaf = openpbr("leaf");
+    assert!(
+        leaf.geometry_thin_walled
+            && leaf.subsurface_weight == 0.4
+            && leaf.subsurface_color == Vec3A::new(0.2, 0.9, 0.1)
+    );
+    assert_eq!(openpbr("brushed").specular_roughness_anisotropy, 0.7);
+    // A bad value names the file and where in it.
+    let mut bad = Doc::new();
+    bad.json["materials"] =
+        json!([{"extensions": {"KHR_materials_sheen": {"sheenRoughnessFactor": -1}}}]);
+    let sq = bad.square(1.0, 1.0, Some(0));
+    let n = bad.node(json!({"name": "card", "mesh": sq}));
+    bad.root(n);
+    let path = bad.write(&dir, "bad");
+    let e = lightpath::load_scene(path.to_str().unwrap())
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("bad.gltf")
+            && e.contains("/materials/0/extensions/KHR_materials_sheen/sheenRoughnessFactor"),
+        "{e}"
+    );
     let _ = std::fs::remove_dir_all(&dir);
 }

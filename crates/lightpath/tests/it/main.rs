@@ -14,6 +14,7 @@ mod identity;
 mod meshes;
 mod mutation;
 mod newcomer;
+mod openpbr;
 mod peer;
 mod render;
 mod sampling;

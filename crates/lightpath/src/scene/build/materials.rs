@@ -186,6 +186,17 @@ fn material(
     Ok((material, model))
 }
 
+/// The emission an OpenPBR material gives the objects made of it (`emission_luminance`
+/// × `emission_color`: luminance 1 is radiance 1, as Cycles' emission strength).
+pub fn emission(m: &MaterialDesc) -> Option<Vec3A> {
+    match &m.kind {
+        MaterialKind::OpenPbr(p) if p.emission_luminance > 0.0 => {
+            Some(p.emission_color * p.emission_luminance)
+        }
+        _ => None,
+    }
+}
+
 /// The accessor of OpenPBR input `name` (a name from the table).
 fn input_ref(name: &str) -> InputRef {
     openpbr::input(name)

@@ -158,9 +158,14 @@ fn add_objects(
             }
         }
         let groups = o.lpegroups.clone().unwrap_or_else(|| vec![name.clone()]);
+        // The object's own emission, else its OpenPBR material's.
+        let emission = o.emission.map(Vec3A::from).or_else(|| {
+            let m = desc.materials.get(&o.material.as_ref()?.name)?;
+            materials::emission(m)
+        });
         objects.push(Object {
             material: materials::find(desc, material_ids, &o.material)?,
-            emission: o.emission.map(Vec3A::from).unwrap_or(Vec3A::ZERO),
+            emission: emission.unwrap_or(Vec3A::ZERO),
             holdout: o.holdout,
             ..new_object(name, groups)
         });

@@ -1,7 +1,7 @@
 //! Scenes shipped inside the binary (TOML sources, loaded like files).
 
 /// (name, TOML source) of every built-in scene; the first is the default.
-pub const BUILTIN: [(&str, &str); 2] = [
+pub const BUILTIN: [(&str, &str); 3] = [
     (
         "cornell",
         include_str!("../../../../../scenes/cornell.toml"),
@@ -9,6 +9,10 @@ pub const BUILTIN: [(&str, &str); 2] = [
     (
         "cornell-classic",
         include_str!("../../../../../scenes/cornell-classic.toml"),
+    ),
+    (
+        "materials",
+        include_str!("../../../../../scenes/materials.toml"),
     ),
 ];
 

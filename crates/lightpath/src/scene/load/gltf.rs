@@ -20,7 +20,9 @@
 
 use super::defaults;
 use crate::camera::FovAxis;
+use crate::material::openpbr::{self, InputMut, OpenPbr};
 use crate::material::texture::{UvTransform, Wrap};
+use crate::scene::desc::InputTexture;
 use crate::scene::desc::{
     CameraDesc, ImageSource, LightDesc, LightKind, MaterialDesc, MaterialKind, MeshData, NameRef,
     NamedCamera, ObjectDesc, Origin, SceneDesc, ShapeDesc, TextureDesc, TexturesDesc,
@@ -36,10 +38,16 @@ use std::sync::Arc;
 /// The extensions Lightpath reads.
 pub const SUPPORTED: &[&str] = &[
     "KHR_lights_punctual",
+    "KHR_materials_anisotropy",
     "KHR_materials_clearcoat",
+    "KHR_materials_diffuse_transmission",
     "KHR_materials_emissive_strength",
     "KHR_materials_ior",
+    "KHR_materials_iridescence",
+    "KHR_materials_sheen",
+    "KHR_materials_specular",
     "KHR_materials_transmission",
+    "KHR_materials_volume",
     "KHR_texture_transform",
 ];
 
@@ -508,7 +516,10 @@ impl Loader {
         })
     }
 
-    /// The scene material for a glTF material (None: glTF's default), made once.
+    /// The scene material for a glTF material (None: glTF's default), made once: an
+    /// OpenPBR material, mapped as Blender's glTF importer maps the file to its Principled
+    /// BSDF (artists check their files against Blender), extensions included
+    /// (docs/scene-format.md#gltf-materials).
     fn material(&mut self, m: gltf::Material) -> Result<String, SceneError> {
         if let Some(name) = self.materials.get(&m.index()) {
             return Ok(name.clone());
@@ -530,43 +541,37 @@ impl Loader {
         }
         let pbr = m.pbr_metallic_roughness();
         let [r, g, b, _a] = pbr.base_color_factor();
-        let transmission = m.transmission().map_or(0.0, |t| t.transmission_factor());
-        if transmission > 0.0 && transmission < 1.0 {
-            self.warn(
-                &format!("{pointer}/extensions/KHR_materials_transmission"),
-                format!(
-                    "partial transmission ({transmission}) is not blended: the material is {}",
-                    if transmission >= 0.5 {
-                        "glass"
-                    } else {
-                        "opaque"
-                    }
-                ),
-            );
-        }
-        let clearcoat = m.extension_value("KHR_materials_clearcoat");
-        let number = |key: &str, default: f32| {
-            clearcoat
-                .and_then(|c| c.get(key))
-                .and_then(|v| v.as_f64())
-                .map_or(default, |v| v as f32)
-        };
-        let kind = MaterialKind::Pbr {
-            base_color: [r, g, b],
-            metallic: pbr.metallic_factor(),
-            ior: m.ior(),
-            transmission,
-            clearcoat: number("clearcoatFactor", 0.0),
-            clearcoat_roughness: number("clearcoatRoughnessFactor", 0.0),
+        let base_color = Vec3A::new(r, g, b);
+        let mut p = OpenPbr {
+            base_color,
+            base_metalness: pbr.metallic_factor(),
+            specular_roughness: pbr.roughness_factor(),
+            specular_ior: m.ior().unwrap_or(1.5),
+            // glTF's transmission is tinted by the base colour.
+            transmission_weight: m.transmission().map_or(0.0, |t| t.transmission_factor()),
+            transmission_color: base_color,
+            // KHR_materials_clearcoat's coat is of index 1.5.
+            coat_ior: 1.5,
+            ..OpenPbr::default()
         };
         let mut textures = TexturesDesc::default();
         if let Some(info) = pbr.base_color_texture() {
-            textures.base_color =
-                Some(self.texture(&info.texture(), info.texture_transform(), &pointer)?);
+            let t = self.texture(&info.texture(), info.texture_transform(), &pointer)?;
+            // The base colour texture tints transmission as the factor does.
+            textures
+                .inputs
+                .push(input_texture("transmission_color", t.clone(), 0, true));
+            textures.base_color = Some(t);
         }
         if let Some(info) = pbr.metallic_roughness_texture() {
             textures.metallic_roughness =
                 Some(self.texture(&info.texture(), info.texture_transform(), &pointer)?);
+        }
+        if let Some(info) = m.transmission().and_then(|t| t.transmission_texture()) {
+            let t = self.texture(&info.texture(), info.texture_transform(), &pointer)?;
+            textures
+                .inputs
+                .push(input_texture("transmission_weight", t, 0, false));
         }
         if let Some(nt) = m.normal_texture() {
             let t = self.texture(&nt.texture(), None, &pointer)?;
@@ -576,10 +581,11 @@ impl Loader {
             textures.emissive =
                 Some(self.texture(&info.texture(), info.texture_transform(), &pointer)?);
         }
+        self.extensions(&m, &pointer, &mut p, &mut textures)?;
         self.desc.materials.insert(
             name.clone(),
             MaterialDesc {
-                kind,
+                kind: MaterialKind::OpenPbr(Box::new(p)),
                 roughness: pbr.roughness_factor(),
                 user_color: None,
                 textures,
@@ -590,6 +596,312 @@ impl Loader {
         );
         self.materials.insert(m.index(), name.clone());
         Ok(name)
+    }
+
+    /// The material extensions the `gltf` crate does not read, from the file's JSON:
+    /// each factor sets an OpenPBR parameter and each texture multiplies it.
+    fn extensions(
+        &mut self,
+        m: &gltf::Material,
+        pointer: &str,
+        p: &mut OpenPbr,
+        textures: &mut TexturesDesc,
+    ) -> Result<(), SceneError> {
+        // (extension, glTF key, OpenPBR input, default)
+        const NUMBERS: &[(&str, &str, &str, f32)] = &[
+            (
+                "KHR_materials_clearcoat",
+                "clearcoatFactor",
+                "coat_weight",
+                0.0,
+            ),
+            (
+                "KHR_materials_clearcoat",
+                "clearcoatRoughnessFactor",
+                "coat_roughness",
+                0.0,
+            ),
+            (
+                "KHR_materials_sheen",
+                "sheenRoughnessFactor",
+                "fuzz_roughness",
+                0.0,
+            ),
+            // KHR's specular factor is Blender's "Specular IOR Level" × 2: OpenPBR's weight.
+            (
+                "KHR_materials_specular",
+                "specularFactor",
+                "specular_weight",
+                1.0,
+            ),
+            (
+                "KHR_materials_anisotropy",
+                "anisotropyStrength",
+                "specular_roughness_anisotropy",
+                0.0,
+            ),
+            (
+                "KHR_materials_iridescence",
+                "iridescenceFactor",
+                "thin_film_weight",
+                0.0,
+            ),
+            (
+                "KHR_materials_iridescence",
+                "iridescenceIor",
+                "thin_film_ior",
+                1.3,
+            ),
+            (
+                "KHR_materials_diffuse_transmission",
+                "diffuseTransmissionFactor",
+                "subsurface_weight",
+                0.0,
+            ),
+        ];
+        // (extension, glTF key, OpenPBR input, default)
+        const COLORS: &[(&str, &str, &str, [f32; 3])] = &[
+            (
+                "KHR_materials_sheen",
+                "sheenColorFactor",
+                "fuzz_color",
+                [0.0; 3],
+            ),
+            (
+                "KHR_materials_specular",
+                "specularColorFactor",
+                "specular_color",
+                [1.0; 3],
+            ),
+            (
+                "KHR_materials_diffuse_transmission",
+                "diffuseTransmissionColorFactor",
+                "subsurface_color",
+                [1.0; 3],
+            ),
+        ];
+        // (extension, glTF key, OpenPBR input, channel, sRGB colour)
+        const TEXTURES: &[(&str, &str, &str, u8, bool)] = &[
+            (
+                "KHR_materials_clearcoat",
+                "clearcoatTexture",
+                "coat_weight",
+                0,
+                false,
+            ),
+            (
+                "KHR_materials_clearcoat",
+                "clearcoatRoughnessTexture",
+                "coat_roughness",
+                1,
+                false,
+            ),
+            (
+                "KHR_materials_sheen",
+                "sheenColorTexture",
+                "fuzz_color",
+                0,
+                true,
+            ),
+            (
+                "KHR_materials_sheen",
+                "sheenRoughnessTexture",
+                "fuzz_roughness",
+                3,
+                false,
+            ),
+            (
+                "KHR_materials_specular",
+                "specularTexture",
+                "specular_weight",
+                3,
+                false,
+            ),
+            (
+                "KHR_materials_specular",
+                "specularColorTexture",
+                "specular_color",
+                0,
+                true,
+            ),
+            (
+                "KHR_materials_anisotropy",
+                "anisotropyTexture",
+                "specular_roughness_anisotropy",
+                2,
+                false,
+            ),
+            (
+                "KHR_materials_iridescence",
+                "iridescenceTexture",
+                "thin_film_weight",
+                0,
+                false,
+            ),
+            (
+                "KHR_materials_iridescence",
+                "iridescenceThicknessTexture",
+                "thin_film_thickness",
+                1,
+                false,
+            ),
+            (
+                "KHR_materials_diffuse_transmission",
+                "diffuseTransmissionTexture",
+                "subsurface_weight",
+                3,
+                false,
+            ),
+            (
+                "KHR_materials_diffuse_transmission",
+                "diffuseTransmissionColorTexture",
+                "subsurface_color",
+                0,
+                true,
+            ),
+        ];
+        let value = |ext: &str, key: &str| m.extension_value(ext).and_then(|e| e.get(key));
+        let at = |ext: &str, key: &str| format!("{pointer}/extensions/{ext}/{key}");
+        for &(ext, key, input, default) in NUMBERS {
+            let Some(v) = value(ext, key) else {
+                if m.extension_value(ext).is_some() {
+                    set_number(p, input, default);
+                }
+                continue;
+            };
+            let v = v
+                .as_f64()
+                .map(|v| v as f32)
+                .filter(|v| v.is_finite() && *v >= 0.0)
+                .ok_or_else(|| {
+                    self.error(
+                        &at(ext, key),
+                        format!("expected a non-negative number, got {v}"),
+                    )
+                })?;
+            set_number(p, input, v);
+        }
+        for &(ext, key, input, default) in COLORS {
+            let c = match value(ext, key) {
+                None if m.extension_value(ext).is_none() => continue,
+                None => default,
+                Some(v) => v
+                    .as_array()
+                    .filter(|a| a.len() == 3)
+                    .and_then(|a| {
+                        let c = [a[0].as_f64()?, a[1].as_f64()?, a[2].as_f64()?];
+                        Some(c.map(|x| x as f32))
+                    })
+                    .filter(|c| c.iter().all(|x| x.is_finite() && *x >= 0.0))
+                    .ok_or_else(|| {
+                        self.error(
+                            &at(ext, key),
+                            format!("expected [r, g, b] of non-negative numbers, got {v}"),
+                        )
+                    })?,
+            };
+            if let Some(InputMut::Color(slot)) = openpbr::input(input).map(|i| (i.get)(p)) {
+                *slot = Vec3A::from(c);
+            }
+        }
+        // A sheen is on wherever its colour is not black (Blender sets its weight to 1).
+        if m.extension_value("KHR_materials_sheen").is_some() && p.fuzz_color != Vec3A::ZERO {
+            p.fuzz_weight = 1.0;
+        }
+        // KHR_materials_specular may exceed 1; OpenPBR's weight allows it too.
+        if let Some(ir) = m.extension_value("KHR_materials_iridescence") {
+            let max = ir
+                .get("iridescenceThicknessMaximum")
+                .and_then(|v| v.as_f64())
+                .unwrap_or(400.0);
+            // Nanometres to OpenPBR's micrometres; a thickness texture scales the maximum.
+            p.thin_film_thickness = (max as f32 / 1000.0).max(0.0);
+        }
+        if let Some(dt) = m.extension_value("KHR_materials_diffuse_transmission") {
+            let _ = dt;
+            // Without KHR_materials_volume the surface is a thin sheet: translucency.
+            p.geometry_thin_walled = m.extension_value("KHR_materials_volume").is_none();
+        }
+        if let Some(v) = m.extension_value("KHR_materials_volume") {
+            let distance = v.get("attenuationDistance").and_then(|d| d.as_f64());
+            if let Some(d) = distance.filter(|d| d.is_finite() && *d > 0.0) {
+                let color = v
+                    .get("attenuationColor")
+                    .and_then(|c| c.as_array())
+                    .filter(|a| a.len() == 3)
+                    .and_then(|a| {
+                        Some([
+                            a[0].as_f64()? as f32,
+                            a[1].as_f64()? as f32,
+                            a[2].as_f64()? as f32,
+                        ])
+                    })
+                    .unwrap_or([1.0; 3]);
+                // The interior's absorption, which participating media render.
+                p.transmission_depth = d as f32;
+                self.warn(
+                    &format!("{pointer}/extensions/KHR_materials_volume"),
+                    "the interior's absorption (attenuationColor) is not rendered yet: the glass is clear",
+                );
+                p.transmission_color *= Vec3A::from(color).clamp(Vec3A::ZERO, Vec3A::ONE);
+                if p.subsurface_weight > 0.0 {
+                    p.subsurface_radius = d as f32;
+                }
+            }
+        }
+        if let Some(rotation) =
+            value("KHR_materials_anisotropy", "anisotropyRotation").and_then(|v| v.as_f64())
+        {
+            if rotation != 0.0 {
+                self.warn(
+                    &at("KHR_materials_anisotropy", "anisotropyRotation"),
+                    "the rotation of anisotropy is not read: highlights stretch along the tangent",
+                );
+            }
+        }
+        for &(ext, key, input, channel, srgb) in TEXTURES {
+            let Some(info) = value(ext, key) else {
+                continue;
+            };
+            let t = self.texture_info(info, &at(ext, key))?;
+            textures.inputs.push(input_texture(input, t, channel, srgb));
+        }
+        Ok(())
+    }
+
+    /// A texture a material extension names by its JSON `textureInfo`.
+    fn texture_info(
+        &mut self,
+        info: &serde_json::Value,
+        pointer: &str,
+    ) -> Result<TextureDesc, SceneError> {
+        let index = info
+            .get("index")
+            .and_then(|i| i.as_u64())
+            .ok_or_else(|| self.error(pointer, "expected a texture index"))?;
+        // The document is borrowed by the texture while `self` reads its image.
+        let doc = self.doc.clone();
+        let texture = usize::try_from(index)
+            .ok()
+            .and_then(|i| doc.textures().nth(i))
+            .ok_or_else(|| self.error(pointer, format!("no texture {index} in /textures")))?;
+        let mut t = self.texture(&texture, None, pointer)?;
+        if let Some(x) = info
+            .get("extensions")
+            .and_then(|e| e.get("KHR_texture_transform"))
+        {
+            let pair = |key: &str, default: [f32; 2]| {
+                x.get(key)
+                    .and_then(|v| v.as_array())
+                    .filter(|a| a.len() == 2)
+                    .and_then(|a| Some([a[0].as_f64()? as f32, a[1].as_f64()? as f32]))
+                    .unwrap_or(default)
+            };
+            let rotation = x.get("rotation").and_then(|r| r.as_f64()).unwrap_or(0.0) as f32;
+            t.transform =
+                UvTransform::new(pair("offset", [0.0; 2]), rotation, pair("scale", [1.0; 2]));
+        }
+        Ok(t)
     }
 
     /// Emission of a material's surface (factor × KHR_materials_emissive_strength).
@@ -954,6 +1266,25 @@ fn percent_decode(uri: &str) -> String {
         i += 1;
     }
     String::from_utf8_lossy(&out).into_owned()
+}
+
+/// Sets OpenPBR number `input` (a name from the table).
+fn set_number(p: &mut OpenPbr, input: &str, v: f32) {
+    if let Some(InputMut::Scalar(slot)) = openpbr::input(input).map(|i| (i.get)(p)) {
+        *slot = v;
+    }
+}
+
+/// A texture on OpenPBR input `input` (a name from the table).
+fn input_texture(input: &str, texture: TextureDesc, channel: u8, srgb: bool) -> InputTexture {
+    InputTexture {
+        input: openpbr::input(input)
+            .expect("glTF maps to OpenPBR inputs")
+            .name,
+        texture,
+        channel,
+        srgb,
+    }
 }
 
 #[cfg(test)]
