@@ -9,7 +9,9 @@ use super::{Sink, Tracer};
 use crate::geometry::{Hit, Ray, Visibility};
 use crate::light::{Light, LightModel};
 use crate::sampler::{dim, Sampler};
+use crate::sampling::Rng;
 use glam::Vec3A;
+use std::f32::consts::FRAC_1_PI;
 
 /// The power heuristic with β = 2 (Veach 1997), for the strategy with pdf `a` against `b`.
 #[inline]
@@ -189,6 +191,76 @@ impl Tracer<'_> {
             let value = f * ls.radiance / light_pdf;
             self.contribute(out, s_light, path.throughput, value, w, origin);
         }
+    }
+
+    /// Light sampling where a subsurface walk left its object (subsurface.rs): a
+    /// Lambertian exit lobe around `n` (outwards; `ng` the outward geometric normal) with
+    /// the path's state already past its `TD3` event, so the next event is the light's
+    /// `L`, weighted against the exit lobe's cosine sampling. The numbers come from the
+    /// walk's `rng`.
+    pub(super) fn exit_light(
+        &self,
+        out: &mut Sink,
+        path: &PathState,
+        hit: &Hit,
+        n: Vec3A,
+        ng: Vec3A,
+        rng: &mut Rng,
+    ) {
+        let scene = self.scene;
+        let a = &scene.automaton;
+        let u_light = rng.next_f32();
+        let u_point = rng.next_2d();
+        if scene.lights.is_empty() {
+            return;
+        }
+        let Some((li, select_pmf)) = scene.light_select.sample(u_light, hit.p, n) else {
+            return;
+        };
+        let light = &scene.lights[li];
+        if !self.lit(hit.object, li as u32) {
+            return;
+        }
+        let s_light = a.step(path.state, light.classes.light);
+        if a.accepting(s_light).is_empty() {
+            return;
+        }
+        let Some(ls) = light.sample(hit.p, u_point, scene.accel.prims()) else {
+            return;
+        };
+        let cos = ls.wi.dot(n);
+        if cos <= 0.0 || ls.wi.dot(ng) <= 0.0 {
+            return;
+        }
+        let f = cos * FRAC_1_PI;
+        let light_pdf = select_pmf * ls.pdf;
+        let w = if ls.delta {
+            1.0
+        } else {
+            power_heuristic(light_pdf, f)
+        };
+        out.rays += 1;
+        let tmax = if ls.dist.is_finite() {
+            ls.dist - 2.0 * scene.epsilon
+        } else {
+            f32::INFINITY
+        };
+        let visible = tmax <= 0.0
+            || !scene
+                .accel
+                .occluded(&self.spawn(hit, ls.wi, tmax), 0.0, light.shadow_exempt());
+        let via = match (light.glow, visible) {
+            (true, false) => return,
+            (true, true) => Via::Glow,
+            (false, visible) => Via::LightSample { visible },
+        };
+        let origin = Origin {
+            via,
+            scatters: path.depth + 1,
+            part: light.part,
+        };
+        let value = ls.radiance * (f / light_pdf);
+        self.contribute(out, s_light, path.throughput, value, w, origin);
     }
 
     /// The nearest light surface along `ray`, ignoring everything else: (light, t,

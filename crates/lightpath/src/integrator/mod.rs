@@ -13,6 +13,7 @@ mod path;
 mod pixel;
 mod routing;
 mod shading;
+pub mod subsurface;
 
 use crate::film::{Film, Mattes, PixelWindow, SampleAccumulator};
 use crate::geometry::{Hit, Ray};

@@ -130,7 +130,7 @@ impl Tracer<'_> {
             };
             self.data_lobes(out, &path, &v);
             self.direct_light(out, &path, &v, sampler);
-            let Some(next) = self.scatter(&mut path, &v, sampler) else {
+            let Some(next) = self.scatter(out, &mut path, &v, sampler) else {
                 break;
             };
             ray = next;
@@ -223,10 +223,11 @@ impl Tracer<'_> {
         }
     }
 
-    /// Samples one lobe and a direction and steps the path through them; the ray to
-    /// trace next, or `None` where the path ends (no sample, depth limits, dead state).
+    /// Samples one lobe and a direction and steps the path through them (through a
+    /// random walk for a subsurface lobe, subsurface.rs); the ray to trace next, or `None` where the path ends (no sample, depth limits, dead state).
     fn scatter<S: Sampler>(
         &self,
+        out: &mut Sink,
         path: &mut PathState,
         v: &Vertex,
         sampler: &mut S,
@@ -265,6 +266,10 @@ impl Tracer<'_> {
         }
         path.throughput *= bs.weight;
         path.eta_scale *= bs.eta;
+        if let Some(lobe) = v.bsdf.subsurface(bs.lobe) {
+            let u = [u_lobe, u_dir.x, u_dir.y];
+            return self.subsurface_scatter(out, path, v, lobe, bs.wi, u);
+        }
         path.prev_p = v.hit.p;
         path.prev_n = v.sh.frame.n;
         path.prev_pdf = bs.pdf;

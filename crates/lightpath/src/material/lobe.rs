@@ -10,7 +10,7 @@ use super::fuzz::Fuzz;
 use super::iridescence::Iridescence;
 use super::{
     coat::Coat, conductor::Conductor, dielectric::Dielectric, lambert::Lambert, specular::Specular,
-    translucent::DiffuseTransmission,
+    subsurface::Subsurface, translucent::DiffuseTransmission,
 };
 use glam::{Vec2, Vec3A};
 use lpe::Scatter;
@@ -123,6 +123,7 @@ lobes!(
     Conductor,
     Dielectric,
     Coat,
+    Subsurface,
     Fuzz,
     Iridescence,
     Specular

@@ -34,6 +34,7 @@ pub mod microfacet;
 pub mod openpbr;
 pub mod pbr;
 mod specular;
+mod subsurface;
 pub mod texture;
 pub mod textured;
 pub mod thin_film;
@@ -57,6 +58,7 @@ pub use layer::Layer;
 pub use lobe::{Lobe, LobeModel, LobeTag};
 pub use pbr::PbrParams;
 pub use specular::Specular;
+pub use subsurface::Subsurface;
 pub use thin_film::{conductor_ior_from_colors, thin_film_fresnel, FilmBase};
 pub use translucent::DiffuseTransmission;
 
@@ -205,7 +207,7 @@ impl Bsdf {
         Bsdf::layered(&[Lambert { albedo }.into()], None, albedo)
     }
 
-    /// Diffuse reflection (RD2) and diffuse transmission (TD3): thin translucent sheets.
+    /// Diffuse reflection (RD2) and diffuse transmission (TD2): thin translucent sheets.
     pub fn translucent(reflect: Vec3A, transmit: Vec3A) -> Bsdf {
         Bsdf::layered(
             &[
@@ -331,10 +333,17 @@ impl Bsdf {
         let s = self.lobes[l].sample(wo, ctx, u)?;
         let k = self.tag_index(l, s.sub);
         if let Some((weight, pdf, delta)) = s.value {
+            // A subsurface walk comes back out on the side it went in: the layers above
+            // see it leave there (the inward direction mirrored stands for the exit's,
+            // both cosine-distributed), and its exit lobe is under none of them.
+            let wi_layers = match self.lobes[l] {
+                Lobe::Subsurface(_) => Vec3A::new(s.wi.x, s.wi.y, -s.wi.z),
+                _ => s.wi,
+            };
             return Some(BsdfSample {
                 lobe: k,
                 wi: sh.frame.to_world(s.wi),
-                weight: weight * self.attenuation(l, wo, s.wi),
+                weight: weight * self.attenuation(l, wo, wi_layers),
                 pdf,
                 delta,
                 eta: s.eta,
@@ -352,6 +361,16 @@ impl Bsdf {
             delta: false,
             eta: s.eta,
         })
+    }
+
+    /// The subsurface lobe behind lobe event `k`, if it is one: a sample of it is the
+    /// entry of a random walk (integrator/subsurface.rs), not a direction to trace.
+    pub fn subsurface(&self, k: usize) -> Option<&Subsurface> {
+        let (l, _) = *self.tag_lobe[..self.n_tags].get(k)?;
+        match &self.lobes[l as usize] {
+            Lobe::Subsurface(s) => Some(s),
+            _ => None,
+        }
     }
 
     fn tag_index(&self, lobe: usize, sub: usize) -> usize {

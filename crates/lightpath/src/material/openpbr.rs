@@ -27,7 +27,7 @@ use super::lobe::Lobe;
 use super::microfacet::roughness_anisotropy_to_alpha;
 use super::{
     roughness_to_alpha, Bsdf, Coat, Conductor, Dielectric, DiffuseTransmission, Fuzz, Lambert,
-    Specular,
+    Specular, Subsurface,
 };
 use glam::Vec3A;
 
@@ -225,9 +225,12 @@ impl Bsdf {
             });
         }
         if set.subsurface {
-            // Until the random walk lands, subsurface scatters as diffuse transmission.
-            b.push(DiffuseTransmission {
-                transmit: p.subsurface_color * (base_w * opaque * sss),
+            b.push(Subsurface {
+                weight: base_w * opaque * sss,
+                color: p.subsurface_color,
+                radius: p.subsurface_radius_scale * p.subsurface_radius,
+                anisotropy: p.subsurface_scatter_anisotropy,
+                ior: eta,
             });
         }
         if set.specular {

@@ -1,5 +1,6 @@
-//! Diffuse transmission (TD3): the far side of a thin translucent sheet, RenderMan's
-//! subsurface-like lobe.
+//! Diffuse transmission (TD2): the far side of a thin translucent sheet. RenderMan
+//! numbers translucency `D2` like diffuse reflection; `D3` is subsurface
+//! (material/subsurface.rs).
 
 use super::lobe::{tag, LobeModel, LobeSample, LobeTag, SampleCtx};
 use crate::light::luminance;
@@ -8,7 +9,7 @@ use glam::{Vec2, Vec3A};
 use lpe::Scatter;
 use std::f32::consts::FRAC_1_PI;
 
-pub const TD3: LobeTag = tag(true, Scatter::diffuse(3), false);
+pub const TD2: LobeTag = tag(true, Scatter::diffuse(2), false);
 
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct DiffuseTransmission {
@@ -17,7 +18,7 @@ pub struct DiffuseTransmission {
 
 impl LobeModel for DiffuseTransmission {
     fn tags(&self) -> &'static [LobeTag] {
-        &[TD3]
+        &[TD2]
     }
     fn eval(&self, _: usize, wo: Vec3A, wi: Vec3A, sel: f32) -> (Vec3A, f32) {
         if wo.z <= 0.0 || wi.z >= 0.0 {

@@ -19,5 +19,6 @@ mod peer;
 mod render;
 mod sampling;
 mod settings;
+mod subsurface;
 mod view;
 mod workflow;

@@ -1,0 +1,116 @@
+//! Subsurface scattering (TD3): the entry of a random walk under the surface (Chiang,
+//! Kutz & Burley 2016, "Practical and Controllable Subsurface Scattering for Production
+//! Path Tracing"; the walk itself is integrator/subsurface.rs). Parameters are
+//! OpenPBR's. Light does not reach subsurface at the entry point but where the walk
+//! leaves the object, so `eval` is zero; `sample` gives a cosine-distributed direction
+//! into the surface, and the integrator, seeing [`Bsdf::subsurface`](super::Bsdf::subsurface),
+//! walks from there (docs/lpe.md: entering emits one `TD3` event, the walk none).
+
+use super::lobe::{tag, LobeModel, LobeSample, LobeTag, SampleCtx};
+use crate::light::luminance;
+use crate::sampling::{cosine_hemisphere, cosine_hemisphere_pdf};
+use glam::{Vec2, Vec3A};
+use lpe::Scatter;
+
+pub const TD3: LobeTag = tag(true, Scatter::diffuse(3), false);
+
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Subsurface {
+    /// The share of the surface that is subsurface (`subsurface_weight`, in [0, 1]).
+    pub weight: f32,
+    /// The multiple-scattering albedo wanted (`subsurface_color`): what a thick slab of
+    /// the medium reflects.
+    pub color: Vec3A,
+    /// Mean free path per channel, in scene units (`subsurface_radius` ×
+    /// `subsurface_radius_scale`).
+    pub radius: Vec3A,
+    /// Henyey–Greenstein g of the medium (`subsurface_scatter_anisotropy`), in (−1, 1).
+    pub anisotropy: f32,
+    /// Index of refraction of the boundary (`specular_ior`).
+    pub ior: f32,
+}
+
+impl LobeModel for Subsurface {
+    fn tags(&self) -> &'static [LobeTag] {
+        &[TD3]
+    }
+    fn eval(&self, _: usize, _: Vec3A, _: Vec3A, _: f32) -> (Vec3A, f32) {
+        (Vec3A::ZERO, 0.0)
+    }
+    /// A cosine-distributed direction into the surface (Cycles' "random walk" entry);
+    /// its weight is `weight / sel`: the colour comes from the walk, which leaves with
+    /// about `color` of what enters.
+    fn sample(&self, wo: Vec3A, ctx: SampleCtx, u: Vec2) -> Option<LobeSample> {
+        if wo.z <= 0.0 || self.weight <= 0.0 || ctx.sel <= 0.0 {
+            return None;
+        }
+        let mut wi = cosine_hemisphere(u);
+        if wi.z <= 0.0 {
+            return None;
+        }
+        let pdf = ctx.sel * cosine_hemisphere_pdf(wi.z);
+        wi.z = -wi.z;
+        Some(LobeSample {
+            sub: 0,
+            wi,
+            eta: 1.0,
+            value: Some((Vec3A::splat(self.weight / ctx.sel), pdf, false)),
+        })
+    }
+    fn selection_weight(&self, _: Vec3A) -> f32 {
+        self.weight * luminance(self.color)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::material::{Bsdf, Lambert, Shading};
+
+    /// Light sampling never reaches subsurface at the entry; a sample goes into the
+    /// surface with weight `weight / selection`, and the Bsdf names the lobe as
+    /// subsurface so the integrator walks.
+    #[test]
+    fn samples_go_inside_and_the_bsdf_says_walk() {
+        let lobe = Subsurface {
+            weight: 0.7,
+            color: Vec3A::new(0.9, 0.5, 0.2),
+            radius: Vec3A::ONE,
+            anisotropy: 0.0,
+            ior: 1.4,
+        };
+        let bsdf = Bsdf::layered(
+            &[
+                Lambert {
+                    albedo: Vec3A::splat(0.3),
+                }
+                .into(),
+                lobe.into(),
+            ],
+            None,
+            Vec3A::ONE,
+        );
+        assert_eq!(bsdf.lobes(), &[crate::material::lambert::RD2, TD3]);
+        assert!(bsdf.subsurface(0).is_none());
+        assert_eq!(bsdf.subsurface(1), Some(&lobe));
+        assert!(bsdf.subsurface(2).is_none());
+        let n = Vec3A::new(0.2, 0.3, 0.9).normalize();
+        let sh = Shading::new(&bsdf, n, n, Vec3A::new(0.0, 0.6, 0.8));
+        let mut walks = 0;
+        for i in 0..64 {
+            let u = (i as f32 + 0.5) / 64.0;
+            let s = bsdf
+                .sample(&sh, u, Vec2::new(u, 1.0 - u))
+                .expect("a sample");
+            let wi = sh.frame.to_local(s.wi);
+            assert_eq!(bsdf.eval_lobe(1, &sh, wi).0, Vec3A::ZERO);
+            if s.lobe == 1 {
+                walks += 1;
+                assert!(wi.z < 0.0, "into the surface: {wi}");
+                let sel = s.pdf / cosine_hemisphere_pdf(-wi.z);
+                assert!((s.weight - Vec3A::splat(0.7 / sel)).abs().max_element() < 1e-4);
+            }
+        }
+        assert!(walks > 0);
+    }
+}
