@@ -6,11 +6,11 @@
 
 use crate::aov::{self, AovSpec};
 use crate::checkpoint::{self, Checkpoint, CheckpointError};
+use crate::film::mattes::MatteTable;
 use crate::film::{Film, PixelWindow};
 use crate::identity::{Identity, Recording};
 use crate::integrator::{FrameRequest, Snapshot};
 use crate::output;
-use crate::post::cryptomatte::MatteTable;
 use crate::progress::Progress;
 use crate::scene::desc::SceneDesc;
 use crate::scene::{Scene, Source};
@@ -448,7 +448,7 @@ fn matte_table(desc: &SceneDesc, scene: &Scene, ranks: u32) -> MatteTable {
             vec![Some(o.name.clone()), material, Some(asset)]
         })
         .collect();
-    MatteTable::new(
+    crate::post::cryptomatte::table(
         vec![OBJECT.into(), MATERIAL.into(), ASSET.into()],
         ranks,
         &names,

@@ -14,9 +14,9 @@ mod pixel;
 mod routing;
 mod shading;
 
+use crate::film::mattes::{MatteTable, PixelMatte};
 use crate::film::{Film, Mattes, PixelWindow, SampleAccumulator};
 use crate::geometry::{Hit, Ray};
-use crate::post::cryptomatte::{MatteTable, PixelMatte};
 use crate::progress::{Progress, Silent};
 use crate::scene::Scene;
 use adaptive::{Moments, Pilot, Rule};

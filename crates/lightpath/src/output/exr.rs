@@ -208,8 +208,12 @@ pub fn stage_film(
         attributes.push((naming::aov_attribute(&d.name), d.definition));
     }
     if let Some(m) = mattes {
-        attributes.extend(m.table.attributes());
-        channels.extend(m.table.channel_names().into_iter().zip(m.planes));
+        attributes.extend(crate::post::cryptomatte::table_attributes(&m.table));
+        channels.extend(
+            crate::post::cryptomatte::table_channel_names(&m.table)
+                .into_iter()
+                .zip(m.planes),
+        );
     }
     attributes.append(&mut header.text);
     header.text = attributes;

@@ -3,6 +3,8 @@
 //! plane per channel, so output hands the planes to the EXR writer without copying and
 //! the peak memory stays about one film.
 
+pub mod mattes;
+
 use glam::Vec3A;
 
 #[derive(Clone, Debug)]
@@ -32,7 +34,7 @@ pub struct Film {
 /// Cryptomatte output of a render: the table it was made with and its planes.
 #[derive(Clone, Debug)]
 pub struct Mattes {
-    pub table: crate::post::cryptomatte::MatteTable,
+    pub table: mattes::MatteTable,
     pub planes: Vec<Vec<f32>>,
 }
 
@@ -299,7 +301,7 @@ impl Film {
                         a[k] = m.planes[p][i];
                         b[k] = o.planes[p][i];
                     }
-                    crate::post::cryptomatte::merge_ranked(&[(&a, wa), (&b, wb)], &mut out);
+                    mattes::merge_ranked(&[(&a, wa), (&b, wb)], &mut out);
                     for (k, p) in planes.clone().enumerate() {
                         m.planes[p][i] = out[k];
                     }
