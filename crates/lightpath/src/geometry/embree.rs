@@ -20,7 +20,8 @@
 //! - the object a shadow ray ignores (the light it aims at) to a context filter function,
 //!   set only on shadow rays that ignore one.
 
-use super::{Accel, Prim, Ray, Visibility};
+use super::accel::{Accel, Visibility};
+use super::{Prim, Ray};
 use embree3::sys::*;
 use std::collections::HashMap;
 use std::ffi::c_void;

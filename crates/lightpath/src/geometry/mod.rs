@@ -2,6 +2,7 @@
 //! `intersect` / `occluded` seam; `obvhs` builds the BVH, `bvh` lays it out 4 or 8 wide
 //! (`lanes`: SSE2 or, where the CPU has AVX2, AVX).
 
+mod accel;
 pub mod attrs;
 mod bvh;
 #[cfg(feature = "embree")]
@@ -11,8 +12,8 @@ mod lanes;
 mod sah;
 pub mod shapes;
 
+pub use accel::{Accel, Visibility};
 pub use attrs::{SurfaceAttrs, SurfaceUv};
-pub use bvh::{Accel, Visibility};
 pub use instance::Instance;
 
 use glam::Vec3A;
