@@ -253,8 +253,7 @@ impl RenderJob {
         warnings.extend(crate::scene::load::defaults::no_light_warning(&desc));
         let specs = self.plan(&desc, &mut warnings)?;
         crate::limits::Limits::current()
-            .check_aovs(specs.len() as u64, "this render's AOV plan")
-            .map_err(Error::Setting)?;
+            .check_aovs(specs.len() as u64, "this render's AOV plan")?;
         let mut scene = Scene::build(&desc, &specs)?;
         let reads = recording.finish();
         // No output may replace a file the scene reads (its includes, meshes, textures).
@@ -266,10 +265,7 @@ impl RenderJob {
             &reads,
             crate::identity::settings(&desc, self.camera.as_deref()),
         );
-        scene
-            .accel
-            .use_backend(self.accel)
-            .map_err(Error::Setting)?;
+        scene.accel.use_backend(self.accel)?;
         scene.variance_aovs = self.variance_aovs(&desc, &scene)?;
         checks::film(&scene).map_err(Error::Setting)?;
         warnings.extend(checks::scene_warnings(&scene));
@@ -282,7 +278,7 @@ impl RenderJob {
         }
         let (width, height) = (scene.camera.width, scene.camera.height);
         let window = self.crop.unwrap_or(PixelWindow::full(width, height));
-        window.check(width, height).map_err(Error::Plan)?;
+        window.check(width, height).map_err(|e| Error::Plan(e.0))?;
         let metadata = output::naming::settings_attributes(&scene, &identity, window);
         let mattes = self
             .cryptomatte

@@ -8,6 +8,7 @@ use super::bvh::{Trees, Width};
 #[cfg(feature = "embree")]
 use super::embree::EmbreeScene;
 use super::{Hit, Instance, Prim, Ray};
+use crate::error::AccelError;
 use glam::Vec3A;
 
 /// Ray kinds, as bits: an object can be hidden from each (trace sets).
@@ -101,7 +102,7 @@ impl Accel {
     /// float rounding, and the surface at a hit is computed as before. Errors when Embree
     /// cannot make a device or build the scene.
     #[cfg(feature = "embree")]
-    pub fn use_embree(&mut self) -> Result<(), String> {
+    pub fn use_embree(&mut self) -> Result<(), AccelError> {
         if !self.prims.is_empty() {
             let scene = EmbreeScene::build(self, &self.visibility, false)?;
             self.embree = Some(Box::new(scene));
@@ -111,13 +112,13 @@ impl Accel {
 
     /// Traces with `backend` from now on (`Bvh`: nothing to do; `Embree`: `use_embree`,
     /// or an error in a build without the `embree` feature).
-    pub fn use_backend(&mut self, backend: super::Backend) -> Result<(), String> {
+    pub fn use_backend(&mut self, backend: super::Backend) -> Result<(), AccelError> {
         match backend {
             super::Backend::Bvh => Ok(()),
             #[cfg(feature = "embree")]
             super::Backend::Embree => self.use_embree(),
             #[cfg(not(feature = "embree"))]
-            super::Backend::Embree => Err(super::Backend::EMBREE_UNAVAILABLE.into()),
+            super::Backend::Embree => Err(AccelError::EmbreeUnavailable),
         }
     }
 

@@ -38,13 +38,13 @@ impl Backend {
          crates/lightpath --features embree` (or `cargo run --release --features embree -- \
          render --accel embree ...`)";
 
-    pub fn parse(s: &str) -> Result<Backend, String> {
+    pub fn parse(s: &str) -> Result<Backend, crate::error::InvalidValue> {
         match s {
             "bvh" => Ok(Backend::Bvh),
             "embree" => Ok(Backend::Embree),
-            other => Err(format!(
+            other => Err(crate::error::InvalidValue(format!(
                 "unknown accelerator '{other}': expected bvh or embree"
-            )),
+            ))),
         }
     }
 

@@ -33,7 +33,7 @@ pub enum ExrCompression {
 }
 
 impl ExrCompression {
-    pub fn parse(s: &str) -> std::result::Result<ExrCompression, String> {
+    pub fn parse(s: &str) -> std::result::Result<ExrCompression, crate::error::InvalidValue> {
         Ok(match s {
             "none" => ExrCompression::None,
             "rle" => ExrCompression::Rle,
@@ -41,9 +41,9 @@ impl ExrCompression {
             "zip" => ExrCompression::Zip,
             "piz" => ExrCompression::Piz,
             other => {
-                return Err(format!(
+                return Err(crate::error::InvalidValue(format!(
                     "unknown compression '{other}': expected none, rle, zips, zip or piz"
-                ))
+                )))
             }
         })
     }
