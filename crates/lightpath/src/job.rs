@@ -521,15 +521,8 @@ impl PreparedRender {
             rows_done,
             pilot,
         } = rendered;
-        let interrupted = (!complete).then(|| Interrupted {
-            rows_done: rows_done.iter().filter(|d| **d).count() as u32,
-            rows: film.height,
-            pass: pilot.as_ref().map(|p| match p.complete {
-                false => AdaptivePass::Pilot,
-                true => AdaptivePass::Second,
-            }),
-            checkpoint: checkpoint_path.clone(),
-        });
+        let interrupted = (!complete)
+            .then(|| Interrupted::of(&film, &rows_done, pilot.as_ref(), &checkpoint_path));
         if interrupted.is_some() {
             let snapshot = Snapshot {
                 film: &film,
@@ -538,11 +531,7 @@ impl PreparedRender {
             };
             checkpoint::write(&checkpoint_path, stamp, &snapshot).map_err(Error::Output)?;
         }
-        let overflowed = film
-            .planes
-            .iter()
-            .map(|p| p.iter().filter(|v| !v.is_finite()).count() as u64)
-            .sum();
+        let overflowed = non_finite_values(&film);
         let header = exr_header(&job, &source, &scene, metadata, &film, interrupted.as_ref());
         let derived = output::derived_aovs(&film, &scene.aovs);
         // Unfinished rows go beside the output, never over a finished image of that name.
@@ -585,6 +574,35 @@ impl PreparedRender {
             denoised,
         })
     }
+}
+
+impl Interrupted {
+    /// How far a render stopped before its end got: its finished rows, its adaptive pass,
+    /// and the checkpoint written for `--resume`.
+    fn of(
+        film: &Film,
+        rows_done: &[bool],
+        pilot: Option<&crate::integrator::adaptive::Pilot>,
+        checkpoint: &std::path::Path,
+    ) -> Interrupted {
+        Interrupted {
+            rows_done: rows_done.iter().filter(|d| **d).count() as u32,
+            rows: film.height,
+            pass: pilot.map(|p| match p.complete {
+                false => AdaptivePass::Pilot,
+                true => AdaptivePass::Second,
+            }),
+            checkpoint: checkpoint.to_path_buf(),
+        }
+    }
+}
+
+/// Values of the film that overflowed to infinity or NaN (the summary reports them).
+fn non_finite_values(film: &Film) -> u64 {
+    film.planes
+        .iter()
+        .map(|p| p.iter().filter(|v| !v.is_finite()).count() as u64)
+        .sum()
 }
 
 /// The EXR header of a render: its settings, the AOVs' metadata, the camera, the date if

@@ -18,5 +18,6 @@ mod peer;
 mod render;
 mod sampling;
 mod settings;
+mod style;
 mod view;
 mod workflow;

@@ -609,7 +609,10 @@ fn cornell_at_its_defaults_has_few_fireflies() {
     let (_, film) = run(&src, |_| {}, vec![]);
     assert_eq!((film.width, film.height, film.spp), (320, 320, 32));
     let n = isolated_fireflies(&film);
-    assert!(n < 30, "{n} isolated fireflies (issue 11's target: under 30)");
+    assert!(
+        n < 30,
+        "{n} isolated fireflies (issue 11's target: under 30)"
+    );
     let (_, raw) = run(
         &src,
         |d| {
