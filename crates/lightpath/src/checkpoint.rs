@@ -197,7 +197,7 @@ pub struct FilmShape {
 pub fn read(path: &Path, stamp: Stamp, shape: FilmShape) -> Result<Checkpoint, CheckpointError> {
     let bad =
         |what: &str| CheckpointError::Unusable(format!("checkpoint {}: {what}", path.display()));
-    let bytes = crate::limits::read_input(path).map_err(|e| bad(&e))?;
+    let bytes = crate::limits::read_input(path).map_err(|e| bad(&e.to_string()))?;
     if bytes.len() >= 8 && bytes[..6] == MAGIC_FAMILY[..] && bytes[..8] != MAGIC[..] {
         return Err(bad(&format!(
             "it was written by another version of Lightpath (format {}; this one reads {}): \

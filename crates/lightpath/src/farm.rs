@@ -19,11 +19,13 @@ pub enum SplitBy {
 }
 
 impl SplitBy {
-    pub fn parse(s: &str) -> Result<SplitBy, String> {
+    pub fn parse(s: &str) -> Result<SplitBy, crate::error::InvalidValue> {
         match s {
             "samples" => Ok(SplitBy::Samples),
             "tiles" => Ok(SplitBy::Tiles),
-            other => Err(format!("expected samples or tiles, got '{other}'")),
+            other => Err(crate::error::InvalidValue(format!(
+                "expected samples or tiles, got '{other}'"
+            ))),
         }
     }
 }

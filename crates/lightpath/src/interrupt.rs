@@ -3,6 +3,7 @@
 //! exits at once; otherwise signals are counted, and [`wait`] returns after one (the
 //! viewer's "press Ctrl-C to stop").
 
+use crate::Error;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{Arc, Condvar, Mutex, Once, PoisonError};
 
@@ -16,7 +17,7 @@ static SIGNALS: Mutex<u32> = Mutex::new(0);
 static SIGNALLED: Condvar = Condvar::new();
 
 /// Installs the handler (once); an error says why signals cannot be caught.
-pub fn catch() -> Result<(), String> {
+pub fn catch() -> Result<(), Error> {
     static ONCE: Once = Once::new();
     static FAILED: Mutex<Option<String>> = Mutex::new(None);
     ONCE.call_once(|| {
@@ -29,13 +30,13 @@ pub fn catch() -> Result<(), String> {
         .unwrap_or_else(PoisonError::into_inner)
         .clone()
     {
-        Some(e) => Err(format!("cannot catch interrupts ({e})")),
+        Some(e) => Err(Error::Interrupts(e)),
         None => Ok(()),
     }
 }
 
 /// From now until [`render_finished`], a signal sets `cancel` (a second exits).
-pub fn render_started(cancel: Arc<AtomicBool>) -> Result<(), String> {
+pub fn render_started(cancel: Arc<AtomicBool>) -> Result<(), Error> {
     *RENDERING.lock().unwrap_or_else(PoisonError::into_inner) = Some(cancel);
     catch()
 }
@@ -46,7 +47,7 @@ pub fn render_finished() {
 
 /// Blocks until a signal has come while no render ran (one that came before the call
 /// counts: a signal is never missed between installing the handler and waiting).
-pub fn wait() -> Result<(), String> {
+pub fn wait() -> Result<(), Error> {
     catch()?;
     let mut n = SIGNALS.lock().unwrap_or_else(PoisonError::into_inner);
     while *n == 0 {

@@ -6,11 +6,11 @@
 
 use crate::aov::{self, AovSpec};
 use crate::checkpoint::{self, Checkpoint, CheckpointError};
+use crate::film::mattes::MatteTable;
 use crate::film::{Film, PixelWindow};
 use crate::identity::{Identity, Recording};
 use crate::integrator::{FrameRequest, Snapshot};
 use crate::output;
-use crate::post::cryptomatte::MatteTable;
 use crate::progress::Progress;
 use crate::scene::desc::SceneDesc;
 use crate::scene::{Scene, Source};
@@ -253,8 +253,7 @@ impl RenderJob {
         warnings.extend(crate::scene::load::defaults::no_light_warning(&desc));
         let specs = self.plan(&desc, &mut warnings)?;
         crate::limits::Limits::current()
-            .check_aovs(specs.len() as u64, "this render's AOV plan")
-            .map_err(Error::Setting)?;
+            .check_aovs(specs.len() as u64, "this render's AOV plan")?;
         let mut scene = Scene::build(&desc, &specs)?;
         let reads = recording.finish();
         // No output may replace a file the scene reads (its includes, meshes, textures).
@@ -266,10 +265,7 @@ impl RenderJob {
             &reads,
             crate::identity::settings(&desc, self.camera.as_deref()),
         );
-        scene
-            .accel
-            .use_backend(self.accel)
-            .map_err(Error::Setting)?;
+        scene.accel.use_backend(self.accel)?;
         scene.variance_aovs = self.variance_aovs(&desc, &scene)?;
         checks::film(&scene).map_err(Error::Setting)?;
         warnings.extend(checks::scene_warnings(&scene));
@@ -282,7 +278,7 @@ impl RenderJob {
         }
         let (width, height) = (scene.camera.width, scene.camera.height);
         let window = self.crop.unwrap_or(PixelWindow::full(width, height));
-        window.check(width, height).map_err(Error::Plan)?;
+        window.check(width, height).map_err(|e| Error::Plan(e.0))?;
         let metadata = output::naming::settings_attributes(&scene, &identity, window);
         let mattes = self
             .cryptomatte
@@ -448,7 +444,7 @@ fn matte_table(desc: &SceneDesc, scene: &Scene, ranks: u32) -> MatteTable {
             vec![Some(o.name.clone()), material, Some(asset)]
         })
         .collect();
-    MatteTable::new(
+    crate::post::cryptomatte::table(
         vec![OBJECT.into(), MATERIAL.into(), ASSET.into()],
         ranks,
         &names,
@@ -525,15 +521,8 @@ impl PreparedRender {
             rows_done,
             pilot,
         } = rendered;
-        let interrupted = (!complete).then(|| Interrupted {
-            rows_done: rows_done.iter().filter(|d| **d).count() as u32,
-            rows: film.height,
-            pass: pilot.as_ref().map(|p| match p.complete {
-                false => AdaptivePass::Pilot,
-                true => AdaptivePass::Second,
-            }),
-            checkpoint: checkpoint_path.clone(),
-        });
+        let interrupted = (!complete)
+            .then(|| Interrupted::of(&film, &rows_done, pilot.as_ref(), &checkpoint_path));
         if interrupted.is_some() {
             let snapshot = Snapshot {
                 film: &film,
@@ -542,11 +531,7 @@ impl PreparedRender {
             };
             checkpoint::write(&checkpoint_path, stamp, &snapshot).map_err(Error::Output)?;
         }
-        let overflowed = film
-            .planes
-            .iter()
-            .map(|p| p.iter().filter(|v| !v.is_finite()).count() as u64)
-            .sum();
+        let overflowed = non_finite_values(&film);
         let header = exr_header(&job, &source, &scene, metadata, &film, interrupted.as_ref());
         let derived = output::derived_aovs(&film, &scene.aovs);
         // Unfinished rows go beside the output, never over a finished image of that name.
@@ -589,6 +574,35 @@ impl PreparedRender {
             denoised,
         })
     }
+}
+
+impl Interrupted {
+    /// How far a render stopped before its end got: its finished rows, its adaptive pass,
+    /// and the checkpoint written for `--resume`.
+    fn of(
+        film: &Film,
+        rows_done: &[bool],
+        pilot: Option<&crate::integrator::adaptive::Pilot>,
+        checkpoint: &std::path::Path,
+    ) -> Interrupted {
+        Interrupted {
+            rows_done: rows_done.iter().filter(|d| **d).count() as u32,
+            rows: film.height,
+            pass: pilot.map(|p| match p.complete {
+                false => AdaptivePass::Pilot,
+                true => AdaptivePass::Second,
+            }),
+            checkpoint: checkpoint.to_path_buf(),
+        }
+    }
+}
+
+/// Values of the film that overflowed to infinity or NaN (the summary reports them).
+fn non_finite_values(film: &Film) -> u64 {
+    film.planes
+        .iter()
+        .map(|p| p.iter().filter(|v| !v.is_finite()).count() as u64)
+        .sum()
 }
 
 /// The EXR header of a render: its settings, the AOVs' metadata, the camera, the date if

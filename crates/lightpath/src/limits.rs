@@ -5,6 +5,7 @@
 //! Each limit has a default and an environment variable that replaces it
 //! (`LIGHTPATH_MAX_MEMORY=64G lightpath render …`); `docs/performance.md` lists them.
 
+use crate::error::{LimitError, ReadError};
 use std::sync::OnceLock;
 
 /// The limits in force.
@@ -75,7 +76,7 @@ impl Default for Limits {
 
 impl Limits {
     /// The defaults, each replaced by its environment variable when that is set.
-    pub fn from_env() -> Result<Limits, String> {
+    pub fn from_env() -> Result<Limits, LimitError> {
         let d = Limits::default();
         Ok(Limits {
             memory: read_env(&MEMORY, d.memory)?,
@@ -95,22 +96,22 @@ impl Limits {
         *LIMITS.get_or_init(|| Limits::from_env().unwrap_or_default())
     }
 
-    pub fn check_memory(&self, bytes: u64, for_what: &str) -> Result<(), String> {
+    pub fn check_memory(&self, bytes: u64, for_what: &str) -> Result<(), LimitError> {
         exceeds(&MEMORY, bytes, self.memory, for_what)
     }
-    pub fn check_pixels(&self, pixels: u64, for_what: &str) -> Result<(), String> {
+    pub fn check_pixels(&self, pixels: u64, for_what: &str) -> Result<(), LimitError> {
         exceeds(&PIXELS, pixels, self.pixels, for_what)
     }
-    pub fn check_samples(&self, samples: u64, for_what: &str) -> Result<(), String> {
+    pub fn check_samples(&self, samples: u64, for_what: &str) -> Result<(), LimitError> {
         exceeds(&SAMPLES, samples, self.samples, for_what)
     }
-    pub fn check_aovs(&self, aovs: u64, for_what: &str) -> Result<(), String> {
+    pub fn check_aovs(&self, aovs: u64, for_what: &str) -> Result<(), LimitError> {
         exceeds(&AOVS, aovs, self.aovs, for_what)
     }
-    pub fn check_segments(&self, segments: u64, for_what: &str) -> Result<(), String> {
+    pub fn check_segments(&self, segments: u64, for_what: &str) -> Result<(), LimitError> {
         exceeds(&SEGMENTS, segments, self.segments, for_what)
     }
-    pub fn check_file_bytes(&self, bytes: u64, for_what: &str) -> Result<(), String> {
+    pub fn check_file_bytes(&self, bytes: u64, for_what: &str) -> Result<(), LimitError> {
         exceeds(&FILE_BYTES, bytes, self.file_bytes, for_what)
     }
 }
@@ -119,44 +120,44 @@ impl Limits {
 /// as an OBJ) is refused before reading, and a file that grows past the limit while being
 /// read is cut off with an error. Every file a render reads comes through here, and is
 /// noted in the render's identity (`identity.rs`).
-pub fn read_input(path: &std::path::Path) -> Result<Vec<u8>, String> {
+pub fn read_input(path: &std::path::Path) -> Result<Vec<u8>, ReadError> {
     use std::io::Read;
     let limits = Limits::current();
-    let file = std::fs::File::open(path).map_err(|e| format!("cannot open: {e}"))?;
-    let meta = file.metadata().map_err(|e| format!("cannot read: {e}"))?;
+    let file = std::fs::File::open(path).map_err(ReadError::Open)?;
+    let meta = file.metadata().map_err(ReadError::Read)?;
     if !meta.is_file() {
-        return Err("not a regular file (a directory, device or pipe)".into());
+        return Err(ReadError::NotRegular);
     }
     limits.check_file_bytes(meta.len(), "reading this file")?;
     let mut bytes = Vec::new();
     file.take(limits.file_bytes.saturating_add(1))
         .read_to_end(&mut bytes)
-        .map_err(|e| format!("cannot read: {e}"))?;
+        .map_err(ReadError::Read)?;
     limits.check_file_bytes(bytes.len() as u64, "reading this file")?;
     crate::identity::note_read(path, &bytes);
     Ok(bytes)
 }
 
-fn exceeds(knob: &Knob, value: u64, limit: u64, for_what: &str) -> Result<(), String> {
+fn exceeds(knob: &Knob, value: u64, limit: u64, for_what: &str) -> Result<(), LimitError> {
     if value <= limit {
         return Ok(());
     }
-    Err(format!(
-        "{for_what} needs {value} {what}, above the limit of {limit} (set {env} to raise it)",
-        what = knob.what,
-        env = knob.env,
-    ))
+    Err(LimitError::Exceeded {
+        for_what: for_what.to_string(),
+        value,
+        what: knob.what,
+        limit,
+        env: knob.env,
+    })
 }
 
-fn read_env(knob: &Knob, default: u64) -> Result<u64, String> {
+fn read_env(knob: &Knob, default: u64) -> Result<u64, LimitError> {
     match std::env::var(knob.env) {
         Err(std::env::VarError::NotPresent) => Ok(default),
-        Err(std::env::VarError::NotUnicode(_)) => Err(format!("{} is not valid UTF-8", knob.env)),
-        Ok(v) => parse_size(&v).ok_or_else(|| {
-            format!(
-                "{}='{v}': expected a whole number, optionally with a K, M, G or T suffix",
-                knob.env
-            )
+        Err(std::env::VarError::NotUnicode(_)) => Err(LimitError::EnvNotUnicode(knob.env)),
+        Ok(v) => parse_size(&v).ok_or(LimitError::EnvMalformed {
+            env: knob.env,
+            value: v,
         }),
     }
 }
@@ -237,6 +238,15 @@ mod tests {
         };
         assert!(l.check_pixels(100, "x").is_ok());
         let e = l.check_pixels(101, "a 101x1 film").unwrap_err();
+        assert!(matches!(
+            e,
+            LimitError::Exceeded {
+                value: 101,
+                limit: 100,
+                ..
+            }
+        ));
+        let e = e.to_string();
         assert!(e.contains("a 101x1 film needs 101 pixels"), "{e}");
         assert!(
             e.contains("limit of 100") && e.contains("LIGHTPATH_MAX_PIXELS"),

@@ -196,40 +196,8 @@ pub fn minimize(dfa: &Dfa) -> Dfa {
     if n == 0 {
         return dfa.clone();
     }
-    // Initial partition: by accepted rule set.
-    let mut block_of = vec![0u32; n];
-    let mut blocks: Vec<Vec<u32>> = Vec::new();
-    {
-        let mut by_accept: HashMap<&[u32], u32> = HashMap::new();
-        for (s, accept) in dfa.accept.iter().enumerate() {
-            let b = *by_accept.entry(accept).or_insert_with(|| {
-                blocks.push(Vec::new());
-                (blocks.len() - 1) as u32
-            });
-            block_of[s] = b;
-            blocks[b as usize].push(s as u32);
-        }
-    }
-    // Inverse transitions: for class c and target t, the states that go to t on c.
-    let mut inv_start = vec![0u32; n * k + 1];
-    for s in 0..n {
-        for c in 0..k {
-            let t = dfa.next[s * k + c] as usize;
-            inv_start[t * k + c + 1] += 1;
-        }
-    }
-    for i in 1..inv_start.len() {
-        inv_start[i] += inv_start[i - 1];
-    }
-    let mut fill = inv_start.clone();
-    let mut inv = vec![0u32; n * k];
-    for s in 0..n {
-        for c in 0..k {
-            let t = dfa.next[s * k + c] as usize;
-            inv[fill[t * k + c] as usize] = s as u32;
-            fill[t * k + c] += 1;
-        }
-    }
+    let (mut block_of, mut blocks) = initial_partition(dfa);
+    let (inv_start, inv) = inverse_transitions(dfa);
     let mut in_work = vec![true; blocks.len()];
     let mut work: Vec<u32> = (0..blocks.len() as u32).collect();
     let mut marked = vec![false; n];
@@ -301,7 +269,59 @@ pub fn minimize(dfa: &Dfa) -> Dfa {
             touched.clear();
         }
     }
-    // Renumber: the dead state's block first, then in order of first appearance.
+    quotient(dfa, &blocks, &block_of)
+}
+
+/// Hopcroft's initial partition: states grouped by accepted rule set. Returns each
+/// state's block and each block's states.
+fn initial_partition(dfa: &Dfa) -> (Vec<u32>, Vec<Vec<u32>>) {
+    let n = dfa.len();
+    let mut block_of = vec![0u32; n];
+    let mut blocks: Vec<Vec<u32>> = Vec::new();
+    {
+        let mut by_accept: HashMap<&[u32], u32> = HashMap::new();
+        for (s, accept) in dfa.accept.iter().enumerate() {
+            let b = *by_accept.entry(accept).or_insert_with(|| {
+                blocks.push(Vec::new());
+                (blocks.len() - 1) as u32
+            });
+            block_of[s] = b;
+            blocks[b as usize].push(s as u32);
+        }
+    }
+    (block_of, blocks)
+}
+
+/// Inverse transitions: for class c and target t, the states that go to t on c are
+/// `inv[inv_start[t * k + c]..inv_start[t * k + c + 1]]`.
+fn inverse_transitions(dfa: &Dfa) -> (Vec<u32>, Vec<u32>) {
+    let (n, k) = (dfa.len(), dfa.classes);
+    let mut inv_start = vec![0u32; n * k + 1];
+    for s in 0..n {
+        for c in 0..k {
+            let t = dfa.next[s * k + c] as usize;
+            inv_start[t * k + c + 1] += 1;
+        }
+    }
+    for i in 1..inv_start.len() {
+        inv_start[i] += inv_start[i - 1];
+    }
+    let mut fill = inv_start.clone();
+    let mut inv = vec![0u32; n * k];
+    for s in 0..n {
+        for c in 0..k {
+            let t = dfa.next[s * k + c] as usize;
+            inv[fill[t * k + c] as usize] = s as u32;
+            fill[t * k + c] += 1;
+        }
+    }
+    (inv_start, inv)
+}
+
+/// The automaton whose states are the final partition's blocks: the dead state's block
+/// first (state 0), then in order of first appearance.
+fn quotient(dfa: &Dfa, blocks: &[Vec<u32>], block_of: &[u32]) -> Dfa {
+    let k = dfa.classes;
     let mut new_id = vec![u32::MAX; blocks.len()];
     let mut order = Vec::with_capacity(blocks.len());
     let mut assign = |b: u32, order: &mut Vec<u32>| {
@@ -312,7 +332,7 @@ pub fn minimize(dfa: &Dfa) -> Dfa {
     };
     assign(block_of[0], &mut order);
     assign(block_of[dfa.start as usize], &mut order);
-    for &b in &block_of {
+    for &b in block_of {
         assign(b, &mut order);
     }
     let mut next = Vec::with_capacity(order.len() * k);

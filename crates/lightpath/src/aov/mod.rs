@@ -32,7 +32,7 @@ impl AovSpec {
     }
 
     /// Parses `NAME=DEF` (as `--aov` takes it); a bare standard name is its own name.
-    pub fn parse(arg: &str) -> Result<AovSpec, String> {
+    pub fn parse(arg: &str) -> Result<AovSpec, crate::error::InvalidValue> {
         if let Some((name, def)) = arg.split_once('=') {
             let name = name.trim();
             if !name.is_empty()
@@ -48,9 +48,9 @@ impl AovSpec {
         }
         match lpe::standard_name(word) {
             Some((name, _)) => Ok(AovSpec::new(name, format!("lpe:{name}"))),
-            None => Err(format!(
+            None => Err(crate::error::InvalidValue(format!(
                 "expected NAME=DEFINITION or a standard name, got '{arg}'"
-            )),
+            ))),
         }
     }
 }

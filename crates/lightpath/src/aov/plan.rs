@@ -80,9 +80,9 @@ impl std::error::Error for PlanError {}
 pub fn parse_aov_args(args: &[String]) -> Result<Vec<AovSpec>, PlanError> {
     args.iter()
         .map(|a| {
-            AovSpec::parse(a).map_err(|message| PlanError::BadAov {
+            AovSpec::parse(a).map_err(|e| PlanError::BadAov {
                 arg: a.clone(),
-                message,
+                message: e.0,
             })
         })
         .collect()

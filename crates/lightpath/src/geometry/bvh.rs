@@ -10,10 +10,11 @@
 //! `cornell-classic` a shadow ray took ~560 instructions; here ~350, with a box test of
 //! ~45 (docs/performance.md).
 
+use super::accel::{Accel, Visibility};
 #[cfg(target_arch = "x86_64")]
 use super::lanes::F8;
 use super::lanes::{Lanes, Mask};
-use super::{Hit, Instance, Prim, Ray};
+use super::{Prim, Ray};
 use glam::{Vec3A, Vec4};
 use obvhs::aabb::Aabb;
 use obvhs::bvh2::builder::build_bvh2;
@@ -27,16 +28,6 @@ impl Boundable for Bounded {
     fn aabb(&self) -> Aabb {
         self.0
     }
-}
-
-/// Ray kinds, as bits: an object can be hidden from each (trace sets).
-pub struct Visibility;
-
-impl Visibility {
-    pub const CAMERA: u8 = 1;
-    pub const INDIRECT: u8 = 2;
-    pub const SHADOW: u8 = 4;
-    pub const ALL: u8 = 7;
 }
 
 /// A child reference with this bit set names a leaf, otherwise a node.
@@ -234,7 +225,7 @@ struct Leaf<L: Lanes> {
 }
 
 /// The wide tree of one lane width.
-struct Tree<L: Lanes> {
+pub(super) struct Tree<L: Lanes> {
     nodes: Vec<Node<L>>,
     leaves: Vec<Leaf<L>>,
     /// Stack entries the deepest path can need.
@@ -242,33 +233,11 @@ struct Tree<L: Lanes> {
 }
 
 /// An accelerator's tree, at the width chosen when it was built.
-enum Trees {
+pub(super) enum Trees {
     Four(Tree<Vec4>),
     /// Only made where AVX2 was detected: its traversal runs AVX instructions.
     #[cfg(target_arch = "x86_64")]
     Eight(Tree<F8>),
-}
-
-pub struct Accel {
-    tree: Trees,
-    prims: Vec<Prim>,
-    /// Object id of each primitive, in the same order.
-    objects: Vec<u32>,
-    /// Per-vertex shading normals of triangles that have them, three per entry.
-    normals: Vec<[Vec3A; 3]>,
-    /// Unit geometric normal of each triangle (unused for spheres), in the same order.
-    face_normals: Vec<Vec3A>,
-    /// Where each primitive, by its index as given to `build`, sits in `prims`.
-    slots: Vec<u32>,
-    /// Shared meshes, each in its own space, and their placements (`Prim::Instance`).
-    meshes: Vec<Accel>,
-    instances: Vec<Instance>,
-    /// Which ray kinds see each primitive, in the same order (for building Embree's scene).
-    #[cfg(feature = "embree")]
-    visibility: Vec<u8>,
-    /// When set (`use_embree`), `intersect` and `occluded` ask Embree instead of the tree.
-    #[cfg(feature = "embree")]
-    embree: Option<Box<super::embree::EmbreeScene>>,
 }
 
 /// Per-ray constants of the box and triangle tests.
@@ -357,195 +326,88 @@ impl<L: Lanes> RayLanes<L> {
     }
 }
 
-impl Accel {
-    /// Builds the BVH. `prims[i]` belongs to object `objects[i]`.
-    /// `visibility[i]` says which ray kinds see it.
-    pub fn build(
-        prims: Vec<Prim>,
-        objects: Vec<u32>,
-        normals: Vec<[Vec3A; 3]>,
-        visibility: Vec<u8>,
-    ) -> Accel {
-        Accel::build_with(prims, objects, normals, visibility, Width::detect())
-    }
+/// A BVH over some primitives, and the order it lays them out in.
+pub(super) struct LaidOut {
+    pub tree: Trees,
+    /// Per slot (leaf order), the index of the primitive given to [`lay_out`].
+    pub order: Vec<u32>,
+    /// The primitives in slot order.
+    pub prims: Vec<Prim>,
+    /// Which ray kinds see each slot's primitive.
+    #[cfg_attr(not(feature = "embree"), allow(dead_code))]
+    pub visibility: Vec<u8>,
+}
 
-    /// [`build`](Self::build) at a given lane width (eight falls back to four on CPUs
-    /// without AVX2).
-    pub fn build_with(
-        prims: Vec<Prim>,
-        objects: Vec<u32>,
-        normals: Vec<[Vec3A; 3]>,
-        visibility: Vec<u8>,
-        width: Width,
-    ) -> Accel {
-        let width = if Width::eight_available() {
-            width
-        } else {
-            Width::Four
-        };
-        let mut accel = Accel {
+/// Builds the wide BVH over `prims` (`visibility[i]`: which ray kinds see `prims[i]`) at
+/// `width` (eight falls back to four on CPUs without AVX2), with the primitives laid out in
+/// leaf order so leaves address them by range.
+pub(super) fn lay_out(prims: &[Prim], visibility: &[u8], width: Width) -> LaidOut {
+    let width = if Width::eight_available() {
+        width
+    } else {
+        Width::Four
+    };
+    if prims.is_empty() {
+        return LaidOut {
             tree: Trees::Four(Tree {
                 nodes: Vec::new(),
                 leaves: Vec::new(),
                 stack_need: 0,
             }),
+            order: Vec::new(),
             prims: Vec::new(),
-            objects: Vec::new(),
-            normals,
-            face_normals: Vec::new(),
-            slots: Vec::new(),
-            meshes: Vec::new(),
-            instances: Vec::new(),
-            #[cfg(feature = "embree")]
             visibility: Vec::new(),
-            #[cfg(feature = "embree")]
-            embree: None,
         };
-        if prims.is_empty() {
-            return accel;
-        }
-        let (boxes, group_start, by_group) = group_duplicate_boxes(&prims);
-        let (tree, tree_indices) = build_tree(&boxes, width.leaf_prims());
-        // Lay the primitives out in leaf order so leaves address them by range:
-        // `slot_start[k]` is the first slot of the k-th box in obvhs's order.
-        let mut order = Vec::with_capacity(prims.len());
-        let mut slot_start = Vec::with_capacity(tree_indices.len() + 1);
-        for &g in &tree_indices {
-            slot_start.push(order.len() as u32);
-            let g = g as usize;
-            order
-                .extend_from_slice(&by_group[group_start[g] as usize..group_start[g + 1] as usize]);
-        }
+    }
+    let (boxes, group_start, by_group) = group_duplicate_boxes(prims);
+    let (tree, tree_indices) = build_tree(&boxes, width.leaf_prims());
+    // `slot_start[k]` is the first slot of the k-th box in obvhs's order.
+    let mut order = Vec::with_capacity(prims.len());
+    let mut slot_start = Vec::with_capacity(tree_indices.len() + 1);
+    for &g in &tree_indices {
         slot_start.push(order.len() as u32);
-        accel.prims = order.iter().map(|&i| prims[i as usize]).collect();
-        accel.slots = vec![0; prims.len()];
-        for (slot, &i) in order.iter().enumerate() {
-            accel.slots[i as usize] = slot as u32;
-        }
-        accel.objects = order.iter().map(|&i| objects[i as usize]).collect();
-        let visibility: Vec<u8> = order.iter().map(|&i| visibility[i as usize]).collect();
-        #[cfg(feature = "embree")]
-        {
-            accel.visibility = visibility.clone();
-        }
-        accel.face_normals = accel.prims.iter().map(Prim::face_normal).collect();
-
-        accel.tree = match width {
-            #[cfg(target_arch = "x86_64")]
-            Width::Eight => {
-                Trees::Eight(Tree::build(&tree, &slot_start, &accel.prims, &visibility))
-            }
-            _ => Trees::Four(Tree::build(&tree, &slot_start, &accel.prims, &visibility)),
-        };
-        accel
+        let g = g as usize;
+        order.extend_from_slice(&by_group[group_start[g] as usize..group_start[g + 1] as usize]);
     }
-    pub fn prims(&self) -> &[Prim] {
-        &self.prims
+    slot_start.push(order.len() as u32);
+    let laid: Vec<Prim> = order.iter().map(|&i| prims[i as usize]).collect();
+    let visibility: Vec<u8> = order.iter().map(|&i| visibility[i as usize]).collect();
+    let tree = match width {
+        #[cfg(target_arch = "x86_64")]
+        Width::Eight => Trees::Eight(Tree::build(&tree, &slot_start, &laid, &visibility)),
+        _ => Trees::Four(Tree::build(&tree, &slot_start, &laid, &visibility)),
+    };
+    LaidOut {
+        tree,
+        order,
+        prims: laid,
+        visibility,
     }
+}
 
-    /// Which ray kinds see each primitive of `prims()`.
-    #[cfg(feature = "embree")]
-    pub(super) fn visibility(&self) -> &[u8] {
-        &self.visibility
-    }
-
-    /// From now on `intersect` and `occluded` ask Intel Embree (an Embree scene built
-    /// over the same primitives, instances and visibility); hits are the BVH's up to
-    /// float rounding, and the surface at a hit is computed as before. Errors when Embree
-    /// cannot make a device or build the scene.
-    #[cfg(feature = "embree")]
-    pub fn use_embree(&mut self) -> Result<(), String> {
-        if !self.prims.is_empty() {
-            let scene = super::embree::EmbreeScene::build(self, &self.visibility, false)?;
-            self.embree = Some(Box::new(scene));
-        }
-        Ok(())
-    }
-
-    /// Traces with `backend` from now on (`Bvh`: nothing to do; `Embree`: `use_embree`,
-    /// or an error in a build without the `embree` feature).
-    pub fn use_backend(&mut self, backend: super::Backend) -> Result<(), String> {
-        match backend {
-            super::Backend::Bvh => Ok(()),
-            #[cfg(feature = "embree")]
-            super::Backend::Embree => self.use_embree(),
-            #[cfg(not(feature = "embree"))]
-            super::Backend::Embree => Err(super::Backend::EMBREE_UNAVAILABLE.into()),
-        }
-    }
-
-    /// Whether `use_embree` took effect.
-    pub fn uses_embree(&self) -> bool {
-        #[cfg(feature = "embree")]
-        {
-            self.embree.is_some()
-        }
-        #[cfg(not(feature = "embree"))]
-        {
-            false
-        }
-    }
-
-    /// Gives the accelerator the meshes and placements its `Prim::Instance` primitives
-    /// name (`index` into `instances`, each naming one of `meshes`). Meshes hold no
-    /// instances themselves: the structure has two levels.
-    pub fn with_instances(mut self, meshes: Vec<Accel>, instances: Vec<Instance>) -> Accel {
-        debug_assert!(meshes.iter().all(|m| m.instances.is_empty()));
-        self.meshes = meshes;
-        self.instances = instances;
-        self
-    }
-
-    /// The box around every primitive (inverted, min > max, when there are none).
-    pub fn bounds(&self) -> (Vec3A, Vec3A) {
-        self.prims.iter().fold(
-            (Vec3A::splat(f32::INFINITY), Vec3A::splat(f32::NEG_INFINITY)),
-            |(lo, hi), p| {
-                let (a, b) = p.bounds();
-                (lo.min(a), hi.max(b))
-            },
-        )
-    }
-
-    pub fn instances(&self) -> &[Instance] {
-        &self.instances
-    }
-
-    pub fn meshes(&self) -> &[Accel] {
-        &self.meshes
-    }
-
-    /// The index in `prims()` of the primitive given to `build` as number `original`.
-    pub fn slot(&self, original: u32) -> u32 {
-        self.slots[original as usize]
-    }
-
-    pub fn object_of(&self, prim: u32) -> u32 {
-        self.objects[prim as usize]
-    }
-
-    /// The nearest hit along the ray among primitives visible to rays of kind `mask`.
-    #[inline]
-    pub fn intersect(&self, ray: &Ray, tmin: f32, mask: u8) -> Option<Hit> {
-        if self.prims.is_empty() {
-            return None;
-        }
-        #[cfg(feature = "embree")]
-        if let Some(embree) = &self.embree {
-            let (prim, t, inner) = embree.intersect(ray, tmin, mask)?;
-            return Some(self.surface(ray, prim, t, inner));
-        }
-        let (prim, t, inner) = self.nearest(ray, tmin, mask, &DEEP_CLOSEST);
-        (prim != u32::MAX).then(|| self.surface(ray, prim, t, inner))
-    }
-
-    /// The lane width this accelerator was built with.
-    pub fn width(&self) -> Width {
-        match self.tree {
+impl Trees {
+    pub(super) fn width(&self) -> Width {
+        match self {
             Trees::Four(_) => Width::Four,
             #[cfg(target_arch = "x86_64")]
             Trees::Eight(_) => Width::Eight,
         }
+    }
+}
+
+/// The BVH's traversal of an accelerator's tree (the tree, primitives and instances
+/// `accel` holds).
+impl Accel {
+    /// The nearest hit (slot, t, instanced slot), or `u32::MAX` for none.
+    #[inline]
+    pub(super) fn bvh_nearest(&self, ray: &Ray, tmin: f32, mask: u8) -> (u32, f32, u32) {
+        self.nearest(ray, tmin, mask, &DEEP_CLOSEST)
+    }
+
+    /// Whether anything but object `ignore` blocks the shadow ray.
+    #[inline]
+    pub(super) fn bvh_occluded(&self, ray: &Ray, tmin: f32, ignore: u32) -> bool {
+        self.occluded_with(ray, tmin, ignore, &DEEP_ANY)
     }
 
     /// `closest` in the tree of whatever width, on the machine stack or on `deep` for very
@@ -607,18 +469,6 @@ impl Accel {
             deep.set(stack);
             found
         }
-    }
-
-    /// The ray in instance `index`'s space (same distances along it).
-    #[inline]
-    fn local_ray(&self, index: u32, ray: &Ray, tmax: f32) -> (&Instance, Ray) {
-        let inst = &self.instances[index as usize];
-        let local = Ray {
-            origin: inst.to_local.transform_point3a(ray.origin),
-            dir: inst.to_local.transform_vector3a(ray.dir),
-            tmax,
-        };
-        (inst, local)
     }
 
     /// The nearest hit on instance `index` before `tmax`: (the mesh's slot, t), t
@@ -781,20 +631,6 @@ impl Accel {
         }
     }
 
-    /// Is anything that casts shadows between the origin and `tmax`, other than object
-    /// `ignore` (the light the shadow ray aims at)?
-    #[inline]
-    pub fn occluded(&self, ray: &Ray, tmin: f32, ignore: u32) -> bool {
-        if self.prims.is_empty() {
-            return false;
-        }
-        #[cfg(feature = "embree")]
-        if let Some(embree) = &self.embree {
-            return embree.occluded(ray, tmin, ignore);
-        }
-        self.occluded_with(ray, tmin, ignore, &DEEP_ANY)
-    }
-
     /// `any_hit` in the tree of whatever width, on the machine stack or on `deep` for very
     /// deep trees.
     #[inline]
@@ -923,75 +759,6 @@ impl Accel {
             }
             sp -= 1;
             current = stack.take(sp);
-        }
-    }
-
-    fn surface(&self, ray: &Ray, prim: u32, t: f32, inner: u32) -> Hit {
-        if let Prim::Instance { index, .. } = self.prims[prim as usize] {
-            return self.instance_surface(ray, prim, index, t, inner);
-        }
-        let p = ray.origin + ray.dir * t;
-        let (ng, ns) = match self.prims[prim as usize] {
-            Prim::Triangle {
-                p0,
-                e1,
-                e2,
-                normals,
-            } => {
-                let ng = self.face_normals[prim as usize];
-                let ns = if normals == u32::MAX {
-                    ng
-                } else {
-                    // Barycentrics of the hit point.
-                    let d = p - p0;
-                    let (d00, d01, d11) = (e1.dot(e1), e1.dot(e2), e2.dot(e2));
-                    let (d20, d21) = (d.dot(e1), d.dot(e2));
-                    let denom = d00 * d11 - d01 * d01;
-                    let v = (d11 * d20 - d01 * d21) / denom;
-                    let w = (d00 * d21 - d01 * d20) / denom;
-                    let [n0, n1, n2] = self.normals[normals as usize];
-                    let n = (n0 * (1.0 - v - w) + n1 * v + n2 * w).normalize_or(ng);
-                    if n.dot(ng) < 0.0 {
-                        -n
-                    } else {
-                        n
-                    }
-                };
-                (ng, ns)
-            }
-            curved @ (Prim::Sphere { .. } | Prim::Cylinder { .. }) => {
-                let n = curved.curved_normal(p);
-                (n, n)
-            }
-            Prim::Instance { .. } => unreachable!("instances are placed above"),
-        };
-        Hit {
-            t,
-            p,
-            ng,
-            ns,
-            prim,
-            inner: u32::MAX,
-            object: self.objects[prim as usize],
-        }
-    }
-
-    /// The hit on an instance: the mesh's own surface at the same distance, placed.
-    #[inline(never)]
-    fn instance_surface(&self, ray: &Ray, prim: u32, index: u32, t: f32, inner: u32) -> Hit {
-        let (inst, local) = self.local_ray(index, ray, t);
-        let mesh = &self.meshes[inst.mesh as usize];
-        let h = mesh.surface(&local, inner, t, u32::MAX);
-        let ng = (inst.normal_to_world * h.ng).normalize_or(Vec3A::Z);
-        let ns = (inst.normal_to_world * h.ns).normalize_or(ng);
-        Hit {
-            t,
-            p: ray.origin + ray.dir * t,
-            ng,
-            ns: if ns.dot(ng) < 0.0 { -ns } else { ns },
-            prim,
-            inner,
-            object: self.objects[prim as usize],
         }
     }
 }
@@ -1221,6 +988,7 @@ fn node_of<L: Lanes>(children: &[(Aabb, u32)]) -> Node<L> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::geometry::Instance;
     use crate::sampling::{uniform_sphere, Rng};
 
     /// Both widths: where AVX2 is missing `Eight` builds the four-lane tree, so the

@@ -20,7 +20,9 @@
 //! - the object a shadow ray ignores (the light it aims at) to a context filter function,
 //!   set only on shadow rays that ignore one.
 
-use super::{Accel, Prim, Ray, Visibility};
+use super::accel::{Accel, Visibility};
+use super::{Prim, Ray};
+use crate::error::AccelError;
 use embree3::sys::*;
 use std::collections::HashMap;
 use std::ffi::c_void;
@@ -33,28 +35,28 @@ struct Device(RTCDevice);
 unsafe impl Send for Device {}
 unsafe impl Sync for Device {}
 
-fn device() -> Result<RTCDevice, String> {
-    static DEVICE: OnceLock<Result<Device, String>> = OnceLock::new();
+fn device() -> Result<RTCDevice, AccelError> {
+    static DEVICE: OnceLock<Result<Device, AccelError>> = OnceLock::new();
     let made = DEVICE.get_or_init(|| {
         // SAFETY: a null configuration string asks for the defaults.
         let device = unsafe { rtcNewDevice(std::ptr::null()) };
         if device.is_null() {
-            return Err(
+            return Err(AccelError::Embree(
                 "Embree could not create a device (rtcNewDevice failed: does this CPU \
                  have SSE2?)"
                     .into(),
-            );
+            ));
         }
         // SAFETY: `device` is a live device.
         let masks = unsafe { rtcGetDeviceProperty(device, RTCDeviceProperty::RAY_MASK_SUPPORTED) };
         let filters =
             unsafe { rtcGetDeviceProperty(device, RTCDeviceProperty::FILTER_FUNCTION_SUPPORTED) };
         if masks == 0 || filters == 0 {
-            return Err(
+            return Err(AccelError::Embree(
                 "this Embree library was built without ray masks or filter functions \
                  (EMBREE_RAY_MASK, EMBREE_FILTER_FUNCTION), which --accel embree needs"
                     .into(),
-            );
+            ));
         }
         Ok(Device(device))
     });
@@ -269,7 +271,7 @@ impl EmbreeScene {
     /// An Embree scene over `accel`'s primitives (and its meshes'), `visibility` each
     /// slot's ray kinds. In a shared mesh (`inner`) every primitive that some ray kind
     /// sees is seen by all: the placement's visibility decides (as in the BVH).
-    pub fn build(accel: &Accel, visibility: &[u8], inner: bool) -> Result<EmbreeScene, String> {
+    pub fn build(accel: &Accel, visibility: &[u8], inner: bool) -> Result<EmbreeScene, AccelError> {
         let meshes = accel
             .meshes()
             .iter()
@@ -369,7 +371,9 @@ impl EmbreeScene {
             rtcCommitScene(handle);
             let err = rtcGetDeviceError(device);
             if err != RTCError::NONE {
-                return Err(format!("Embree could not build the scene ({err:?})"));
+                return Err(AccelError::Embree(format!(
+                    "Embree could not build the scene ({err:?})"
+                )));
             }
             Ok(scene)
         }
@@ -383,16 +387,16 @@ impl EmbreeScene {
         object: u32,
         slots: &[u32],
         mesh: u32,
-    ) -> Result<(), String> {
+    ) -> Result<(), AccelError> {
         rtcSetGeometryMask(geom, mask);
         rtcCommitGeometry(geom);
         let id = rtcAttachGeometry(self.handle, geom);
         rtcReleaseGeometry(geom);
         if id as usize != self.geom_object.len() {
-            return Err(format!(
+            return Err(AccelError::Embree(format!(
                 "Embree numbered geometry {} as {id}",
                 self.geom_object.len()
-            ));
+            )));
         }
         self.geom_object.push(object);
         self.geom_first.push(self.geom_slots.len() as u32);
@@ -470,8 +474,11 @@ fn rtc_ray(ray: &Ray, tmin: f32, mask: u8) -> RTCRay {
 }
 
 /// Embree's last error, named with the call that failed.
-unsafe fn error(device: RTCDevice, call: &str) -> String {
-    format!("Embree: {call} failed ({:?})", rtcGetDeviceError(device))
+unsafe fn error(device: RTCDevice, call: &str) -> AccelError {
+    AccelError::Embree(format!(
+        "Embree: {call} failed ({:?})",
+        rtcGetDeviceError(device)
+    ))
 }
 
 /// A triangle geometry over the triangles at `slots`.
@@ -479,7 +486,7 @@ unsafe fn triangles(
     device: RTCDevice,
     prims: &[Prim],
     slots: &[u32],
-) -> Result<RTCGeometry, String> {
+) -> Result<RTCGeometry, AccelError> {
     let geom = rtcNewGeometry(device, RTCGeometryType::TRIANGLE);
     if geom.is_null() {
         return Err(error(device, "rtcNewGeometry(TRIANGLE)"));
@@ -511,7 +518,7 @@ unsafe fn triangles(
 }
 
 /// A user geometry over the spheres in `data`.
-unsafe fn spheres(device: RTCDevice, data: &Spheres) -> Result<RTCGeometry, String> {
+unsafe fn spheres(device: RTCDevice, data: &Spheres) -> Result<RTCGeometry, AccelError> {
     let geom = rtcNewGeometry(device, RTCGeometryType::USER);
     if geom.is_null() {
         return Err(error(device, "rtcNewGeometry(USER)"));

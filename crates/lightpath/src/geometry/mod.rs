@@ -2,6 +2,7 @@
 //! `intersect` / `occluded` seam; `obvhs` builds the BVH, `bvh` lays it out 4 or 8 wide
 //! (`lanes`: SSE2 or, where the CPU has AVX2, AVX).
 
+mod accel;
 pub mod attrs;
 mod bvh;
 #[cfg(feature = "embree")]
@@ -11,8 +12,8 @@ mod lanes;
 mod sah;
 pub mod shapes;
 
+pub use accel::{Accel, Visibility};
 pub use attrs::{SurfaceAttrs, SurfaceUv};
-pub use bvh::{Accel, Visibility};
 pub use instance::Instance;
 
 use glam::Vec3A;
@@ -37,13 +38,13 @@ impl Backend {
          crates/lightpath --features embree` (or `cargo run --release --features embree -- \
          render --accel embree ...`)";
 
-    pub fn parse(s: &str) -> Result<Backend, String> {
+    pub fn parse(s: &str) -> Result<Backend, crate::error::InvalidValue> {
         match s {
             "bvh" => Ok(Backend::Bvh),
             "embree" => Ok(Backend::Embree),
-            other => Err(format!(
+            other => Err(crate::error::InvalidValue(format!(
                 "unknown accelerator '{other}': expected bvh or embree"
-            )),
+            ))),
         }
     }
 

@@ -15,9 +15,9 @@ mod routing;
 mod shading;
 pub mod subsurface;
 
+use crate::film::mattes::{MatteTable, PixelMatte};
 use crate::film::{Film, Mattes, PixelWindow, SampleAccumulator};
 use crate::geometry::{Hit, Ray};
-use crate::post::cryptomatte::{MatteTable, PixelMatte};
 use crate::progress::{Progress, Silent};
 use crate::scene::Scene;
 use adaptive::{Moments, Pilot, Rule};

@@ -33,7 +33,7 @@ pub enum ExrCompression {
 }
 
 impl ExrCompression {
-    pub fn parse(s: &str) -> std::result::Result<ExrCompression, String> {
+    pub fn parse(s: &str) -> std::result::Result<ExrCompression, crate::error::InvalidValue> {
         Ok(match s {
             "none" => ExrCompression::None,
             "rle" => ExrCompression::Rle,
@@ -41,9 +41,9 @@ impl ExrCompression {
             "zip" => ExrCompression::Zip,
             "piz" => ExrCompression::Piz,
             other => {
-                return Err(format!(
+                return Err(crate::error::InvalidValue(format!(
                     "unknown compression '{other}': expected none, rle, zips, zip or piz"
-                ))
+                )))
             }
         })
     }
@@ -208,8 +208,12 @@ pub fn stage_film(
         attributes.push((naming::aov_attribute(&d.name), d.definition));
     }
     if let Some(m) = mattes {
-        attributes.extend(m.table.attributes());
-        channels.extend(m.table.channel_names().into_iter().zip(m.planes));
+        attributes.extend(crate::post::cryptomatte::table_attributes(&m.table));
+        channels.extend(
+            crate::post::cryptomatte::table_channel_names(&m.table)
+                .into_iter()
+                .zip(m.planes),
+        );
     }
     attributes.append(&mut header.text);
     header.text = attributes;

@@ -17,10 +17,12 @@
 //! does not see (`visible_camera = false`), has no id: where the camera sees geometry
 //! the coverages of `CryptoObject` sum to the pixel's alpha.
 //!
-//! The render loop keeps a [`PixelMatte`] per worker (fixed size: nothing is allocated
-//! per sample or pixel) and writes the ranked pairs when a pixel's samples are done.
+//! Counting coverage during the render is the film's (`film::mattes`); this module names,
+//! hashes and writes what it counted.
 
 use std::collections::BTreeMap;
+
+use crate::film::mattes::MatteTable;
 
 /// The layers Lightpath writes, in channel order.
 pub const OBJECT: &str = "CryptoObject";
@@ -30,9 +32,6 @@ pub const ASSET: &str = "CryptoAsset";
 pub const DEFAULT_RANKS: u32 = 6;
 /// Largest rank count `--cryptomatte-ranks` accepts.
 pub const MAX_RANKS: u32 = 16;
-/// Distinct ids a pixel can tell apart per layer; a pixel seeing more objects than this
-/// keeps the first ones met (far beyond the ranks written).
-pub const PIXEL_CAPACITY: usize = 32;
 
 /// The spec's hash attribute value and conversion.
 pub const HASH_NAME: &str = "MurmurHash3_32";
@@ -135,185 +134,55 @@ pub fn is_layer_channel(layer: &str, name: &str) -> bool {
         .is_some_and(|(n, c)| n.len() == 2 && n.bytes().all(|b| b.is_ascii_digit()) && c.len() == 1)
 }
 
-/// What a render's Cryptomatte layers know of the scene: per object, its id in each
-/// layer (`None`: it has no name there, e.g. no material), and each layer's names.
-#[derive(Clone, Debug)]
-pub struct MatteTable {
-    /// Layer names, in order (`CryptoObject`, `CryptoMaterial`, `CryptoAsset`).
-    pub layers: Vec<String>,
-    pub ranks: u32,
-    /// Per scene object, per layer: the id's float bits.
-    pub ids: Vec<Vec<Option<u32>>>,
-    /// Per layer: the names its manifest lists.
-    pub names: Vec<Vec<String>>,
-}
-
-impl MatteTable {
-    /// A table from each object's name in each layer (`None`: nothing in that layer).
-    /// Holdout objects should be given no names: they are not in the image.
-    pub fn new(layers: Vec<String>, ranks: u32, object_names: &[Vec<Option<String>>]) -> Self {
-        let mut names: Vec<Vec<String>> = vec![Vec::new(); layers.len()];
-        let ids = object_names
-            .iter()
-            .map(|per_layer| {
-                per_layer
-                    .iter()
-                    .enumerate()
-                    .map(|(l, n)| {
-                        let n = n.as_ref()?;
-                        if !names[l].contains(n) {
-                            names[l].push(n.clone());
-                        }
-                        Some(id_bits(n))
-                    })
-                    .collect()
-            })
-            .collect();
-        for n in &mut names {
-            n.sort();
-        }
-        MatteTable {
-            layers,
-            ranks: ranks.clamp(1, MAX_RANKS),
-            ids,
-            names,
-        }
+/// The table of a render's Cryptomatte layers from each object's name in each layer
+/// (`None`: nothing in that layer): the ids the film accumulates and the names the
+/// manifests list. Holdout objects should be given no names: they are not in the image.
+pub fn table(layers: Vec<String>, ranks: u32, object_names: &[Vec<Option<String>>]) -> MatteTable {
+    let mut names: Vec<Vec<String>> = vec![Vec::new(); layers.len()];
+    let ids = object_names
+        .iter()
+        .map(|per_layer| {
+            per_layer
+                .iter()
+                .enumerate()
+                .map(|(l, n)| {
+                    let n = n.as_ref()?;
+                    if !names[l].contains(n) {
+                        names[l].push(n.clone());
+                    }
+                    Some(id_bits(n))
+                })
+                .collect()
+        })
+        .collect();
+    for n in &mut names {
+        n.sort();
     }
-
-    /// Values per pixel: per layer, an (id, coverage) pair per rank, padded to whole
-    /// RGBA groups.
-    pub fn stride(&self) -> usize {
-        self.layers.len() * self.layer_stride()
-    }
-
-    fn layer_stride(&self) -> usize {
-        4 * self.ranks.div_ceil(2) as usize
-    }
-
-    /// Header attributes of every layer.
-    pub fn attributes(&self) -> Vec<(String, String)> {
-        self.layers
-            .iter()
-            .zip(&self.names)
-            .flat_map(|(l, n)| attributes(l, n))
-            .collect()
-    }
-
-    /// Channel names in the order of a pixel's values.
-    pub fn channel_names(&self) -> Vec<String> {
-        self.layers
-            .iter()
-            .flat_map(|l| channel_names(l, self.ranks))
-            .collect()
+    MatteTable {
+        layers,
+        ranks: ranks.clamp(1, MAX_RANKS),
+        ids,
+        names,
     }
 }
 
-/// One pixel's ids and their sample counts, per layer: fixed size, reused pixel after
-/// pixel by a render worker.
-pub struct PixelMatte {
-    entries: Vec<[(u32, u32); PIXEL_CAPACITY]>,
-    len: Vec<usize>,
-    samples: u32,
+/// Header attributes of every layer of a table.
+pub fn table_attributes(table: &MatteTable) -> Vec<(String, String)> {
+    table
+        .layers
+        .iter()
+        .zip(&table.names)
+        .flat_map(|(l, n)| attributes(l, n))
+        .collect()
 }
 
-impl PixelMatte {
-    pub fn new(layers: usize) -> PixelMatte {
-        PixelMatte {
-            entries: vec![[(0, 0); PIXEL_CAPACITY]; layers],
-            len: vec![0; layers],
-            samples: 0,
-        }
-    }
-
-    /// One camera sample whose first visible hit is `object` (`None`: nothing, a holdout
-    /// or the background).
-    #[inline]
-    pub fn add(&mut self, table: &MatteTable, object: Option<u32>) {
-        self.samples += 1;
-        let Some(ids) = object.and_then(|o| table.ids.get(o as usize)) else {
-            return;
-        };
-        for (l, id) in ids.iter().enumerate() {
-            let Some(id) = *id else { continue };
-            let entries = &mut self.entries[l][..];
-            let len = &mut self.len[l];
-            match entries[..*len].iter_mut().find(|e| e.0 == id) {
-                Some(e) => e.1 += 1,
-                None if *len < PIXEL_CAPACITY => {
-                    entries[*len] = (id, 1);
-                    *len += 1;
-                }
-                None => {}
-            }
-        }
-    }
-
-    /// Starts the pixel's record from ranked pairs [`PixelMatte::flush`] wrote after
-    /// `samples` samples (an adaptive render's pilot), so that the samples added next
-    /// count on top of them. Ids ranked below `table.ranks` were dropped by that flush.
-    pub fn resume(&mut self, table: &MatteTable, pairs: &[f32], samples: u32) {
-        self.samples = samples;
-        for (l, chunk) in pairs.chunks_exact(table.layer_stride()).enumerate() {
-            let mut len = 0;
-            for p in chunk
-                .chunks_exact(2)
-                .filter(|p| p[1] > 0.0)
-                .take(PIXEL_CAPACITY)
-            {
-                // A coverage is count / samples in f32: exact back to the count for any
-                // pilot under 2^22 samples.
-                let count = (p[1] * samples as f32).round() as u32;
-                self.entries[l][len] = (p[0].to_bits(), count);
-                len += 1;
-            }
-            self.len[l] = len;
-        }
-    }
-
-    /// Writes the pixel's ranked (id, coverage) pairs into `out` (`table.stride()`
-    /// values) and clears the record for the next pixel. Ranks by coverage, then by id
-    /// so that ties are ordered the same in every render.
-    pub fn flush(&mut self, table: &MatteTable, out: &mut [f32]) {
-        let stride = table.layer_stride();
-        let total = self.samples.max(1) as f32;
-        for (l, chunk) in out.chunks_exact_mut(stride).enumerate() {
-            let entries = &mut self.entries[l][..self.len[l]];
-            entries.sort_unstable_by(|a, b| b.1.cmp(&a.1).then(a.0.cmp(&b.0)));
-            chunk.fill(0.0);
-            for (r, e) in entries.iter().take(table.ranks as usize).enumerate() {
-                chunk[2 * r] = f32::from_bits(e.0);
-                chunk[2 * r + 1] = e.1 as f32 / total;
-            }
-            self.len[l] = 0;
-        }
-        self.samples = 0;
-    }
-}
-
-/// Merges one layer's ranked pairs of the same pixel from several renders of it (sample
-/// ranges), each weighted by its share of the samples: the same ids' coverages add, and
-/// the result is ranked again. `parts` gives each part's pairs and weight; `out` gets
-/// `ranks` pairs.
-pub fn merge_ranked(parts: &[(&[f32], f64)], out: &mut [f32]) {
-    let mut acc: Vec<(u32, f64)> = Vec::new();
-    for (pairs, w) in parts {
-        for p in pairs.chunks_exact(2) {
-            if p[1] <= 0.0 {
-                continue;
-            }
-            let id = p[0].to_bits();
-            match acc.iter_mut().find(|e| e.0 == id) {
-                Some(e) => e.1 += p[1] as f64 * w,
-                None => acc.push((id, p[1] as f64 * w)),
-            }
-        }
-    }
-    acc.sort_by(|a, b| b.1.total_cmp(&a.1).then(a.0.cmp(&b.0)));
-    out.fill(0.0);
-    for (slot, e) in out.chunks_exact_mut(2).zip(&acc) {
-        slot[0] = f32::from_bits(e.0);
-        slot[1] = e.1 as f32;
-    }
+/// A table's channel names, in the order of a pixel's values.
+pub fn table_channel_names(table: &MatteTable) -> Vec<String> {
+    table
+        .layers
+        .iter()
+        .flat_map(|l| channel_names(l, table.ranks))
+        .collect()
 }
 
 #[cfg(test)]
@@ -348,35 +217,22 @@ mod tests {
     }
 
     #[test]
-    fn a_pixel_ranks_ids_by_coverage_and_merges_weighted() {
-        let table = MatteTable::new(
+    fn a_table_hashes_each_name_and_lists_it_once_per_layer() {
+        let table = table(
             vec![OBJECT.into()],
-            4,
-            &[vec![Some("a".into())], vec![Some("b".into())], vec![None]],
+            40,
+            &[
+                vec![Some("b".into())],
+                vec![Some("a".into())],
+                vec![Some("b".into())],
+                vec![None],
+            ],
         );
-        let mut px = PixelMatte::new(1);
-        for o in [Some(1), Some(0), Some(1), Some(2), None] {
-            px.add(&table, o);
-        }
-        let mut out = vec![9.0; table.stride()];
-        px.flush(&table, &mut out);
-        assert_eq!(out[0].to_bits(), id_bits("b"));
-        assert_eq!(out[1], 0.4);
-        assert_eq!(out[2].to_bits(), id_bits("a"));
-        assert_eq!(out[3], 0.2);
-        assert_eq!(&out[4..], &[0.0; 4]);
-        // The record is clear for the next pixel.
-        px.add(&table, Some(0));
-        px.flush(&table, &mut out);
-        assert_eq!((out[0].to_bits(), out[1]), (id_bits("a"), 1.0));
-
-        let (a, b) = (id("a"), id("b"));
-        let mut merged = [0.0; 4];
-        merge_ranked(
-            &[(&[a, 1.0, 0.0, 0.0], 0.25), (&[b, 0.5, a, 0.5], 0.75)],
-            &mut merged,
-        );
-        assert_eq!(merged, [a, 0.625, b, 0.375]);
+        assert_eq!(table.ranks, MAX_RANKS);
+        assert_eq!(table.names, [["a", "b"]]);
+        assert_eq!(table.ids[0], [Some(id_bits("b"))]);
+        assert_eq!(table.ids[3], [None]);
+        assert_eq!(table_channel_names(&table).len(), table.stride());
     }
 
     #[test]

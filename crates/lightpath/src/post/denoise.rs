@@ -61,14 +61,14 @@ pub enum Quality {
 }
 
 impl Quality {
-    pub fn parse(s: &str) -> Result<Quality, String> {
+    pub fn parse(s: &str) -> Result<Quality, crate::error::InvalidValue> {
         match s {
             "high" => Ok(Quality::High),
             "balanced" => Ok(Quality::Balanced),
             "fast" => Ok(Quality::Fast),
-            other => Err(format!(
+            other => Err(crate::error::InvalidValue(format!(
                 "unknown quality '{other}': expected high, balanced or fast"
-            )),
+            ))),
         }
     }
     pub fn as_str(self) -> &'static str {

@@ -502,7 +502,7 @@ fn add_mattes(
             }
             let here = &mut acc[px * stride..(px + 1) * stride];
             // Coverage scaled by the part's weight; normalised once all are in.
-            cryptomatte::merge_ranked(&[(&*here, 1.0), (&pairs, weights[px])], &mut merged);
+            crate::film::mattes::merge_ranked(&[(&*here, 1.0), (&pairs, weights[px])], &mut merged);
             here.copy_from_slice(&merged);
         }
     }

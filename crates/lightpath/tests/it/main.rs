@@ -19,6 +19,7 @@ mod peer;
 mod render;
 mod sampling;
 mod settings;
+mod style;
 mod subsurface;
 mod view;
 mod workflow;

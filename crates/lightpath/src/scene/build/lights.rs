@@ -274,15 +274,15 @@ fn parallelogram(prims: &[Prim]) -> Option<[Vec3A; 3]> {
 }
 
 fn load_env(path: &Path, origin: &Origin) -> Result<EnvMap, SceneError> {
-    let cannot = |e: String| {
+    let cannot = |e: &dyn std::fmt::Display| {
         origin.error(format!(
             "cannot read environment map {}: {e}",
             path.display()
         ))
     };
     // Read as every input is (limits, identity), decoded by the one EXR reader.
-    let bytes = crate::limits::read_input(path).map_err(cannot)?;
-    let (w, h, texels) = crate::output::decode_exr_rgba(&bytes).map_err(cannot)?;
+    let bytes = crate::limits::read_input(path).map_err(|e| cannot(&e))?;
+    let (w, h, texels) = crate::output::decode_exr_rgba(&bytes).map_err(|e| cannot(&e))?;
     let texels = texels
         .into_iter()
         .map(|[r, g, b, _]| Vec3A::new(r, g, b))

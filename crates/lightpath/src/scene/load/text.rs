@@ -10,7 +10,7 @@ use std::path::Path;
 /// The bytes of `path`, a `what` file named at `at`; the error names the file and the
 /// OS reason. Only regular files are read (a device such as /dev/zero never ends).
 pub fn read(path: &Path, at: &Origin, what: &str) -> Result<Vec<u8>, SceneError> {
-    let cannot = |reason: String| {
+    let cannot = |reason: crate::error::ReadError| {
         at.error(format!(
             "cannot read {what} file {}: {reason}",
             path.display()

@@ -3,6 +3,15 @@
 //! plane per channel, so output hands the planes to the EXR writer without copying and
 //! the peak memory stays about one film.
 
+pub mod mattes;
+
+use crate::error::InvalidValue;
+
+/// Two films that cannot be merged: not of the same frame and AOVs.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, thiserror::Error)]
+#[error("films differ in size, window, AOV count or variance AOVs")]
+pub struct FilmMismatch;
+
 use glam::Vec3A;
 
 #[derive(Clone, Debug)]
@@ -32,7 +41,7 @@ pub struct Film {
 /// Cryptomatte output of a render: the table it was made with and its planes.
 #[derive(Clone, Debug)]
 pub struct Mattes {
-    pub table: crate::post::cryptomatte::MatteTable,
+    pub table: mattes::MatteTable,
     pub planes: Vec<Vec<f32>>,
 }
 
@@ -67,9 +76,13 @@ impl PixelWindow {
     }
 
     /// Parses `X0,Y0,X1,Y1`.
-    pub fn parse(s: &str) -> Result<PixelWindow, String> {
+    pub fn parse(s: &str) -> Result<PixelWindow, InvalidValue> {
         let v: Vec<&str> = s.split(',').map(str::trim).collect();
-        let bad = || format!("expected X0,Y0,X1,Y1 (pixels, end exclusive), got '{s}'");
+        let bad = || {
+            InvalidValue(format!(
+                "expected X0,Y0,X1,Y1 (pixels, end exclusive), got '{s}'"
+            ))
+        };
         if v.len() != 4 {
             return Err(bad());
         }
@@ -84,19 +97,19 @@ impl PixelWindow {
             y1: n[3],
         };
         if w.x1 <= w.x0 || w.y1 <= w.y0 {
-            return Err(format!(
+            return Err(InvalidValue(format!(
                 "crop {s} is empty: X1 must exceed X0 and Y1 must exceed Y0"
-            ));
+            )));
         }
         Ok(w)
     }
 
     /// Checks that the window lies in a `width × height` frame and is not empty.
-    pub fn check(&self, width: u32, height: u32) -> Result<(), String> {
+    pub fn check(&self, width: u32, height: u32) -> Result<(), InvalidValue> {
         if self.width() == 0 || self.height() == 0 || self.x1 > width || self.y1 > height {
-            return Err(format!(
+            return Err(InvalidValue(format!(
                 "crop {self} is not a non-empty window of the {width}x{height} frame"
-            ));
+            )));
         }
         Ok(())
     }
@@ -267,12 +280,12 @@ impl Film {
 
     /// Merges a film of the same frame rendered with other samples (a farm's sample
     /// ranges): the result is the film of all samples.
-    pub fn merge(&mut self, other: &Film) -> Result<(), String> {
+    pub fn merge(&mut self, other: &Film) -> Result<(), FilmMismatch> {
         if (self.width, self.height, self.aovs, &self.squared)
             != (other.width, other.height, other.aovs, &other.squared)
             || (self.window, self.frame) != (other.window, other.frame)
         {
-            return Err("films differ in size, window, AOV count or variance AOVs".into());
+            return Err(FilmMismatch);
         }
         for (a, b) in self.planes.iter_mut().zip(&other.planes) {
             for (x, y) in a.iter_mut().zip(b) {
@@ -299,7 +312,7 @@ impl Film {
                         a[k] = m.planes[p][i];
                         b[k] = o.planes[p][i];
                     }
-                    crate::post::cryptomatte::merge_ranked(&[(&a, wa), (&b, wb)], &mut out);
+                    mattes::merge_ranked(&[(&a, wa), (&b, wb)], &mut out);
                     for (k, p) in planes.clone().enumerate() {
                         m.planes[p][i] = out[k];
                     }
