@@ -25,6 +25,9 @@ pub struct Dielectric {
     /// GGX (αx along the tangent, αy); both 0 is smooth.
     pub alpha: Vec2,
     pub tint: Vec3A,
+    /// Turquin's compensation on (false only for a regularised glass: see
+    /// `Bsdf::regularized_glass`).
+    pub compensate: bool,
 }
 
 impl Dielectric {
@@ -39,6 +42,9 @@ impl Dielectric {
 
     /// Turquin's energy scale 1/E(μo) for rough glass seen from `wo`.
     fn compensation(&self, g: &Ggx, wo: Vec3A) -> f32 {
+        if !self.compensate {
+            return 1.0;
+        }
         // Anisotropic glass reads the isotropic table at its smaller alpha: it then
         // loses some energy, but never gains any.
         let a = albedo::min_alpha(g);

@@ -227,7 +227,17 @@ impl Bsdf {
     /// Glass (RS8 + TS8), smooth or rough.
     pub fn dielectric(eta: f32, alpha: f32, tint: Vec3A) -> Bsdf {
         let alpha = Vec2::splat(alpha);
-        Bsdf::layered(&[Dielectric { eta, alpha, tint }.into()], None, tint)
+        Bsdf::layered(
+            &[Dielectric {
+                eta,
+                alpha,
+                tint,
+                compensate: true,
+            }
+            .into()],
+            None,
+            tint,
+        )
     }
 
     /// A diffuse base (RD2) under a dielectric clear coat (RS4).
@@ -241,6 +251,20 @@ impl Bsdf {
             }),
             albedo,
         )
+    }
+
+    /// This Bsdf with its glass uncompensated, for path regularisation: a regularised
+    /// glass stands in for a smooth one so that caustics can be light-sampled, and the
+    /// multiple scattering of its borrowed roughness would add light along exactly the
+    /// paths it is there to tame (on the built-in `cornell`, isolated fireflies at its
+    /// defaults went from ~23 to 51 with it).
+    pub fn regularized_glass(mut self) -> Bsdf {
+        for lobe in &mut self.lobes[..self.n_lobes] {
+            if let Lobe::Dielectric(d) = lobe {
+                d.compensate = false;
+            }
+        }
+        self
     }
 
     /// The LPE events of the lobes, in the order `eval_lobe` and `BsdfSample::lobe` use.

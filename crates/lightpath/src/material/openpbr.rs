@@ -271,61 +271,82 @@ impl Bsdf {
                 p.transmission_color
             };
             b.push(Dielectric {
+                compensate: true,
                 eta,
                 alpha,
                 tint: tint * (dielectric * transmission),
             });
         }
         if set.metal {
-            let f0 = p.base_color * base_w;
-            b.push(Conductor {
-                f0,
-                f82_tint: p.specular_color,
-                weight: p.specular_weight * metalness * (1.0 - film),
-                alpha,
-                lobe: 2,
-            });
-            if set.film {
-                b.push(Iridescence::on_metal(
-                    f0,
-                    p.specular_color,
-                    p.thin_film_ior,
-                    thickness,
-                    p.specular_weight * metalness * film,
-                    alpha,
-                ));
-            }
+            push_metal(&mut b, p, set, metalness, film, thickness, alpha);
         }
-        if set.coat {
-            let below = b.len();
-            let coat = Coat {
-                eta: p.coat_ior.max(1.0),
-                alpha: roughness_to_alpha(p.coat_roughness),
-                weight: p.coat_weight.clamp(0.0, 1.0),
-            };
-            let base_albedo = crate::light::luminance(p.base_color * base_w);
-            b.push(coat);
-            b.layer(
-                Layer::coat(coat, p.coat_color, p.coat_darkening, base_albedo),
-                below,
-            );
-        }
-        if set.fuzz {
-            let below = b.len();
-            let fuzz = Fuzz {
-                color: p.fuzz_color,
-                weight: p.fuzz_weight.clamp(0.0, 1.0),
-                roughness: p.fuzz_roughness.clamp(0.0, 1.0),
-            };
-            b.push(fuzz);
-            b.layer(Layer::Fuzz(fuzz), below);
-        }
+        push_layers(&mut b, p, set);
         // The `U2` albedo: the colours of the lobes by their weights.
         let albedo = base_w
             * (metalness * p.base_color
                 + opaque * ((1.0 - sss) * p.base_color + sss * p.subsurface_color))
             + dielectric * transmission * p.transmission_color;
         Bsdf::from_builder(b, albedo)
+    }
+}
+
+/// The metal (`RS2`) and, with a thin film, its filmed copy (`RS5`); `metalness` is the
+/// metal's share of the base.
+fn push_metal(
+    b: &mut BsdfBuilder,
+    p: &OpenPbr,
+    set: &LobeSet,
+    metalness: f32,
+    film: f32,
+    thickness: f32,
+    alpha: glam::Vec2,
+) {
+    let f0 = p.base_color * p.base_weight.clamp(0.0, 1.0);
+    b.push(Conductor {
+        f0,
+        f82_tint: p.specular_color,
+        weight: p.specular_weight * metalness * (1.0 - film),
+        alpha,
+        lobe: 2,
+    });
+    if set.film {
+        b.push(Iridescence::on_metal(
+            f0,
+            p.specular_color,
+            p.thin_film_ior,
+            thickness,
+            p.specular_weight * metalness * film,
+            alpha,
+        ));
+    }
+}
+
+/// The coat and the fuzz over everything pushed so far.
+fn push_layers(b: &mut BsdfBuilder, p: &OpenPbr, set: &LobeSet) {
+    let base_w = p.base_weight.clamp(0.0, 1.0);
+    if set.coat {
+        let below = b.len();
+        let coat = Coat {
+            eta: p.coat_ior.max(1.0),
+            alpha: roughness_to_alpha(p.coat_roughness),
+            weight: p.coat_weight.clamp(0.0, 1.0),
+        };
+        let base_albedo = crate::light::luminance(p.base_color * base_w);
+        b.push(coat);
+        b.layer(
+            Layer::coat(coat, p.coat_color, p.coat_darkening, base_albedo),
+            below,
+        );
+    }
+    if set.fuzz {
+        let below = b.len();
+        let fuzz = Fuzz {
+            color: p.fuzz_color,
+            weight: p.fuzz_weight.clamp(0.0, 1.0),
+            roughness: p.fuzz_roughness.clamp(0.0, 1.0),
+        };
+        b.push(fuzz);
+        b.layer(Layer::Fuzz(fuzz), below);
     }
 }
 

@@ -54,6 +54,7 @@ impl Bsdf {
         if p.glass {
             return Bsdf::layered(
                 &[Dielectric {
+                    compensate: true,
                     eta: p.ior,
                     alpha: glam::Vec2::splat(p.alpha),
                     tint: base,

@@ -189,6 +189,7 @@ fn rough_lobe_cases() -> Vec<(String, Lobe, Vec<Vec3A>)> {
         cases.push((
             format!("dielectric alpha {alpha}"),
             Dielectric {
+                compensate: true,
                 eta: 1.5,
                 alpha,
                 tint: Vec3A::ONE,
@@ -226,6 +227,7 @@ fn rough_lobe_cases() -> Vec<(String, Lobe, Vec<Vec3A>)> {
         cases.push((
             format!("dielectric alpha {alpha}"),
             Dielectric {
+                compensate: true,
                 eta: 1.5,
                 alpha: Vec2::splat(alpha),
                 tint: Vec3A::ONE,
@@ -250,6 +252,7 @@ fn rough_glass_inside_cases() -> Vec<(String, Lobe, Vec<Vec3A>)> {
         (
             format!("dielectric alpha {alpha}, inside"),
             Dielectric {
+                compensate: true,
                 eta: 1.5,
                 alpha,
                 tint: Vec3A::ONE,
@@ -652,6 +655,7 @@ fn smooth_lobes_reflect_their_fresnel_and_glass_conserves_energy() {
     // Reflection + transmission · η² = 1 for clear glass, from either side (the η²
     // undoes the 1/η² radiance compression of transmission).
     let glass = Lobe::from(Dielectric {
+        compensate: true,
         eta: 1.5,
         alpha: Vec2::splat(0.0),
         tint: Vec3A::ONE,
@@ -1010,6 +1014,7 @@ fn white_furnace_rough_glass_keeps_its_energy_from_both_sides() {
             // energy, and may still lose some.
             let lo = if alpha.x == alpha.y { FURNACE.0 } else { 0.0 };
             let lobe = Lobe::from(Dielectric {
+                compensate: true,
                 eta: 1.5,
                 alpha,
                 tint: Vec3A::ONE,
@@ -1126,6 +1131,7 @@ fn passive_lobes_never_create_energy() {
             }
             .into(),
             _ => Dielectric {
+                compensate: true,
                 eta: 1.0 + 2.0 * r(),
                 alpha,
                 tint: colour(&mut r),

@@ -12,10 +12,6 @@ const ALLOWED: &[(&str, &str)] = &[
     // The closest-hit traversal: one body on purpose, inlined into each lane width's
     // `#[target_feature]` entry point; split, it was slower (its doc comment says why).
     ("crates/lightpath/src/geometry/bvh.rs", "closest"),
-    // Being rewritten in issue 26 (materials and the glTF loader are someone else's work
-    // in progress; split them there).
-    ("crates/lightpath/src/material/openpbr.rs", "openpbr"),
-    ("crates/lightpath/src/scene/load/gltf.rs", "extensions"),
 ];
 
 /// Every function in `text` (rustfmt's layout: a body closes with `}` at the indentation

@@ -75,7 +75,7 @@ fn regularized(model: &ShadeModel, roughness: f32) -> Option<Bsdf> {
     if rough == *p {
         return None;
     }
-    let bsdf = Bsdf::openpbr(&rough, &model.lobes);
+    let bsdf = Bsdf::openpbr(&rough, &model.lobes).regularized_glass();
     let before = Bsdf::openpbr(p, &model.lobes);
     let same_events = bsdf.lobes().len() == before.lobes().len()
         && bsdf

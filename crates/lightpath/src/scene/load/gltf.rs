@@ -81,6 +81,160 @@ pub fn load_scene(path: &Path, at: &Origin) -> Result<SceneDesc, SceneError> {
     })
 }
 
+/// Material extensions' numbers: (extension, glTF key, OpenPBR input, default).
+const NUMBERS: &[(&str, &str, &str, f32)] = &[
+    (
+        "KHR_materials_clearcoat",
+        "clearcoatFactor",
+        "coat_weight",
+        0.0,
+    ),
+    (
+        "KHR_materials_clearcoat",
+        "clearcoatRoughnessFactor",
+        "coat_roughness",
+        0.0,
+    ),
+    (
+        "KHR_materials_sheen",
+        "sheenRoughnessFactor",
+        "fuzz_roughness",
+        0.0,
+    ),
+    // KHR's specular factor is Blender's "Specular IOR Level" × 2: OpenPBR's weight.
+    (
+        "KHR_materials_specular",
+        "specularFactor",
+        "specular_weight",
+        1.0,
+    ),
+    (
+        "KHR_materials_anisotropy",
+        "anisotropyStrength",
+        "specular_roughness_anisotropy",
+        0.0,
+    ),
+    (
+        "KHR_materials_iridescence",
+        "iridescenceFactor",
+        "thin_film_weight",
+        0.0,
+    ),
+    (
+        "KHR_materials_iridescence",
+        "iridescenceIor",
+        "thin_film_ior",
+        1.3,
+    ),
+    (
+        "KHR_materials_diffuse_transmission",
+        "diffuseTransmissionFactor",
+        "subsurface_weight",
+        0.0,
+    ),
+];
+/// Material extensions' colours: (extension, glTF key, OpenPBR input, default).
+const COLORS: &[(&str, &str, &str, [f32; 3])] = &[
+    (
+        "KHR_materials_sheen",
+        "sheenColorFactor",
+        "fuzz_color",
+        [0.0; 3],
+    ),
+    (
+        "KHR_materials_specular",
+        "specularColorFactor",
+        "specular_color",
+        [1.0; 3],
+    ),
+    (
+        "KHR_materials_diffuse_transmission",
+        "diffuseTransmissionColorFactor",
+        "subsurface_color",
+        [1.0; 3],
+    ),
+];
+/// Material extensions' textures: (extension, glTF key, OpenPBR input, channel, sRGB).
+const TEXTURES: &[(&str, &str, &str, u8, bool)] = &[
+    (
+        "KHR_materials_clearcoat",
+        "clearcoatTexture",
+        "coat_weight",
+        0,
+        false,
+    ),
+    (
+        "KHR_materials_clearcoat",
+        "clearcoatRoughnessTexture",
+        "coat_roughness",
+        1,
+        false,
+    ),
+    (
+        "KHR_materials_sheen",
+        "sheenColorTexture",
+        "fuzz_color",
+        0,
+        true,
+    ),
+    (
+        "KHR_materials_sheen",
+        "sheenRoughnessTexture",
+        "fuzz_roughness",
+        3,
+        false,
+    ),
+    (
+        "KHR_materials_specular",
+        "specularTexture",
+        "specular_weight",
+        3,
+        false,
+    ),
+    (
+        "KHR_materials_specular",
+        "specularColorTexture",
+        "specular_color",
+        0,
+        true,
+    ),
+    (
+        "KHR_materials_anisotropy",
+        "anisotropyTexture",
+        "specular_roughness_anisotropy",
+        2,
+        false,
+    ),
+    (
+        "KHR_materials_iridescence",
+        "iridescenceTexture",
+        "thin_film_weight",
+        0,
+        false,
+    ),
+    (
+        "KHR_materials_iridescence",
+        "iridescenceThicknessTexture",
+        "thin_film_thickness",
+        1,
+        false,
+    ),
+    (
+        "KHR_materials_diffuse_transmission",
+        "diffuseTransmissionTexture",
+        "subsurface_weight",
+        3,
+        false,
+    ),
+    (
+        "KHR_materials_diffuse_transmission",
+        "diffuseTransmissionColorTexture",
+        "subsurface_color",
+        0,
+        true,
+    ),
+];
+
 /// Decoded file and what the walk collects.
 struct Loader {
     file: String,
@@ -607,159 +761,6 @@ impl Loader {
         p: &mut OpenPbr,
         textures: &mut TexturesDesc,
     ) -> Result<(), SceneError> {
-        // (extension, glTF key, OpenPBR input, default)
-        const NUMBERS: &[(&str, &str, &str, f32)] = &[
-            (
-                "KHR_materials_clearcoat",
-                "clearcoatFactor",
-                "coat_weight",
-                0.0,
-            ),
-            (
-                "KHR_materials_clearcoat",
-                "clearcoatRoughnessFactor",
-                "coat_roughness",
-                0.0,
-            ),
-            (
-                "KHR_materials_sheen",
-                "sheenRoughnessFactor",
-                "fuzz_roughness",
-                0.0,
-            ),
-            // KHR's specular factor is Blender's "Specular IOR Level" × 2: OpenPBR's weight.
-            (
-                "KHR_materials_specular",
-                "specularFactor",
-                "specular_weight",
-                1.0,
-            ),
-            (
-                "KHR_materials_anisotropy",
-                "anisotropyStrength",
-                "specular_roughness_anisotropy",
-                0.0,
-            ),
-            (
-                "KHR_materials_iridescence",
-                "iridescenceFactor",
-                "thin_film_weight",
-                0.0,
-            ),
-            (
-                "KHR_materials_iridescence",
-                "iridescenceIor",
-                "thin_film_ior",
-                1.3,
-            ),
-            (
-                "KHR_materials_diffuse_transmission",
-                "diffuseTransmissionFactor",
-                "subsurface_weight",
-                0.0,
-            ),
-        ];
-        // (extension, glTF key, OpenPBR input, default)
-        const COLORS: &[(&str, &str, &str, [f32; 3])] = &[
-            (
-                "KHR_materials_sheen",
-                "sheenColorFactor",
-                "fuzz_color",
-                [0.0; 3],
-            ),
-            (
-                "KHR_materials_specular",
-                "specularColorFactor",
-                "specular_color",
-                [1.0; 3],
-            ),
-            (
-                "KHR_materials_diffuse_transmission",
-                "diffuseTransmissionColorFactor",
-                "subsurface_color",
-                [1.0; 3],
-            ),
-        ];
-        // (extension, glTF key, OpenPBR input, channel, sRGB colour)
-        const TEXTURES: &[(&str, &str, &str, u8, bool)] = &[
-            (
-                "KHR_materials_clearcoat",
-                "clearcoatTexture",
-                "coat_weight",
-                0,
-                false,
-            ),
-            (
-                "KHR_materials_clearcoat",
-                "clearcoatRoughnessTexture",
-                "coat_roughness",
-                1,
-                false,
-            ),
-            (
-                "KHR_materials_sheen",
-                "sheenColorTexture",
-                "fuzz_color",
-                0,
-                true,
-            ),
-            (
-                "KHR_materials_sheen",
-                "sheenRoughnessTexture",
-                "fuzz_roughness",
-                3,
-                false,
-            ),
-            (
-                "KHR_materials_specular",
-                "specularTexture",
-                "specular_weight",
-                3,
-                false,
-            ),
-            (
-                "KHR_materials_specular",
-                "specularColorTexture",
-                "specular_color",
-                0,
-                true,
-            ),
-            (
-                "KHR_materials_anisotropy",
-                "anisotropyTexture",
-                "specular_roughness_anisotropy",
-                2,
-                false,
-            ),
-            (
-                "KHR_materials_iridescence",
-                "iridescenceTexture",
-                "thin_film_weight",
-                0,
-                false,
-            ),
-            (
-                "KHR_materials_iridescence",
-                "iridescenceThicknessTexture",
-                "thin_film_thickness",
-                1,
-                false,
-            ),
-            (
-                "KHR_materials_diffuse_transmission",
-                "diffuseTransmissionTexture",
-                "subsurface_weight",
-                3,
-                false,
-            ),
-            (
-                "KHR_materials_diffuse_transmission",
-                "diffuseTransmissionColorTexture",
-                "subsurface_color",
-                0,
-                true,
-            ),
-        ];
         let value = |ext: &str, key: &str| m.extension_value(ext).and_then(|e| e.get(key));
         let at = |ext: &str, key: &str| format!("{pointer}/extensions/{ext}/{key}");
         for &(ext, key, input, default) in NUMBERS {
@@ -822,7 +823,34 @@ impl Loader {
             // Without KHR_materials_volume the surface is a thin sheet: translucency.
             p.geometry_thin_walled = m.extension_value("KHR_materials_volume").is_none();
         }
-        if let Some(v) = m.extension_value("KHR_materials_volume") {
+        self.volume(m, pointer, p);
+        if let Some(rotation) =
+            value("KHR_materials_anisotropy", "anisotropyRotation").and_then(|v| v.as_f64())
+        {
+            if rotation != 0.0 {
+                self.warn(
+                    &at("KHR_materials_anisotropy", "anisotropyRotation"),
+                    "the rotation of anisotropy is not read: highlights stretch along the tangent",
+                );
+            }
+        }
+        for &(ext, key, input, channel, srgb) in TEXTURES {
+            let Some(info) = value(ext, key) else {
+                continue;
+            };
+            let t = self.texture_info(info, &at(ext, key))?;
+            textures.inputs.push(input_texture(input, t, channel, srgb));
+        }
+        Ok(())
+    }
+
+    /// KHR_materials_volume: the interior's absorption, kept for the participating media
+    /// that render it (and the subsurface radius of a volumetric diffuse transmission).
+    fn volume(&mut self, m: &gltf::Material, pointer: &str, p: &mut OpenPbr) {
+        let Some(v) = m.extension_value("KHR_materials_volume") else {
+            return;
+        };
+        {
             let distance = v.get("attenuationDistance").and_then(|d| d.as_f64());
             if let Some(d) = distance.filter(|d| d.is_finite() && *d > 0.0) {
                 let color = v
@@ -849,24 +877,6 @@ impl Loader {
                 }
             }
         }
-        if let Some(rotation) =
-            value("KHR_materials_anisotropy", "anisotropyRotation").and_then(|v| v.as_f64())
-        {
-            if rotation != 0.0 {
-                self.warn(
-                    &at("KHR_materials_anisotropy", "anisotropyRotation"),
-                    "the rotation of anisotropy is not read: highlights stretch along the tangent",
-                );
-            }
-        }
-        for &(ext, key, input, channel, srgb) in TEXTURES {
-            let Some(info) = value(ext, key) else {
-                continue;
-            };
-            let t = self.texture_info(info, &at(ext, key))?;
-            textures.inputs.push(input_texture(input, t, channel, srgb));
-        }
-        Ok(())
     }
 
     /// A texture a material extension names by its JSON `textureInfo`.
