@@ -46,6 +46,9 @@ impl AovSpec {
         if let Some((name, def)) = STANDARD_DATA.iter().find(|(n, _)| *n == word) {
             return Ok(AovSpec::new(*name, *def));
         }
+        if let Some((name, _)) = STANDARD_LOBES.iter().find(|(n, _)| *n == word) {
+            return Ok(AovSpec::new(*name, format!("lpe:{name}")));
+        }
         match lpe::standard_name(word) {
             Some((name, _)) => Ok(AovSpec::new(name, format!("lpe:{name}"))),
             None => Err(crate::error::InvalidValue(format!(
@@ -197,6 +200,8 @@ mod tests {
             resolve_definition("lpe:fuzz")
         );
         assert_eq!(resolve_definition("lpe:coat"), "C<RS4>[DS]*[<L.>O]");
+        let coat = AovSpec::parse("coat").unwrap();
+        assert_eq!((coat.name.as_str(), coat.definition.as_str()), ("coat", "lpe:coat"));
         assert_eq!(resolve_definition("normal"), "normal");
         let mut compiler = lpe::Compiler::new().profile(crate::events::profile());
         for (name, _) in STANDARD_DATA {
