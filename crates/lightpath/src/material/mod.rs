@@ -324,8 +324,12 @@ impl Bsdf {
     /// (selection included). Delta lobes evaluate to zero.
     pub fn eval_lobe(&self, k: usize, sh: &Shading, wi: Vec3A) -> (Vec3A, f32) {
         let wo = sh.wo;
-        let sel = self.selection(wo);
         let (l, sub) = self.tag_lobe[k];
+        // One lobe (no layer without a second): chosen always, attenuated by nothing.
+        if self.n_lobes == 1 {
+            return self.lobes[0].eval(sub as usize, wo, wi, 1.0);
+        }
+        let sel = self.selection(wo);
         let l = l as usize;
         let (f, pdf) = self.lobes[l].eval(sub as usize, wo, wi, sel[l]);
         (f * self.attenuation(l, wo, wi), pdf)
@@ -334,10 +338,10 @@ impl Bsdf {
     /// Samples a lobe and a direction: `u_lobe` chooses the lobe, `u` the direction.
     pub fn sample(&self, sh: &Shading, u_lobe: f32, u: Vec2) -> Option<BsdfSample> {
         let wo = sh.wo;
-        let sel = self.selection(wo);
-        let (l, u_rest) = if self.n_lobes == 1 {
-            (0, u_lobe)
+        let (l, u_rest, sel_l) = if self.n_lobes == 1 {
+            (0, u_lobe, 1.0)
         } else {
+            let sel = self.selection(wo);
             let mut lo = 0.0;
             let mut l = self.n_lobes - 1;
             for (k, &pk) in sel[..self.n_lobes - 1].iter().enumerate() {
@@ -347,10 +351,11 @@ impl Bsdf {
                 }
                 lo += pk;
             }
-            (l, ((u_lobe - lo) / sel[l]).min(1.0 - f32::EPSILON / 2.0))
+            let u_rest = ((u_lobe - lo) / sel[l]).min(1.0 - f32::EPSILON / 2.0);
+            (l, u_rest, sel[l])
         };
         let ctx = SampleCtx {
-            sel: sel[l],
+            sel: sel_l,
             u_lobe: u_rest,
             alone: self.n_lobes == 1,
         };
