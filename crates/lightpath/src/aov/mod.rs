@@ -201,7 +201,10 @@ mod tests {
         );
         assert_eq!(resolve_definition("lpe:coat"), "C<RS4>[DS]*[<L.>O]");
         let coat = AovSpec::parse("coat").unwrap();
-        assert_eq!((coat.name.as_str(), coat.definition.as_str()), ("coat", "lpe:coat"));
+        assert_eq!(
+            (coat.name.as_str(), coat.definition.as_str()),
+            ("coat", "lpe:coat")
+        );
         assert_eq!(resolve_definition("normal"), "normal");
         let mut compiler = lpe::Compiler::new().profile(crate::events::profile());
         for (name, _) in STANDARD_DATA {

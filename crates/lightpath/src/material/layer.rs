@@ -20,7 +20,9 @@ pub enum Layer {
     Coat {
         coat: Coat,
         color: Vec3A,
-        /// The factor of coat darkening, constant over directions.
+        /// Constant over directions: the coat's darkening, and 1 / (1 − w·F̄) so that a
+        /// white diffuse base gets back what the coat does not reflect (the reciprocal
+        /// Fresnel transmission in and out alone left 0.915 of the light in the furnace).
         darken: f32,
     },
     /// A fuzz (sheen) layer: what its fibres scatter towards `wo` (their directional
@@ -35,7 +37,8 @@ impl Layer {
         Layer::Coat {
             coat,
             color,
-            darken: darken(coat.eta, base_albedo, darkening * coat.weight),
+            darken: darken(coat.eta, base_albedo, darkening * coat.weight)
+                / (1.0 - coat.weight * super::albedo::dielectric_f_avg(coat.eta)).max(1e-3),
         }
     }
 }

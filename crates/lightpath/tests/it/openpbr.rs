@@ -159,6 +159,28 @@ fn fuzz_over_a_white_base_keeps_the_dome_white() {
 }
 
 #[test]
+fn a_coat_over_a_white_base_keeps_the_dome_white() {
+    // Smooth: exact in expectation (the coat reflects F(μo), the base gets the rest).
+    let (mean, se) = furnace(
+        "base_color = [1, 1, 1]\nspecular_weight = 0\ncoat_weight = 1",
+        16,
+    );
+    assert!(
+        (mean - 1.0).abs() < 5.0 * se + 1e-3,
+        "smooth coat: mean {mean} ± {se}"
+    );
+    // Rough: issue 26's band, [0.98, 1.01], beyond the noise.
+    let (mean, se) = furnace(
+        "base_color = [1, 1, 1]\nspecular_weight = 0\ncoat_weight = 1\ncoat_roughness = 0.4",
+        16,
+    );
+    assert!(
+        mean > 0.98 - 5.0 * se && mean < 1.01 + 5.0 * se,
+        "rough coat: mean {mean} ± {se}"
+    );
+}
+
+#[test]
 fn an_emissive_openpbr_glows() {
     let text = FURNACE.replace("PARAMS", "emission_luminance = 2\nemission_color = [1, 0.5, 0]\nbase_color = [0, 0, 0]\nspecular_weight = 0")
         .replace("radiance = [1, 1, 1]", "radiance = [0, 0, 0]");

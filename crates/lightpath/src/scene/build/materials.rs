@@ -264,6 +264,7 @@ pub fn preset(m: &MaterialDesc, eta: f32) -> (OpenPbr, &'static [&'static str]) 
             p.coat_weight = *clearcoat;
             p.coat_roughness = *clearcoat_roughness;
             p.coat_ior = 1.5;
+            p.coat_darkening = 0.0;
             &["base_color", "transmission_color"]
         }
         MaterialKind::OpenPbr(params) => {

@@ -704,8 +704,10 @@ impl Loader {
             // glTF's transmission is tinted by the base colour.
             transmission_weight: m.transmission().map_or(0.0, |t| t.transmission_factor()),
             transmission_color: base_color,
-            // KHR_materials_clearcoat's coat is of index 1.5.
+            // KHR_materials_clearcoat's coat is of index 1.5, and does not darken the base
+            // (Blender's Principled coat, which artists check against, does not).
             coat_ior: 1.5,
+            coat_darkening: 0.0,
             ..OpenPbr::default()
         };
         let mut textures = TexturesDesc::default();
