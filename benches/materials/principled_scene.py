@@ -114,6 +114,32 @@ light("key", "POINT", 300.0, (-2.0, -3.0, 3.5), color=(0.85, 0.9, 1.0))
 glb = os.path.join(out_dir, "principled.glb")
 bpy.ops.export_scene.gltf(filepath=glb, export_format="GLB", export_cameras=True, export_lights=True,
                           export_yup=True, export_tangents=True)
+
+
+def add_iridescence(path, material, thickness_nm, ior):
+    """Blender 5.0.1's exporter drops the Principled thin film; write KHR_materials_iridescence
+    into the .glb's JSON chunk by hand (without a texture the thickness is the maximum)."""
+    import json
+    import struct
+    with open(path, "rb") as f:
+        d = f.read()
+    n = struct.unpack("<I", d[12:16])[0]
+    j = json.loads(d[20:20 + n])
+    rest = d[20 + n:]
+    for m in j["materials"]:
+        if m["name"] == material:
+            m.setdefault("extensions", {})["KHR_materials_iridescence"] = {
+                "iridescenceFactor": 1.0, "iridescenceIor": ior,
+                "iridescenceThicknessMinimum": thickness_nm, "iridescenceThicknessMaximum": thickness_nm}
+    j.setdefault("extensionsUsed", []).append("KHR_materials_iridescence")
+    js = json.dumps(j, separators=(",", ":")).encode()
+    js += b" " * (-len(js) % 4)
+    body = struct.pack("<I", len(js)) + b"JSON" + js + rest
+    with open(path, "wb") as f:
+        f.write(d[:8] + struct.pack("<I", 12 + len(body)) + body)
+
+
+add_iridescence(glb, "iridescent_mat", 400.0, 1.33)
 print("wrote", glb)
 
 py = sys.executable
@@ -124,4 +150,5 @@ subprocess.run([py, os.path.join(here, "cycles_file.py"), glb, "-o", cy, "--spp"
                 "--thin-film", "iridescent_mat=400:1.33"], check=True)
 subprocess.run([binary, "render", glb, "-o", lp, "--spp", str(spp), "--resolution", f"{W}x{H}",
                 "--max-depth", "17", "--aovs", "none"], check=True)
-subprocess.run([py, os.path.join(here, "compare.py"), cy, lp, *[n for n, _ in MATERIALS]], check=True)
+subprocess.run([py, os.path.join(here, "compare.py"), cy, lp, *[n for n, _ in MATERIALS],
+                "--markdown", os.path.join(out_dir, "table.md")], check=True)
