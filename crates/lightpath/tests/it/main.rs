@@ -6,6 +6,7 @@ mod common;
 
 mod cli;
 mod denoise;
+mod docs;
 mod embree;
 mod farm;
 mod gltf;
