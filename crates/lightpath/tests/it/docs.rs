@@ -32,10 +32,14 @@ fn strip_comment(line: &str) -> &str {
     }
 }
 
-fn scale(value: &str, by: u32) -> String {
+fn scale(value: &str, by: u32, min: u32) -> String {
     value
         .split([',', 'x'])
-        .map(|n| n.parse::<u32>().map(|n| (n / by).max(1).to_string()).unwrap_or(n.to_string()))
+        .map(|n| {
+            n.parse::<u32>()
+                .map(|n| (n / by).max(min).to_string())
+                .unwrap_or(n.to_string())
+        })
         .collect::<Vec<_>>()
         .join(if value.contains(',') { "," } else { "x" })
 }
@@ -58,12 +62,20 @@ fn shrink(line: &str) -> String {
         match (w, next) {
             ("--resolution", Some(v)) | ("--crop", Some(v)) => {
                 has_resolution |= w == "--resolution";
-                out.push(scale(v, 10));
+                // A crop's corners may be 0; a resolution may not.
+                out.push(scale(v, 10, has_resolution as u32));
                 i += 1;
             }
             ("--spp", Some(v)) | ("--first-sample", Some(v)) | ("--min-spp", Some(v)) => {
                 let n: u32 = v.parse().unwrap_or(16);
-                out.push(if w == "--first-sample" { n / 16 } else { (n / 16).max(1) }.to_string());
+                out.push(
+                    if w == "--first-sample" {
+                        n / 16
+                    } else {
+                        (n / 16).max(1)
+                    }
+                    .to_string(),
+                );
                 i += 1;
             }
             _ => {}
@@ -123,6 +135,7 @@ fn every_command_in_the_docs_runs() {
             for tree in ["scenes", "crates"] {
                 std::os::unix::fs::symlink(root.join(tree), dir.join(tree)).unwrap();
             }
+            let mut after_skip = None;
             for line in &block {
                 let line = strip_comment(line);
                 // The docs' own shell lines that make inputs (`sed … > x.toml`) run as well.
@@ -130,8 +143,10 @@ fn every_command_in_the_docs_runs() {
                 if !line.starts_with("lightpath ") && !makes_input {
                     continue;
                 }
-                if let Some(why) = skip_reason(line) {
+                // A skipped line's outputs are missing for the lines after it in its block.
+                if let Some(why) = skip_reason(line).or(after_skip) {
                     skipped.push(format!("{line}: {why}"));
+                    after_skip = Some("follows a skipped line in its block");
                     continue;
                 }
                 let cmd = shrink(line);
