@@ -12,8 +12,9 @@ use std::time::{Duration, Instant};
 pub trait Progress: Sync {
     /// Work is about to start: `total` units (rows × passes), `samples` camera samples.
     fn start(&self, total: u64, samples: u64);
-    /// `units` more units are done.
-    fn advance(&self, units: u64);
+    /// `units` more units are done, with `samples` camera samples really taken for them (an
+    /// adaptive render takes fewer than `start`'s count; resumed units took none this run).
+    fn advance(&self, units: u64, samples: u64);
     /// The render is over (also after an early stop).
     fn finish(&self);
     /// Rows `rows` of `film` hold their final sums (the render loop stores a band of rows
@@ -31,7 +32,7 @@ pub struct Silent;
 
 impl Progress for Silent {
     fn start(&self, _: u64, _: u64) {}
-    fn advance(&self, _: u64) {}
+    fn advance(&self, _: u64, _: u64) {}
     fn finish(&self) {}
 }
 
@@ -45,8 +46,10 @@ struct LinesState {
     started: Instant,
     last: Instant,
     total: u64,
-    samples: u64,
     done: u64,
+    /// Units and samples this run did itself (not those a resumed render already held).
+    done_now: u64,
+    taken: u64,
 }
 
 impl PeriodicLines {
@@ -58,28 +61,43 @@ impl PeriodicLines {
                 started: now,
                 last: now,
                 total: 0,
-                samples: 0,
                 done: 0,
+                done_now: 0,
+                taken: 0,
             }),
         }
     }
 }
 
-/// One progress line: `rendering 42.0 % 1.23 M samples/s, eta 0:00:12`.
-pub fn progress_line(done: u64, total: u64, samples: u64, elapsed: Duration) -> String {
-    let fraction = if total == 0 {
+/// Where a render is: `done` of `total` units, of which `done_now` this run did, taking
+/// `taken` camera samples in `elapsed`.
+#[derive(Clone, Copy, Debug)]
+pub struct Status {
+    pub done: u64,
+    pub total: u64,
+    pub done_now: u64,
+    pub taken: u64,
+    pub elapsed: Duration,
+}
+
+/// One progress line: `rendering 42.0 % 1.23 M samples/s, eta 0:00:12`. The rate counts the
+/// samples really taken (an adaptive render's cheap rows would otherwise count as full), and
+/// the ETA extrapolates this run's pace over the units left (resumed units took no time).
+pub fn progress_line(s: Status) -> String {
+    let fraction = if s.total == 0 {
         1.0
     } else {
-        done as f64 / total as f64
+        s.done as f64 / s.total as f64
     };
-    let secs = elapsed.as_secs_f64();
+    let secs = s.elapsed.as_secs_f64();
     let rate = if secs > 0.0 {
-        fraction * samples as f64 / secs
+        s.taken as f64 / secs
     } else {
         0.0
     };
-    let eta = if fraction > 0.0 {
-        secs * (1.0 - fraction) / fraction
+    let left = s.total.saturating_sub(s.done);
+    let eta = if s.done_now > 0 {
+        secs * left as f64 / s.done_now as f64
     } else {
         0.0
     };
@@ -94,33 +112,51 @@ pub fn progress_line(done: u64, total: u64, samples: u64, elapsed: Duration) -> 
     )
 }
 
+impl LinesState {
+    fn status(&self, now: Instant) -> Status {
+        Status {
+            done: self.done,
+            total: self.total,
+            done_now: self.done_now,
+            taken: self.taken,
+            elapsed: now - self.started,
+        }
+    }
+}
+
 impl Progress for PeriodicLines {
-    fn start(&self, total: u64, samples: u64) {
+    fn start(&self, total: u64, _samples: u64) {
         let mut s = self.state.lock().unwrap_or_else(|e| e.into_inner());
         let now = Instant::now();
         *s = LinesState {
             started: now,
             last: now,
             total,
-            samples,
             done: 0,
+            done_now: 0,
+            taken: 0,
         };
     }
 
-    fn advance(&self, units: u64) {
+    fn advance(&self, units: u64, samples: u64) {
         let mut s = self.state.lock().unwrap_or_else(|e| e.into_inner());
         s.done += units;
+        // Units that took no samples were resumed, not done by this run.
+        if samples > 0 {
+            s.done_now += units;
+        }
+        s.taken += samples;
         let now = Instant::now();
         if now.duration_since(s.last) >= self.every {
             s.last = now;
-            let line = progress_line(s.done, s.total, s.samples, now - s.started);
+            let line = progress_line(s.status(now));
             let _ = writeln!(std::io::stderr(), "{line}");
         }
     }
 
     fn finish(&self) {
         let s = self.state.lock().unwrap_or_else(|e| e.into_inner());
-        let line = progress_line(s.done, s.total, s.samples, s.started.elapsed());
+        let line = progress_line(s.status(Instant::now()));
         let _ = writeln!(std::io::stderr(), "{line}");
     }
 }
@@ -131,9 +167,57 @@ mod tests {
 
     #[test]
     fn a_line_has_percent_rate_and_eta() {
-        // Half of 2 M samples in 1 s: 1 M samples/s, 1 s to go.
-        let line = progress_line(50, 100, 2_000_000, Duration::from_secs(1));
+        // Half of 100 rows, 1 M samples taken in 1 s: 1 M samples/s, 1 s to go.
+        let line = progress_line(Status {
+            done: 50,
+            total: 100,
+            done_now: 50,
+            taken: 1_000_000,
+            elapsed: Duration::from_secs(1),
+        });
         assert_eq!(line, "rendering  50.0 % 1.00 M samples/s, eta 0:00:01");
-        assert!(progress_line(0, 0, 0, Duration::ZERO).contains("100.0 %"));
+        let none = Status {
+            done: 0,
+            total: 0,
+            done_now: 0,
+            taken: 0,
+            elapsed: Duration::ZERO,
+        };
+        assert!(progress_line(none).contains("100.0 %"));
+    }
+
+    #[test]
+    fn the_rate_counts_samples_taken_not_planned() {
+        // An adaptive render planned for 64 spp whose rows took 8 spp: the rate is the
+        // samples advance() was given, whatever start() planned.
+        let p = PeriodicLines::new(Duration::from_secs(3600));
+        p.start(10, 10 * 100 * 64);
+        for _ in 0..10 {
+            p.advance(1, 100 * 8);
+        }
+        let s = p.state.lock().unwrap();
+        assert_eq!(s.taken, 10 * 100 * 8);
+        let line = progress_line(Status {
+            elapsed: Duration::from_secs(1),
+            ..s.status(s.started)
+        });
+        assert!(line.contains(" 0.01 M samples/s"), "{line}");
+    }
+
+    #[test]
+    fn resumed_units_do_not_shorten_the_eta() {
+        // 40 of 100 rows resumed, 10 rendered in 1 s: 50 left at 10 rows/s is 5 s.
+        let p = PeriodicLines::new(Duration::from_secs(3600));
+        p.start(100, 0);
+        p.advance(40, 0);
+        for _ in 0..10 {
+            p.advance(1, 1000);
+        }
+        let s = p.state.lock().unwrap();
+        let line = progress_line(Status {
+            elapsed: Duration::from_secs(1),
+            ..s.status(s.started)
+        });
+        assert!(line.ends_with("eta 0:00:05"), "{line}");
     }
 }

@@ -272,7 +272,10 @@ fn render_passes(
     };
     let passes = if adaptive { 2 } else { 1 };
     progress.start((h * passes) as u64, (w * h) as u64 * options.spp as u64);
-    progress.advance((pilot_rows + frame.rows_done().iter().filter(|d| **d).count()) as u64);
+    progress.advance(
+        (pilot_rows + frame.rows_done().iter().filter(|d| **d).count()) as u64,
+        0,
+    );
     let mut film = starting_film(scene, options, win, resumed);
     let mut bands = Bands::new(
         &frame,
@@ -621,15 +624,16 @@ impl FrameRender<'_> {
                     if self.done[y].load(Ordering::Relaxed) || self.stopped() {
                         return;
                     }
-                    self.render_row(y, row, (matte, matte_row), plan, acc);
+                    let taken = self.render_row(y, row, (matte, matte_row), plan, acc);
                     self.done[y].store(true, Ordering::Relaxed);
-                    self.progress.advance(1);
+                    self.progress.advance(1, taken);
                 },
             );
     }
 
     /// Renders row `y` of the window as `plan` says: its pixels' sums into `row`, their
     /// Cryptomatte values into `mattes.1`, their moments and counts into `plan`'s slices.
+    /// Returns the samples it took.
     fn render_row(
         &self,
         y: usize,
@@ -637,7 +641,7 @@ impl FrameRender<'_> {
         mattes: (&mut PixelMatte, &mut [f32]),
         mut plan: RowPass,
         acc: &mut SampleAccumulator,
-    ) {
+    ) -> u64 {
         let (matte, matte_row) = mattes;
         let matte_stride = self.table.map_or(0, |t| t.stride());
         let mut out = Sink::new(acc);
@@ -691,6 +695,7 @@ impl FrameRender<'_> {
         c.rays.fetch_add(out.rays, Ordering::Relaxed);
         c.nonfinite.fetch_add(out.nonfinite, Ordering::Relaxed);
         c.samples.fetch_add(samples, Ordering::Relaxed);
+        samples
     }
 
     /// Each pixel's target after the pilot (`adaptive.rs`): the largest count its

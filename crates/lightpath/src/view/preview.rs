@@ -66,8 +66,8 @@ impl Progress for LivePreview<'_> {
     fn start(&self, total: u64, samples: u64) {
         self.inner.start(total, samples);
     }
-    fn advance(&self, units: u64) {
-        self.inner.advance(units);
+    fn advance(&self, units: u64, samples: u64) {
+        self.inner.advance(units, samples);
     }
     fn finish(&self) {
         self.inner.finish();

@@ -46,7 +46,7 @@ impl Progress for Bar {
         self.0
             .set_draw_target(indicatif::ProgressDrawTarget::stderr());
     }
-    fn advance(&self, units: u64) {
+    fn advance(&self, units: u64, _samples: u64) {
         self.0.inc(units);
     }
     fn finish(&self) {
