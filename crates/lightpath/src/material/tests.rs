@@ -4,7 +4,7 @@ use crate::light::luminance;
 use crate::sampling::{uniform_sphere, Rng};
 use std::f64::consts::PI;
 
-fn local(wo: Vec3A) -> Shading {
+pub(super) fn local(wo: Vec3A) -> Shading {
     Shading {
         frame: Frame::new(Vec3A::Z),
         wo,
@@ -121,7 +121,7 @@ fn eval_all(lobe: &Lobe, wo: Vec3A, wi: Vec3A) -> (Vec3A, f32) {
     })
 }
 
-fn dir(theta_deg: f32, phi_deg: f32) -> Vec3A {
+pub(super) fn dir(theta_deg: f32, phi_deg: f32) -> Vec3A {
     let (t, p) = (theta_deg.to_radians(), phi_deg.to_radians());
     Vec3A::new(t.sin() * p.cos(), t.sin() * p.sin(), t.cos())
 }
@@ -266,11 +266,11 @@ fn rough_glass_inside_cases() -> Vec<(String, Lobe, Vec<Vec3A>)> {
 
 // ---- χ² goodness of fit (after pbrt-v4's bsdfs_test.cpp) ----------------------------
 
-const THETA_BINS: usize = 10;
-const PHI_BINS: usize = 20;
-const CHI2_SAMPLES: usize = 200_000;
+pub(super) const THETA_BINS: usize = 10;
+pub(super) const PHI_BINS: usize = 20;
+pub(super) const CHI2_SAMPLES: usize = 200_000;
 
-fn bin_of(w: Vec3A) -> usize {
+pub(super) fn bin_of(w: Vec3A) -> usize {
     let theta = (w.z.clamp(-1.0, 1.0) as f64).acos();
     let mut phi = (w.y as f64).atan2(w.x as f64);
     if phi < 0.0 {
@@ -283,8 +283,8 @@ fn bin_of(w: Vec3A) -> usize {
 
 /// Expected sample counts per bin: the pdf integrated over each bin (midpoint rule on a
 /// fine θ×φ grid, with the sin θ of the solid angle).
-fn expected_counts(pdf: impl Fn(Vec3A) -> f32, n: usize) -> Vec<f64> {
-    const SUB: usize = 24;
+pub(super) fn expected_counts(pdf: impl Fn(Vec3A) -> f32, n: usize) -> Vec<f64> {
+    const SUB: usize = 32;
     let (dt, dp) = (
         PI / (THETA_BINS * SUB) as f64,
         2.0 * PI / (PHI_BINS * SUB) as f64,
@@ -307,7 +307,7 @@ fn expected_counts(pdf: impl Fn(Vec3A) -> f32, n: usize) -> Vec<f64> {
 }
 
 /// ln Γ(x), Lanczos (g = 7, n = 9).
-fn ln_gamma(x: f64) -> f64 {
+pub(super) fn ln_gamma(x: f64) -> f64 {
     const C: [f64; 9] = [
         0.999_999_999_999_809_9,
         676.520_368_121_885_1,
@@ -330,7 +330,7 @@ fn ln_gamma(x: f64) -> f64 {
 
 /// Upper regularised incomplete gamma Q(a, x) (series below a + 1, continued fraction
 /// above; Numerical Recipes §6.2).
-fn gamma_q(a: f64, x: f64) -> f64 {
+pub(super) fn gamma_q(a: f64, x: f64) -> f64 {
     if x <= 0.0 {
         return 1.0;
     }
@@ -389,7 +389,7 @@ fn chi2_survival_matches_known_values() {
 
 /// p-value of observed vs expected counts; bins expecting fewer than 5 samples are
 /// pooled. Err if a sample fell where the pdf integrates to zero.
-fn chi2_p_value(observed: &[u64], expected: &[f64]) -> Result<f64, String> {
+pub(super) fn chi2_p_value(observed: &[u64], expected: &[f64]) -> Result<f64, String> {
     let mut order: Vec<usize> = (0..expected.len()).collect();
     order.sort_by(|&a, &b| expected[a].total_cmp(&expected[b]));
     let (mut chi2, mut dof) = (0.0, 0usize);
@@ -417,7 +417,7 @@ fn chi2_p_value(observed: &[u64], expected: &[f64]) -> Result<f64, String> {
 }
 
 /// Runs the χ² test of `sample` against `pdf`; returns a failure message.
-fn chi2_case(
+pub(super) fn chi2_case(
     what: &str,
     sample: &mut dyn FnMut() -> Option<Vec3A>,
     pdf: &dyn Fn(Vec3A) -> f32,
@@ -438,7 +438,7 @@ fn chi2_case(
 }
 
 /// Šidák-corrected significance for `n` tests at overall level 0.01.
-fn sidak(n: usize) -> f64 {
+pub(super) fn sidak(n: usize) -> f64 {
     1.0 - 0.99f64.powf(1.0 / n as f64)
 }
 
@@ -548,7 +548,7 @@ fn chi2_sampled_directions_follow_each_material_pdf() {
 // ---- Energy ---------------------------------------------------------------------------
 
 /// Mean and standard error of the mean.
-fn mean_se(values: impl Iterator<Item = f64>) -> (f64, f64) {
+pub(super) fn mean_se(values: impl Iterator<Item = f64>) -> (f64, f64) {
     let (mut n, mut s, mut s2) = (0.0, 0.0, 0.0);
     for v in values {
         n += 1.0;
@@ -562,7 +562,7 @@ fn mean_se(values: impl Iterator<Item = f64>) -> (f64, f64) {
 
 /// Where every sample has the same value the standard error is zero; what is left is
 /// f32 rounding of that value and of the f64 sums.
-const ROUNDING: f64 = 1e-5;
+pub(super) const ROUNDING: f64 = 1e-5;
 
 /// Directional albedo ∫ f · |cos θi| dωi from the lobe's own samples (luminance).
 fn sampled_albedo(lobe: &Lobe, wo: Vec3A, n: usize, seed: u64) -> (f64, f64) {
