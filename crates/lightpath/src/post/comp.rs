@@ -260,6 +260,48 @@ pub fn warnings(job: &CompJob) -> Vec<String> {
     }
 }
 
+/// Why relighting a file with gains differs from re-rendering it with the lights changed,
+/// read from the settings its header records (nothing for files without them): a clamp
+/// cuts a bright contribution to the same value whatever its light's strength, and light
+/// selection other than uniform picks each light by every light's power, so the noise of
+/// one light's part depends on the others (README.md, "Relighting equals re-rendering").
+pub fn relight_caveat(attributes: &[(String, String)]) -> Option<String> {
+    let setting = |key: &str| {
+        let name = naming::setting_attribute(key);
+        attributes
+            .iter()
+            .find(|(k, _)| *k == name)
+            .map(|(_, v)| v.as_str())
+    };
+    let mut causes = Vec::new();
+    for key in ["clamp_direct", "clamp_indirect"] {
+        if let Some(v) = setting(key).filter(|v| v.parse::<f32>().is_ok_and(|c| c > 0.0)) {
+            causes.push(format!("{key} = {v}"));
+        }
+    }
+    let clamped = !causes.is_empty();
+    let selection = setting("light_selection").filter(|s| *s != "uniform");
+    if let Some(s) = selection {
+        causes.push(format!("light_selection = {s}"));
+    }
+    if causes.is_empty() {
+        return None;
+    }
+    let mut effects = Vec::new();
+    if clamped {
+        effects.push("they differ where contributions were clamped");
+    }
+    if selection.is_some() {
+        effects.push("each light's part carries the noise of the others' choice");
+    }
+    Some(format!(
+        "rendered with {}: relit images equal a re-render with the lights changed only \
+         with --light-selection uniform and no clamps; here {}",
+        causes.join(", "),
+        effects.join(", and ")
+    ))
+}
+
 /// Runs a comp: writes the output EXR (R, G, B and the input's A) and a PNG beside it,
 /// whose path it returns.
 pub fn run(job: &CompJob) -> Result<PathBuf, String> {
@@ -325,6 +367,42 @@ pub fn run(job: &CompJob) -> Result<PathBuf, String> {
 mod tests {
     use super::*;
     use crate::output::ExrHeader;
+
+    #[test]
+    fn the_relighting_caveat_names_what_breaks_relighting() {
+        let header = |pairs: &[(&str, &str)]| -> Vec<(String, String)> {
+            pairs
+                .iter()
+                .map(|(k, v)| (naming::setting_attribute(k), v.to_string()))
+                .collect()
+        };
+        let exact = header(&[
+            ("clamp_direct", "0"),
+            ("clamp_indirect", "0"),
+            ("light_selection", "uniform"),
+        ]);
+        assert_eq!(relight_caveat(&exact), None);
+        assert_eq!(
+            relight_caveat(&[]),
+            None,
+            "files without settings: nothing to say"
+        );
+        let cornell = header(&[
+            ("clamp_direct", "0"),
+            ("clamp_indirect", "10"),
+            ("light_selection", "tree"),
+        ]);
+        let note = relight_caveat(&cornell).unwrap();
+        assert!(note.contains("clamp_indirect = 10"), "{note}");
+        assert!(note.contains("light_selection = tree"), "{note}");
+        assert!(!note.contains("clamp_direct"), "{note}");
+        let clamped = header(&[("clamp_direct", "4"), ("light_selection", "uniform")]);
+        let note = relight_caveat(&clamped).unwrap();
+        assert!(
+            note.contains("clamped") && !note.contains("light_selection"),
+            "{note}"
+        );
+    }
 
     #[test]
     fn parses_the_guides_compositing_expressions() {

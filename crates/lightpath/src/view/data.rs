@@ -201,6 +201,7 @@ impl ViewData {
             "tolerance": crate::post::partitions::DEFAULT_TOLERANCE,
             "thumbnail_width": THUMBNAIL_WIDTH,
             "mixers": mixers,
+            "relight_caveat": crate::post::comp::relight_caveat(&self.exr.attributes),
             "noisy": noisy,
             "cryptomatte": crypto,
         })

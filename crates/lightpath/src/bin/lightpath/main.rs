@@ -170,6 +170,15 @@ fn comp_command(args: CompArgs) -> ExitCode {
     for w in lightpath::post::comp::warnings(&job) {
         tell!("warning: {w}");
     }
+    if !job.gains.is_empty() {
+        let header = lightpath::output::read_exr_header(&job.exr);
+        if let Some(note) = header
+            .ok()
+            .and_then(|h| lightpath::post::comp::relight_caveat(&h.attributes))
+        {
+            tell!("note: {} {note}", job.exr.display());
+        }
+    }
     let run = || -> Result<(), String> {
         let png = lightpath::post::comp::run(&job)?;
         say!("wrote {} and {}", args.output.display(), png.display());

@@ -318,6 +318,9 @@ function buildMixer() {
   const keep = lpv.mixer && lpv.mixer.base === m.base ? new Map(lpv.mixer.groups.map((g) => [g.part, g])) : new Map();
   lpv.mixer = { base: m.base, groups: groups.map((g) => keep.get(g.part) || { ...g, gain: 1, tint: '#ffffff' }) };
   $('mixer-base').textContent = m.base;
+  const caveat = lpv.info.relight_caveat;
+  $('relight-caveat').hidden = !caveat;
+  $('relight-caveat').textContent = caveat ? `Relighting this file is not a re-render: it was ${caveat}.` : '';
   const box = $('groups');
   box.textContent = '';
   for (const g of lpv.mixer.groups) {
