@@ -3,15 +3,19 @@ scene) against Blender Cycles' random-walk render of the same objects, within 8 
 
     pip install bpy==5.0.1 OpenEXR numpy          # Python 3.11 (e.g. a venv)
     python benches/materials/subsurface_scene.py OUT_DIR LIGHTPATH_BINARY [SPP]
+    KEEP_CYCLES=1 python …        # reuse OUT_DIR/cycles.exr (same objects, another Lightpath)
 
 glTF has no subsurface extension, so the geometry, camera and lights travel as a .glb that
 Blender exports (OUT_DIR/subsurface.glb) and the materials do not: Cycles renders the .glb
 re-imported with each Principled BSDF patched to random-walk subsurface (`cycles_file.py
 --subsurface`), Lightpath renders OUT_DIR/subsurface.toml, which includes the .glb and gives each
 object an OpenPBR material written from the same numbers: base_color = subsurface_color = Base
-Color, subsurface_radius = Subsurface Scale, subsurface_radius_scale = Subsurface Radius,
+Color, subsurface_radius = Subsurface Scale / (4 pi), subsurface_radius_scale = Subsurface Radius,
 subsurface_scatter_anisotropy = Subsurface Anisotropy, specular_roughness = Roughness,
-specular_ior = IOR. Prints per-object mean colour errors (Cycles' Object Index masks) and the
+specular_ior = IOR. The 1 / (4 pi): Cycles' "Random Walk" method walks with the mean free path
+Radius x Scale / (4 pi) (intern/cycles/kernel/closure/bssrdf.h, bssrdf_setup_radius: "so it gives
+similar looking result to older Cubic, Gaussian and Burley models"), OpenPBR's subsurface_radius is
+the mean free path itself. Prints per-object mean colour errors (Cycles' Object Index masks) and the
 frame. Not a CI dependency.
 """
 
@@ -119,7 +123,7 @@ with open(toml, "w") as f:
         f.write(f'[materials.{name}]\ntype = "openpbr"\nbase_color = {fmt(base)}\n'
                 f'specular_roughness = {rough:g}\nspecular_ior = {IOR:g}\n'
                 f'subsurface_weight = 1.0\nsubsurface_color = {fmt(base)}\n'
-                f'subsurface_radius = {scale:g}\nsubsurface_radius_scale = {fmt(radius)}\n'
+                f'subsurface_radius = {scale / (4 * math.pi):g}\nsubsurface_radius_scale = {fmt(radius)}\n'
                 f'subsurface_scatter_anisotropy = {aniso:g}\n\n')
 print("wrote", toml)
 
@@ -129,8 +133,9 @@ lp = os.path.join(out_dir, "lightpath.exr")
 patches = []
 for name, _base, _rough, radius, scale, aniso, _shape in OBJECTS:
     patches += ["--subsurface", f"{name}_mat={','.join(map(str, radius))}:{scale}:{aniso}"]
-subprocess.run([py, os.path.join(here, "cycles_file.py"), glb, "-o", cy, "--spp", str(spp),
-                "--resolution", f"{W}x{H}", "--max-bounces", "16", *patches], check=True)
+if not os.environ.get("KEEP_CYCLES") or not os.path.exists(cy):
+    subprocess.run([py, os.path.join(here, "cycles_file.py"), glb, "-o", cy, "--spp", str(spp),
+                    "--resolution", f"{W}x{H}", "--max-bounces", "16", *patches], check=True)
 subprocess.run([binary, "render", toml, "-o", lp, "--spp", str(spp), "--resolution", f"{W}x{H}",
                 "--max-depth", "17", "--aovs", "none"], check=True)
 subprocess.run([py, os.path.join(here, "compare.py"), cy, lp, *[o[0] for o in OBJECTS],

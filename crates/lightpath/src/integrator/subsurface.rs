@@ -38,8 +38,11 @@ const MIN_ALPHA: f32 = 0.2;
 
 /// The surface a walk runs inside.
 pub trait Boundary {
-    /// The first crossing of the object's own surface along `ray` (within `ray.tmax`).
-    fn hit(&self, ray: &Ray) -> Option<Hit>;
+    /// The first crossing of the object's own surface along `ray` (within `ray.tmax`),
+    /// stepping over the primitive `skip` (`Hit::prim`, `Hit::inner`) where it is within
+    /// the scene's ray epsilon of the origin (the surface the ray starts on; an analytic
+    /// sphere's far side is still found).
+    fn hit(&self, ray: &Ray, skip: Option<(u32, u32)>) -> Option<Hit>;
 }
 
 /// The medium under a subsurface lobe, per colour channel.
@@ -234,7 +237,9 @@ fn pick_channel(w: Vec3A, u: f32) -> (usize, Vec3A) {
 
 /// Walks from `entry` (a point of the boundary) into the medium along `dir` (pointing
 /// inside), with the path's throughput `throughput` so far (it steers the channel
-/// choice). `epsilon` moves the first ray off the surface. `None`: the walk was lost
+/// choice). The walk starts on the surface itself, its first step blind to the entry's
+/// primitive at the origin (as Cycles does): a ray offset would start it that much deep, which dims
+/// channels whose mean free path is near the offset. `None`: the walk was lost
 /// (absorbed, capped, or it found no way out).
 pub fn walk<B: Boundary>(
     boundary: &B,
@@ -242,11 +247,10 @@ pub fn walk<B: Boundary>(
     dir: Vec3A,
     medium: &Medium,
     throughput: Vec3A,
-    epsilon: f32,
     rng: &mut Rng,
 ) -> Option<Exit> {
-    let side = if dir.dot(entry.ng) >= 0.0 { 1.0 } else { -1.0 };
-    let mut p = entry.p + entry.ng * (epsilon * side);
+    let mut p = entry.p;
+    let mut skip = Some((entry.prim, entry.inner));
     let mut d = dir;
     let mut weight = medium.scale;
     let sigma_s = medium.sigma_t * medium.alpha;
@@ -259,7 +263,8 @@ pub fn walk<B: Boundary>(
             dir: d,
             tmax: t,
         };
-        if let Some(hit) = boundary.hit(&ray).filter(|h| h.t <= t) {
+        let crossing = boundary.hit(&ray, skip.take());
+        if let Some(hit) = crossing.filter(|h| h.t <= t) {
             // Reaching the surface: the probability of a free flight past `hit.t`.
             let tr = exp3(-medium.sigma_t * hit.t);
             let pdf = chan_pdf.dot(tr);
@@ -306,14 +311,17 @@ const MAX_OTHER_HITS: u32 = 64;
 struct ObjectBoundary<'s> {
     accel: &'s Accel,
     object: u32,
+    /// Hits on the skipped primitive nearer than this are the surface a ray starts on.
+    epsilon: f32,
 }
 
 impl Boundary for ObjectBoundary<'_> {
-    fn hit(&self, ray: &Ray) -> Option<Hit> {
+    fn hit(&self, ray: &Ray, skip: Option<(u32, u32)>) -> Option<Hit> {
         let mut tmin = 0.0;
         for _ in 0..MAX_OTHER_HITS {
             let h = self.accel.intersect(ray, tmin, Visibility::ALL)?;
-            if h.object == self.object {
+            let on_start = skip == Some((h.prim, h.inner)) && h.t < self.epsilon;
+            if h.object == self.object && !on_start {
                 return Some(h);
             }
             tmin = h.t;
@@ -345,17 +353,10 @@ impl Tracer<'_> {
         let boundary = ObjectBoundary {
             accel: &scene.accel,
             object: v.hit.object,
+            epsilon: scene.epsilon,
         };
         let medium = Medium::of(lobe);
-        let exit = walk(
-            &boundary,
-            v.hit,
-            wi,
-            &medium,
-            path.throughput,
-            scene.epsilon,
-            &mut rng,
-        );
+        let exit = walk(&boundary, v.hit, wi, &medium, path.throughput, &mut rng);
         out.rays += exit.map_or(1, |e| u64::from(e.steps) + 1);
         let exit = exit?;
         path.throughput *= exit.weight;
@@ -399,7 +400,7 @@ mod tests {
     }
 
     impl Boundary for Slab {
-        fn hit(&self, ray: &Ray) -> Option<Hit> {
+        fn hit(&self, ray: &Ray, _skip: Option<(u32, u32)>) -> Option<Hit> {
             let (o, d) = (ray.origin, ray.dir);
             let (t, n) = if d.z > 0.0 {
                 (-o.z / d.z, Vec3A::Z)
@@ -457,7 +458,7 @@ mod tests {
             let mut rng = Rng::for_sample(seed, i as u64, 0);
             let local = cosine_hemisphere(rng.next_2d());
             let dir = Vec3A::new(local.x, local.y, -local.z);
-            let exit = walk(&slab, &entry, dir, medium, Vec3A::ONE, 0.0, &mut rng);
+            let exit = walk(&slab, &entry, dir, medium, Vec3A::ONE, &mut rng);
             let (w, side) = match exit {
                 Some(e) => (e.weight, if e.hit.ng.z > 0.0 { 0 } else { 1 }),
                 None => (Vec3A::ZERO, 0),
@@ -523,6 +524,7 @@ mod tests {
             radius: Vec3A::new(0.5, 1.0, 2.0),
             anisotropy: g,
             ior: 1.0,
+            alpha: 0.0,
         }
     }
 

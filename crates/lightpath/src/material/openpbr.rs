@@ -231,6 +231,7 @@ impl Bsdf {
                 radius: p.subsurface_radius_scale * p.subsurface_radius,
                 anisotropy: p.subsurface_scatter_anisotropy,
                 ior: eta,
+                alpha: (alpha.x * alpha.y).sqrt(),
             });
         }
         if set.specular {
