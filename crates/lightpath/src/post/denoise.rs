@@ -29,6 +29,7 @@
 //!   beauty when every gain is 1.
 
 use crate::aov::naming::{self, channel_names, AovKind};
+use crate::error::{DenoiseFault, OidnError, PostError};
 use crate::output::{read_exr, stage_image, ExrContents, ExrOptions};
 use std::collections::HashMap;
 use std::path::PathBuf;
@@ -196,7 +197,7 @@ type Channels = Vec<(String, Vec<f32>)>;
 /// tests. `albedo_divided`: the input was divided by the albedo (filter it with a white
 /// albedo).
 pub trait Filter {
-    fn filter(&mut self, rgb: &mut [f32], albedo_divided: bool) -> Result<(), String>;
+    fn filter(&mut self, rgb: &mut [f32], albedo_divided: bool) -> Result<(), OidnError>;
 }
 
 /// The auxiliary images, interleaved RGB: albedo clamped to [0, 1], normal as rendered.
@@ -255,7 +256,7 @@ fn filter_aov(
     treatment: Treatment,
     albedo: Option<&[f32]>,
     filter: &mut dyn Filter,
-) -> Result<Planes, String> {
+) -> Result<Planes, OidnError> {
     let mut rgb = interleave([&planes[0], &planes[1], &planes[2]]);
     for v in &mut rgb {
         if !v.is_finite() || *v < 0.0 {
@@ -386,17 +387,13 @@ pub fn denoise_contents(
     filter: &mut dyn Filter,
     keep_noisy: bool,
     summary: &mut DenoiseSummary,
-) -> Result<(Channels, Vec<(String, String)>), String> {
+) -> Result<(Channels, Vec<(String, String)>), DenoiseFault> {
     if exr
         .attributes
         .iter()
         .any(|(k, _)| k == naming::DENOISED_ATTRIBUTE)
     {
-        return Err(
-            "it is already denoised (it has a lightpath/denoised attribute): \
-                    denoise the noisy render instead"
-                .into(),
-        );
+        return Err(DenoiseFault::AlreadyDenoised);
     }
     let plan = plan(exr);
     summary.albedo = aux.albedo.is_some();
@@ -441,7 +438,7 @@ fn filter_aovs(
     aux: &Aux,
     filter: &mut dyn Filter,
     summary: &mut DenoiseSummary,
-) -> Result<(AovPlanes, AovPlanes), String> {
+) -> Result<(AovPlanes, AovPlanes), DenoiseFault> {
     let mut noisy = AovPlanes::new();
     let mut denoised = AovPlanes::new();
     // Beauty is filtered without the emission seen directly, which is added back after.
@@ -473,8 +470,10 @@ fn filter_aovs(
         } else {
             summary.filtered += 1;
             let emission = emission.as_ref().filter(|_| name == naming::BEAUTY);
-            filter_lit(&p, *t, emission, aux, filter)
-                .map_err(|e| format!("filtering AOV '{name}': {e}"))?
+            filter_lit(&p, *t, emission, aux, filter).map_err(|source| DenoiseFault::Filtering {
+                aov: name.clone(),
+                source,
+            })?
         };
         denoised.insert(name.clone(), out);
         noisy.insert(name.clone(), p);
@@ -490,7 +489,7 @@ fn filter_lit(
     emission: Option<&Planes>,
     aux: &Aux,
     filter: &mut dyn Filter,
-) -> Result<Planes, String> {
+) -> Result<Planes, OidnError> {
     let unlit = emission.map(|e| minus(p, e));
     let mut out = filter_aov(
         unlit.as_ref().unwrap_or(p),
@@ -559,17 +558,17 @@ fn keep_noisy_aovs(
     noisy: &AovPlanes,
     channels: &mut Channels,
     attributes: &mut Vec<(String, String)>,
-) -> Result<(), String> {
+) -> Result<(), DenoiseFault> {
     let definitions: HashMap<String, String> = exr.aovs().into_iter().collect();
     let mut names: Vec<&String> = noisy.keys().filter(|n| !is_emission(n)).collect();
     names.sort();
     for name in names {
         let kept = naming::noisy_name(name);
         if definitions.contains_key(&kept) {
-            return Err(format!(
-                "--keep-noisy would name the noisy '{name}' '{kept}', which the file \
-                 already has"
-            ));
+            return Err(DenoiseFault::NoisyNameTaken {
+                aov: name.clone(),
+                name: kept,
+            });
         }
         for (ch, v) in channel_names(&kept).into_iter().zip(&noisy[name]) {
             channels.push((ch, v.clone()));
@@ -619,11 +618,15 @@ pub fn memory_needed(width: usize, height: usize, channels: usize) -> u64 {
 }
 
 /// Runs a denoise: reads the input, filters, writes the output atomically.
-pub fn run(job: &DenoiseJob) -> Result<DenoiseSummary, String> {
+pub fn run(job: &DenoiseJob) -> Result<DenoiseSummary, PostError> {
     // Said first: without the denoiser no input could be of use.
     if !AVAILABLE {
-        return Err(UNAVAILABLE.into());
+        return Err(PostError::DenoiseUnavailable);
     }
+    let cannot = |fault: DenoiseFault| PostError::Denoise {
+        path: job.input.clone(),
+        fault,
+    };
     let start = std::time::Instant::now();
     let exr = read_exr(&job.input)?;
     // Checked before Open Image Denoise allocates: the library's allocation failures
@@ -639,14 +642,15 @@ pub fn run(job: &DenoiseJob) -> Result<DenoiseSummary, String> {
                 exr.channels.len()
             ),
         )
-        .map_err(|e| format!("cannot denoise {}: {e}", job.input.display()))?;
+        .map_err(|e| cannot(e.into()))?;
     let aux = aux_images(&exr);
     let mut summary = DenoiseSummary::default();
     let (channels, attributes) = with_oidn(exr.width, exr.height, &aux, job.quality, |f| {
         denoise_contents(&exr, &aux, f, job.keep_noisy, &mut summary)
     })
+    .map_err(DenoiseFault::from)
     .and_then(|r| r)
-    .map_err(|e| format!("cannot denoise {}: {e}", job.input.display()))?;
+    .map_err(cannot)?;
     // The input's header with the denoiser's attributes: a crop stays a crop of its frame.
     let header = exr.derived_header(attributes);
     let png_path = crate::output::naming::preview_path(&job.output);
@@ -685,16 +689,16 @@ fn with_oidn<R>(
     aux: &Aux,
     quality: Quality,
     body: impl FnOnce(&mut dyn Filter) -> R,
-) -> Result<R, String> {
-    let device = oidn::Device::new().map_err(|e| format!("Open Image Denoise: {e}"))?;
+) -> Result<R, OidnError> {
+    let oidn = |e: oidn::Error| OidnError(e.to_string());
+    let device = oidn::Device::new().map_err(oidn)?;
     let quality = match quality {
         Quality::High => oidn::Quality::High,
         Quality::Balanced => oidn::Quality::Balanced,
         Quality::Fast => oidn::Quality::Fast,
     };
-    let new_filter = |albedo: Option<&[f32]>| -> Result<oidn::RayTracing<'_>, String> {
-        let mut f =
-            oidn::RayTracing::try_new(&device).map_err(|e| format!("Open Image Denoise: {e}"))?;
+    let new_filter = |albedo: Option<&[f32]>| -> Result<oidn::RayTracing<'_>, OidnError> {
+        let mut f = oidn::RayTracing::try_new(&device).map_err(oidn)?;
         f.image_dimensions(width, height)
             .hdr(true)
             .filter_quality(quality);
@@ -721,16 +725,16 @@ fn with_oidn<R>(
         divided: Option<oidn::RayTracing<'a>>,
     }
     impl Filter for Oidn<'_> {
-        fn filter(&mut self, rgb: &mut [f32], albedo_divided: bool) -> Result<(), String> {
+        fn filter(&mut self, rgb: &mut [f32], albedo_divided: bool) -> Result<(), OidnError> {
             let f = match (&self.divided, albedo_divided) {
                 (Some(d), true) => d,
                 _ => &self.plain,
             };
             f.filter_in_place(rgb)
-                .map_err(|e| format!("Open Image Denoise: {e}"))?;
+                .map_err(|e| OidnError(e.to_string()))?;
             self.device
                 .get_error()
-                .map_err(|e| format!("Open Image Denoise: {e}"))
+                .map_err(|e| OidnError(e.to_string()))
         }
     }
     let mut filter = Oidn {
@@ -748,8 +752,8 @@ fn with_oidn<R>(
     _aux: &Aux,
     _quality: Quality,
     _body: impl FnOnce(&mut dyn Filter) -> R,
-) -> Result<R, String> {
-    Err(UNAVAILABLE.into())
+) -> Result<R, OidnError> {
+    Err(OidnError(UNAVAILABLE.into()))
 }
 
 #[cfg(test)]
@@ -764,7 +768,7 @@ mod tests {
     }
 
     impl Filter for BoxBlur {
-        fn filter(&mut self, rgb: &mut [f32], albedo_divided: bool) -> Result<(), String> {
+        fn filter(&mut self, rgb: &mut [f32], albedo_divided: bool) -> Result<(), OidnError> {
             self.divided_calls += albedo_divided as usize;
             let src = rgb.to_vec();
             let (w, h) = (self.width as i64, self.height as i64);
@@ -932,7 +936,7 @@ mod tests {
     fn albedo_division_round_trips_where_filtering_is_the_identity() {
         struct Identity;
         impl Filter for Identity {
-            fn filter(&mut self, _: &mut [f32], _: bool) -> Result<(), String> {
+            fn filter(&mut self, _: &mut [f32], _: bool) -> Result<(), OidnError> {
                 Ok(())
             }
         }
@@ -972,7 +976,7 @@ mod tests {
         };
         let err = denoise_contents(&out, &aux, &mut f, false, &mut DenoiseSummary::default())
             .unwrap_err();
-        assert!(err.contains("already denoised"), "{err}");
+        assert!(matches!(err, DenoiseFault::AlreadyDenoised), "{err}");
     }
 
     #[test]
