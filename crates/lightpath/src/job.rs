@@ -557,7 +557,7 @@ impl PreparedRender {
         // An interrupted render's rows are unfinished: it is denoised once it is resumed.
         let denoised = match job.denoise {
             Some(d) if interrupted.is_none() => {
-                Some(denoise_in_place(&paths, d, job.preview_exposure)?)
+                Some(denoise_in_place(&paths, d, job.preview_exposure, progress)?)
             }
             _ => None,
         };
@@ -712,6 +712,7 @@ fn denoise_in_place(
     paths: &output::naming::OutputPaths,
     request: DenoiseRequest,
     exposure: f32,
+    progress: &dyn Progress,
 ) -> Result<String, Error> {
     let job = crate::post::denoise::DenoiseJob {
         input: paths.exr.clone(),
@@ -720,6 +721,6 @@ fn denoise_in_place(
         quality: request.quality,
         preview_exposure: exposure,
     };
-    let summary = crate::post::denoise::run(&job)?;
+    let summary = crate::post::denoise::run_with_progress(&job, progress)?;
     Ok(summary.line())
 }
