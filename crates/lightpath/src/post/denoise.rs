@@ -16,7 +16,9 @@
 //!   by the albedo first (textures do not smear) and multiplied back after, with a white
 //!   albedo as their auxiliary image; the others (`specular…`, `emission`, light-group
 //!   parts of beauty, user AOVs) are filtered as they are. Light-group parts are filtered
-//!   one by one, like any AOV. An AOV that is zero (or one constant) everywhere stays as
+//!   one by one, like any AOV; an AOV split by light group (beauty excepted) is then the
+//!   sum of its denoised groups, as a compositor rebuilds it, instead of a filter run of
+//!   its own. An AOV that is zero (or one constant) everywhere stays as
 //!   it is (no filtering), and so does one already converged: where the file holds its
 //!   variance (`<aov>_var`, `--variance`), an AOV whose noise (the root mean variance of
 //!   its pixel means) is below [`CONVERGED_NOISE`] of its mean level, in every channel.
@@ -145,6 +147,8 @@ pub struct DenoiseSummary {
     pub zero: usize,
     /// Light AOVs whose variance says they are converged, left as they are.
     pub converged: usize,
+    /// Wholes split by light group made as the sum of their denoised groups.
+    pub summed: usize,
     /// Remainder AOVs written to keep partitions summing.
     pub remainders: usize,
     /// Partitions reconciled.
@@ -164,9 +168,11 @@ impl DenoiseSummary {
             _ => "no auxiliary images (no albedo AOV)",
         };
         format!(
-            "denoised {} AOVs ({} zero or constant and {} converged AOVs left as they are) \
-             with {aux}, {} partitions reconciled ({} remainders): {:.2} s",
+            "denoised {} AOVs ({} more as sums of their light groups; {} zero or constant and \
+             {} converged AOVs left as they are) with {aux}, {} partitions reconciled ({} \
+             remainders): {:.2} s",
             self.filtered,
+            self.summed,
             self.zero,
             self.converged,
             self.partitions,
@@ -526,6 +532,9 @@ struct Work {
     filter: Vec<(String, Treatment)>,
     /// Kept as rendered: emission, and AOVs zero, constant or converged everywhere.
     kept: std::collections::HashSet<String>,
+    /// Wholes split by light group (beauty excepted) made as the sum of their denoised
+    /// parts, with those parts.
+    summed: Vec<(String, Vec<String>)>,
 }
 
 fn work(exr: &ExrContents, plan: &[(String, Treatment)], summary: &mut DenoiseSummary) -> Work {
@@ -554,9 +563,29 @@ fn work(exr: &ExrContents, plan: &[(String, Treatment)], summary: &mut DenoiseSu
             filter.push((name.clone(), *t));
         }
     }
+    // A whole split by light group is what a compositor rebuilds from its groups: the
+    // sum of the denoised parts, one OIDN run fewer per split AOV. Beauty, the image
+    // looked at whole, is filtered itself (at high) and stays authoritative.
+    let mut summed = Vec::new();
+    for p in partitions(exr) {
+        let filtered = filter.iter().position(|(n, _)| *n == p.whole);
+        let complete = p.parts.iter().all(|n| planes_of(exr, n).is_some());
+        if p.kind != naming::PartitionKind::LightGroups || p.whole == naming::BEAUTY || !complete {
+            continue;
+        }
+        if let Some(i) = filtered {
+            filter.remove(i);
+            summed.push((p.whole, p.parts));
+        }
+    }
     filter.sort_by_key(|(name, t)| (name != naming::BEAUTY, *t == Treatment::AlbedoDivided));
     summary.filtered = filter.len();
-    Work { filter, kept }
+    summary.summed = summed.len();
+    Work {
+        filter,
+        kept,
+        summed,
+    }
 }
 
 /// Whether the file's variance of AOV `name` (its `<name>_var`, if written) says its
@@ -623,6 +652,21 @@ fn filter_aovs(
         progress.advance(1, pixels);
         denoised.insert(name.clone(), out);
         noisy.insert(name.clone(), p);
+    }
+    for (whole, parts) in &work.summed {
+        let (Some(p), Some(first)) = (planes_of(exr, whole), parts.first()) else {
+            continue;
+        };
+        let mut sum = denoised.get(first).cloned().unwrap_or_default();
+        for part in &parts[1..] {
+            if let Some(q) = denoised.get(part) {
+                for c in 0..3 {
+                    sum[c].iter_mut().zip(&q[c]).for_each(|(s, v)| *s += v);
+                }
+            }
+        }
+        denoised.insert(whole.clone(), sum);
+        noisy.insert(whole.clone(), p);
     }
     Ok((noisy, denoised))
 }
@@ -795,7 +839,8 @@ fn describe(s: &DenoiseSummary, quality: Quality) -> String {
     format!(
         "Intel Open Image Denoise RT filter (hdr), {aux}; beauty at {}, other AOVs at {}; \
          AOVs named diffuse*, directDiffuse*, indirectDiffuse*, subsurface* divided by \
-         albedo; zero, constant and converged AOVs kept; every declared partition's \
+         albedo; AOVs split by light group (beauty excepted) the sum of their denoised \
+         groups; zero, constant and converged AOVs kept; every declared partition's \
          filtered parts scaled to sum to its denoised whole, with a remainder AOV where \
          its kept parts cannot",
         BEAUTY_QUALITY.as_str(),
