@@ -1454,6 +1454,44 @@ mod tests {
     }
 
     #[test]
+    fn a_whole_split_by_light_group_is_the_sum_of_its_denoised_groups() {
+        let mut exr = file();
+        let dd = planes_of(&exr, "directDiffuse").unwrap();
+        let infos = [
+            ("directDiffuse_key", 0.3f32),
+            ("directDiffuse__default", 0.7),
+        ];
+        for (name, share) in infos {
+            for (ch, v) in channel_names(name).into_iter().zip(&dd) {
+                exr.channels
+                    .push((ch, v.iter().map(|x| x * share).collect()));
+            }
+            exr.attributes
+                .push((naming::kind_attribute(name), AovKind::Light.as_str().into()));
+            exr.attributes
+                .push((naming::aov_attribute(name), "lpe:directDiffuse".into()));
+        }
+        let parts: Vec<naming::PartInfo> = infos
+            .iter()
+            .map(|(name, _)| naming::PartInfo {
+                name,
+                definition: "lpe:directDiffuse",
+                split_of: Some("directDiffuse"),
+            })
+            .collect();
+        exr.attributes.extend(naming::partition_attributes(&parts));
+        let (out, s, f) = run_box(&exr, false);
+        // directDiffuse is not filtered itself; its two groups are.
+        assert_eq!((s.summed, s.filtered), (1, 6));
+        assert_eq!(f.qualities.len(), 6);
+        let checks = crate::post::check_partitions(&out);
+        assert_eq!(checks.len(), 3);
+        for c in &checks {
+            assert!(c.max_relative_error < 1e-5, "{c:?}");
+        }
+    }
+
+    #[test]
     fn memory_is_checked_against_oidns_needs_and_every_channel() {
         // 1080p with 40 RGB AOVs: OIDN's ~1.3 GB and 120 channels four times over.
         let b = memory_needed(1920, 1080, 120);
