@@ -365,25 +365,10 @@ pub enum PostError {
         second: PathBuf,
         changes: Vec<String>,
     },
-    /// A header attribute that must agree between the parts of a frame; `flag` is the
-    /// command-line option of the setting it records, if it records one.
-    #[error(
-        "{} and {} are not parts of one frame: {attribute}{} is {} in the first and {} in \
-         the second",
-        first.display(),
-        second.display(),
-        flag.map_or(String::new(), |f| format!(" (--{f})")),
-        shown(in_first.as_deref()),
-        shown(in_second.as_deref())
-    )]
-    NotOneFrame {
-        first: PathBuf,
-        second: PathBuf,
-        attribute: String,
-        flag: Option<&'static str>,
-        in_first: Option<String>,
-        in_second: Option<String>,
-    },
+    /// A header attribute that must agree between the parts of a frame (boxed: the
+    /// largest of these errors).
+    #[error(transparent)]
+    NotOneFrame(Box<FrameMismatch>),
     #[error(
         "{} holds samples {}-{} and {} holds {}-{}: they overlap, so those samples would \
          count twice",
@@ -477,6 +462,27 @@ pub enum PostError {
     DenoiseUnavailable,
     #[error("cannot denoise {}: {fault}", path.display())]
     Denoise { path: PathBuf, fault: DenoiseFault },
+}
+
+/// A header attribute that differs between two parts of one frame; `flag` is the
+/// command-line option of the setting it records, if it records one.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+#[error(
+    "{} and {} are not parts of one frame: {attribute}{} is {} in the first and {} in the \
+     second",
+    first.display(),
+    second.display(),
+    flag.map_or(String::new(), |f| format!(" (--{f})")),
+    shown(in_first.as_deref()),
+    shown(in_second.as_deref())
+)]
+pub struct FrameMismatch {
+    pub first: PathBuf,
+    pub second: PathBuf,
+    pub attribute: String,
+    pub flag: Option<&'static str>,
+    pub in_first: Option<String>,
+    pub in_second: Option<String>,
 }
 
 /// A header value as `merge` quotes it: at most 80 characters.

@@ -22,7 +22,7 @@ use crate::aov::naming::{
     INPUTS_ATTRIBUTE, INTERRUPTED_ATTRIBUTE, SAMPLES_ATTRIBUTE, SAMPLE_COUNT_CHANNEL,
     SCENE_ATTRIBUTE, SPP_ATTRIBUTE,
 };
-use crate::error::PostError;
+use crate::error::{FrameMismatch, PostError};
 use crate::film::PixelWindow;
 use crate::output::{read_exr, read_exr_header, write_image, ExrHeader, ExrOptions};
 use crate::post::cryptomatte;
@@ -172,14 +172,14 @@ fn same_frame(a: &Part, b: &Part) -> Result<(), PostError> {
         }
         let (va, vb) = (a.text.get(k), b.text.get(k));
         if va != vb {
-            return Err(PostError::NotOneFrame {
+            return Err(PostError::NotOneFrame(Box::new(FrameMismatch {
                 first: a.path.clone(),
                 second: b.path.clone(),
                 attribute: k.clone(),
                 flag: crate::settings::flag_of_attribute(k),
                 in_first: va.cloned(),
                 in_second: vb.cloned(),
-            });
+            })));
         }
     }
     Ok(())
@@ -610,10 +610,8 @@ mod tests {
         let b = part("b.exr", &[(&depth, "4")]);
         let e = same_frame(&a, &b).unwrap_err();
         match &e {
-            PostError::NotOneFrame {
-                attribute, flag, ..
-            } => assert_eq!(
-                (attribute.as_str(), *flag),
+            PostError::NotOneFrame(m) => assert_eq!(
+                (m.attribute.as_str(), m.flag),
                 (depth.as_str(), Some("max-depth"))
             ),
             other => panic!("{other}"),
@@ -629,7 +627,7 @@ mod tests {
             &[(&depth, "8"), ("lightpath/aov/key", "C<L.'key'>")],
         );
         match same_frame(&a, &c).unwrap_err() {
-            PostError::NotOneFrame { flag, .. } => assert_eq!(flag, None),
+            PostError::NotOneFrame(m) => assert_eq!(m.flag, None),
             other => panic!("{other}"),
         }
     }

@@ -19,11 +19,11 @@ pub enum Quality {
 
 impl Quality {
     fn raw(self) -> i32 {
-        (match self {
+        match self {
             Quality::High => OIDNQuality_OIDN_QUALITY_HIGH,
             Quality::Balanced => OIDNQuality_OIDN_QUALITY_BALANCED,
             Quality::Fast => OIDNQuality_OIDN_QUALITY_FAST,
-        }) as i32
+        }
     }
 }
 
