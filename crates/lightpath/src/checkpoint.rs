@@ -114,7 +114,11 @@ impl std::fmt::Display for CheckpointError {
 
 /// Writes the checkpoint of `snapshot` atomically (synced before it replaces the previous
 /// one).
-pub fn write(path: &Path, stamp: Stamp, snapshot: &Snapshot) -> Result<(), String> {
+pub fn write(
+    path: &Path,
+    stamp: Stamp,
+    snapshot: &Snapshot,
+) -> Result<(), crate::error::OutputError> {
     let Snapshot {
         film,
         rows_done,
@@ -162,7 +166,10 @@ pub fn write(path: &Path, stamp: Stamp, snapshot: &Snapshot) -> Result<(), Strin
             out.out.write_all(&total.to_le_bytes())?;
             out.out.flush()
         })();
-        io.map_err(|e| format!("cannot write the checkpoint {}: {e}", path.display()))
+        io.map_err(|source| crate::error::OutputError::Checkpoint {
+            path: path.to_path_buf(),
+            source,
+        })
     })
 }
 

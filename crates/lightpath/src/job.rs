@@ -229,7 +229,7 @@ impl RenderJob {
     pub fn prepare(self) -> Result<PreparedRender, Error> {
         // Before the render: a build without denoising must not render for nothing.
         if self.denoise.is_some() && !crate::post::denoise::AVAILABLE {
-            return Err(Error::Output(crate::post::denoise::UNAVAILABLE.into()));
+            return Err(crate::error::PostError::DenoiseUnavailable.into());
         }
         if self.accel == crate::geometry::Backend::Embree
             && !crate::geometry::Backend::EMBREE_AVAILABLE
@@ -267,7 +267,7 @@ impl RenderJob {
         );
         scene.accel.use_backend(self.accel)?;
         scene.variance_aovs = self.variance_aovs(&desc, &scene)?;
-        checks::film(&scene).map_err(Error::Setting)?;
+        checks::film(&scene)?;
         warnings.extend(checks::scene_warnings(&scene));
         for w in scene.automaton.warnings() {
             let aov = &scene.aovs[w.rule.0 as usize];
@@ -557,7 +557,7 @@ impl PreparedRender {
         // An interrupted render's rows are unfinished: it is denoised once it is resumed.
         let denoised = match job.denoise {
             Some(d) if interrupted.is_none() => {
-                Some(denoise_in_place(&paths, d, job.preview_exposure)?)
+                Some(denoise_in_place(&paths, d, job.preview_exposure, progress)?)
             }
             _ => None,
         };
@@ -674,12 +674,15 @@ fn remove_stale(path: &std::path::Path) -> Result<(), Error> {
     remove_if_there(path, "the interrupted render's partial image")
 }
 
-fn remove_if_there(path: &std::path::Path, what: &str) -> Result<(), Error> {
+fn remove_if_there(path: &std::path::Path, what: &'static str) -> Result<(), Error> {
     match std::fs::remove_file(path) {
-        Err(e) if e.kind() != std::io::ErrorKind::NotFound => Err(Error::Output(format!(
-            "cannot remove {what} {}: {e}",
-            path.display()
-        ))),
+        Err(source) if source.kind() != std::io::ErrorKind::NotFound => {
+            Err(Error::Output(crate::error::OutputError::Remove {
+                what,
+                path: path.to_path_buf(),
+                source,
+            }))
+        }
         _ => Ok(()),
     }
 }
@@ -709,6 +712,7 @@ fn denoise_in_place(
     paths: &output::naming::OutputPaths,
     request: DenoiseRequest,
     exposure: f32,
+    progress: &dyn Progress,
 ) -> Result<String, Error> {
     let job = crate::post::denoise::DenoiseJob {
         input: paths.exr.clone(),
@@ -717,6 +721,6 @@ fn denoise_in_place(
         quality: request.quality,
         preview_exposure: exposure,
     };
-    let summary = crate::post::denoise::run(&job).map_err(Error::Output)?;
+    let summary = crate::post::denoise::run_with_progress(&job, progress)?;
     Ok(summary.line())
 }

@@ -17,6 +17,9 @@ pub trait Progress: Sync {
     fn advance(&self, units: u64, samples: u64);
     /// The render is over (also after an early stop).
     fn finish(&self);
+    /// What the next `start` counts, for the words a reporter shows: a render (the
+    /// default) or other work, such as a denoise's filter runs.
+    fn task(&self, _task: Task) {}
     /// Rows `rows` of `film` hold their final sums (the render loop stores a band of rows
     /// at a time): a live preview copies them; other reporters ignore it.
     fn rows_done(&self, _film: &Film, _rows: Range<usize>) {}
@@ -25,6 +28,26 @@ pub trait Progress: Sync {
     fn band_rows(&self) -> Option<usize> {
         None
     }
+}
+
+/// What a reporter's line says: the work (`rendering`) and what its rate counts
+/// (`samples`, the `samples` of `advance`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Task {
+    pub doing: &'static str,
+    pub counting: &'static str,
+}
+
+impl Task {
+    pub const RENDER: Task = Task {
+        doing: "rendering",
+        counting: "samples",
+    };
+    /// A denoise: units are filter runs, `samples` the pixels each filtered.
+    pub const DENOISE: Task = Task {
+        doing: "denoising",
+        counting: "pixels",
+    };
 }
 
 /// Reports nothing.
@@ -39,6 +62,7 @@ impl Progress for Silent {
 /// Plain lines on stderr every `every` (and at the end): percent, samples/s and ETA.
 pub struct PeriodicLines {
     every: Duration,
+    task: Mutex<Task>,
     state: Mutex<LinesState>,
 }
 
@@ -57,6 +81,7 @@ impl PeriodicLines {
         let now = Instant::now();
         PeriodicLines {
             every,
+            task: Mutex::new(Task::RENDER),
             state: Mutex::new(LinesState {
                 started: now,
                 last: now,
@@ -84,6 +109,11 @@ pub struct Status {
 /// samples really taken (an adaptive render's cheap rows would otherwise count as full), and
 /// the ETA extrapolates this run's pace over the units left (resumed units took no time).
 pub fn progress_line(s: Status) -> String {
+    task_line(Task::RENDER, s)
+}
+
+/// [`progress_line`] for any task: `denoising 42.0 % 1.23 M pixels/s, eta 0:00:12`.
+pub fn task_line(task: Task, s: Status) -> String {
     let fraction = if s.total == 0 {
         1.0
     } else {
@@ -103,13 +133,21 @@ pub fn progress_line(s: Status) -> String {
     };
     let eta = eta.round() as u64;
     format!(
-        "rendering {:5.1} % {:.2} M samples/s, eta {}:{:02}:{:02}",
+        "{} {:5.1} % {:.2} M {}/s, eta {}:{:02}:{:02}",
+        task.doing,
         100.0 * fraction,
         rate / 1e6,
+        task.counting,
         eta / 3600,
         eta / 60 % 60,
         eta % 60
     )
+}
+
+impl PeriodicLines {
+    fn current_task(&self) -> Task {
+        *self.task.lock().unwrap_or_else(|e| e.into_inner())
+    }
 }
 
 impl LinesState {
@@ -149,14 +187,18 @@ impl Progress for PeriodicLines {
         let now = Instant::now();
         if now.duration_since(s.last) >= self.every {
             s.last = now;
-            let line = progress_line(s.status(now));
+            let line = task_line(self.current_task(), s.status(now));
             let _ = writeln!(std::io::stderr(), "{line}");
         }
     }
 
+    fn task(&self, task: Task) {
+        *self.task.lock().unwrap_or_else(|e| e.into_inner()) = task;
+    }
+
     fn finish(&self) {
         let s = self.state.lock().unwrap_or_else(|e| e.into_inner());
-        let line = progress_line(s.status(Instant::now()));
+        let line = task_line(self.current_task(), s.status(Instant::now()));
         let _ = writeln!(std::io::stderr(), "{line}");
     }
 }

@@ -8,6 +8,7 @@
 
 use crate::aov::naming::{setting_attribute, SEED_ATTRIBUTE, SPP_ATTRIBUTE};
 use crate::camera::FilterKind;
+use crate::error::SettingError;
 use crate::light::select::LightSelection;
 use crate::sampler::SamplerKind;
 
@@ -319,11 +320,11 @@ pub struct Setting {
     pub role: Role,
     pub header: Header,
     /// Reads the flag's value into the overrides (or says why it cannot).
-    pub read_flag: fn(&str, &mut SettingOverrides) -> Result<(), String>,
+    pub read_flag: fn(&str, &mut SettingOverrides) -> Result<(), SettingError>,
     /// Reads the TOML value into the settings (or says why it cannot).
-    pub read_toml: fn(&toml::Value, &mut RenderDesc) -> Result<(), String>,
+    pub read_toml: fn(&toml::Value, &mut RenderDesc) -> Result<(), SettingError>,
     /// Says why the setting's value is out of range, if it is.
-    pub check: fn(&RenderDesc) -> Result<(), String>,
+    pub check: fn(&RenderDesc) -> Result<(), SettingError>,
     /// The value as the header, the identity and the checkpoint write it.
     pub show: fn(&RenderDesc) -> String,
 }
@@ -378,7 +379,7 @@ pub fn unknown_key(section: Section, key: &str) -> String {
 }
 
 /// Every setting in range, and the settings agreeing with each other.
-pub fn check(render: &RenderDesc) -> Result<(), String> {
+pub fn check(render: &RenderDesc) -> Result<(), SettingError> {
     for s in SETTINGS {
         (s.check)(render)?;
     }
@@ -386,15 +387,13 @@ pub fn check(render: &RenderDesc) -> Result<(), String> {
 }
 
 /// What one setting's range cannot say: the settings that must agree with each other.
-pub fn check_together(render: &RenderDesc) -> Result<(), String> {
+pub fn check_together(render: &RenderDesc) -> Result<(), SettingError> {
     if let Some(min_spp) = render.min_spp {
         if min_spp > render.spp {
-            return Err(format!(
-                "min_spp ({min_spp}) is above spp ({}): adaptive sampling's pilot pass takes \
-                 min_spp of a pixel's spp samples (--min-spp and --spp, [render] min_spp and \
-                 spp)",
-                render.spp
-            ));
+            return Err(SettingError::MinSppAboveSpp {
+                min_spp,
+                spp: render.spp,
+            });
         }
     }
     Ok(())
@@ -423,6 +422,15 @@ pub fn header_attributes(render: &RenderDesc) -> Vec<(String, String)> {
         .collect()
 }
 
+/// The command-line flag (without `--`) of the setting a header attribute records, for
+/// messages that name an attribute a user did not write.
+pub fn flag_of_attribute(attribute: &str) -> Option<&'static str> {
+    SETTINGS
+        .iter()
+        .find(|s| s.attribute().as_deref() == Some(attribute))
+        .map(|s| s.flag)
+}
+
 /// The header attributes of settings in which the parts of one frame differ by design.
 pub fn per_part_attributes() -> impl Iterator<Item = String> {
     SETTINGS
@@ -447,14 +455,18 @@ pub trait Value: Sized {
     fn numbers(&self) -> Vec<f64>;
 }
 
-fn from_flag<T: Value>(key: &str, range: Range, text: &str) -> Result<T, String> {
+fn from_flag<T: Value>(key: &'static str, range: Range, text: &str) -> Result<T, SettingError> {
     let value = T::from_text(text.trim())
         .ok_or_else(|| unreadable::<T>(key, range, T::EXPECTED_FLAG, text))?;
     check_value(key, range, &value)?;
     Ok(value)
 }
 
-fn from_toml<T: Value>(key: &str, range: Range, value: &toml::Value) -> Result<T, String> {
+fn from_toml<T: Value>(
+    key: &'static str,
+    range: Range,
+    value: &toml::Value,
+) -> Result<T, SettingError> {
     let written = match value {
         toml::Value::String(s) => s.clone(),
         other => other.to_string(),
@@ -467,36 +479,44 @@ fn from_toml<T: Value>(key: &str, range: Range, value: &toml::Value) -> Result<T
 
 /// A value that is not of the setting's type: a choice names its choices, a number what
 /// it must be.
-fn unreadable<T: Value>(key: &str, range: Range, expected: &str, written: &str) -> String {
+fn unreadable<T: Value>(
+    key: &'static str,
+    range: Range,
+    expected: &'static str,
+    written: &str,
+) -> SettingError {
     if !T::CHOICES.is_empty() {
-        return format!(
-            "unknown {key} '{written}': expected {}{}",
-            T::CHOICES.join(" or "),
-            crate::suggest::did_you_mean(written, T::CHOICES.iter().copied())
-        );
+        return SettingError::UnknownChoice {
+            key,
+            written: written.to_string(),
+            choices: T::CHOICES,
+            suggestion: crate::suggest::did_you_mean(written, T::CHOICES.iter().copied()),
+        };
     }
-    match range {
-        Range::Any => format!("{key} must be {expected}, got '{written}'"),
-        r => format!("{key} must be {expected} {}, got '{written}'", r.describe()),
+    SettingError::NotOfType {
+        key,
+        expected,
+        range: range.describe(),
+        written: written.to_string(),
     }
 }
 
-fn check_value<T: Value>(key: &str, range: Range, value: &T) -> Result<(), String> {
+fn check_value<T: Value>(key: &'static str, range: Range, value: &T) -> Result<(), SettingError> {
     let numbers = value.numbers();
     if numbers.iter().any(|x| !x.is_finite()) {
-        return Err(format!(
-            "{key} must be a finite number, got {}",
-            value.show()
-        ));
+        return Err(SettingError::NotFinite {
+            key,
+            value: value.show(),
+        });
     }
     if numbers.iter().all(|&x| range.contains(x)) {
         Ok(())
     } else {
-        Err(format!(
-            "{key} must be {}, got {}",
-            range.describe(),
-            value.show()
-        ))
+        Err(SettingError::OutOfRange {
+            key,
+            range: range.describe(),
+            value: value.show(),
+        })
     }
 }
 

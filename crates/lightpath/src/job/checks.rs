@@ -3,6 +3,7 @@
 //! and what deserves a warning. A failure here costs nothing; the same failure after an
 //! hour's render cost the hour.
 
+use crate::error::{Error, OutputError, SettingError};
 use crate::film::Film;
 use crate::limits::Limits;
 use crate::output::naming::OutputPaths;
@@ -14,15 +15,11 @@ use std::path::Path;
 
 /// The settings (`settings.rs`), the sample range and the film size, as the scene and
 /// the overrides set them.
-pub fn settings(desc: &SceneDesc, first_sample: u32) -> Result<(), String> {
+pub fn settings(desc: &SceneDesc, first_sample: u32) -> Result<(), SettingError> {
     crate::settings::check(&desc.render)?;
     let spp = desc.render.spp;
     if first_sample.checked_add(spp).is_none() {
-        return Err(format!(
-            "--first-sample {first_sample} with {spp} spp runs past sample index {}: \
-             expected first sample + spp ≤ 2^32 - 1",
-            u32::MAX
-        ));
+        return Err(SettingError::PastLastSample { first_sample, spp });
     }
     let [w, h] = desc.render.resolution;
     let pixels = w as u64 * h as u64;
@@ -33,7 +30,7 @@ pub fn settings(desc: &SceneDesc, first_sample: u32) -> Result<(), String> {
 }
 
 /// The film's memory and the AOVs' channel names, once the AOVs are known.
-pub fn film(scene: &Scene) -> Result<(), String> {
+pub fn film(scene: &Scene) -> Result<(), Error> {
     let (w, h) = (scene.camera.width as u64, scene.camera.height as u64);
     let stride = Film::stride_with(scene.aovs.len(), scene.variance_aovs.len()) as u64;
     // The film's planes and the EXR encoder's blocks in flight: the peak is 1.04× the
@@ -51,11 +48,11 @@ pub fn film(scene: &Scene) -> Result<(), String> {
     let mut seen = BTreeSet::new();
     for aov in &scene.aovs {
         if !seen.insert(aov.name.as_str()) {
-            return Err(format!(
+            return Err(Error::Plan(format!(
                 "two AOVs are named '{}' (an AOV of the scene or --aov and a light-group \
                  part?): each EXR channel name must be unique",
                 aov.name
-            ));
+            )));
         }
     }
     Ok(())
@@ -63,7 +60,7 @@ pub fn film(scene: &Scene) -> Result<(), String> {
 
 /// The EXR and its preview (and an interrupted render's partial pair) can be written
 /// where asked, without destroying the scene or any file it reads.
-pub fn outputs(paths: &OutputPaths, inputs: &[&Path]) -> Result<(), String> {
+pub fn outputs(paths: &OutputPaths, inputs: &[&Path]) -> Result<(), OutputError> {
     target::check_exr_name(&paths.exr, Some(&paths.png))?;
     let partial = crate::output::naming::partial_paths(paths);
     for path in [&paths.exr, &paths.png, &partial.exr, &partial.png] {

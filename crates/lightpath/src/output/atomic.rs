@@ -6,6 +6,7 @@
 //! it is registered so that every exit path, an immediate exit on a second Ctrl-C
 //! included, removes it ([`remove_temporary_files`]).
 
+use crate::error::OutputError;
 use std::fs::File;
 use std::path::{Path, PathBuf};
 use std::sync::Mutex;
@@ -111,9 +112,12 @@ fn link_unnamed(_file: &File, _to: &Path) -> std::io::Result<()> {
 /// `path` until [`Staged::commit`].
 pub fn stage(
     path: &Path,
-    write: impl FnOnce(&mut File) -> Result<(), String>,
-) -> Result<Staged, String> {
-    let cannot = |e: std::io::Error| format!("cannot write {}: {e}", path.display());
+    write: impl FnOnce(&mut File) -> Result<(), OutputError>,
+) -> Result<Staged, OutputError> {
+    let cannot = |source| OutputError::Write {
+        path: path.to_path_buf(),
+        source,
+    };
     let mut staged = match unnamed_file(&directory_of(path)) {
         Some(file) => Staged {
             file: Some(file),
@@ -141,7 +145,10 @@ pub fn stage(
             staged
         }
     };
-    let file = staged.file.as_mut().ok_or("no file")?;
+    // Set in both arms above.
+    let Some(file) = staged.file.as_mut() else {
+        return Err(cannot(std::io::Error::other("no file")));
+    };
     write(file)?;
     file.sync_all().map_err(cannot)?;
     Ok(staged)
@@ -149,11 +156,15 @@ pub fn stage(
 
 impl Staged {
     /// Moves the file under its target's name, replacing what was there in one step.
-    pub fn commit(mut self) -> Result<(), String> {
+    pub fn commit(mut self) -> Result<(), OutputError> {
         let target = self.target.clone();
-        let cannot =
-            |e: std::io::Error| format!("cannot move {} into place: {e}", target.display());
-        let file = self.file.take().ok_or("no file")?;
+        let cannot = |source| OutputError::Move {
+            path: target.clone(),
+            source,
+        };
+        let Some(file) = self.file.take() else {
+            return Err(cannot(std::io::Error::other("no file")));
+        };
         let tmp = match self.named.clone() {
             Some(tmp) => tmp,
             None => {
@@ -189,8 +200,8 @@ impl Drop for Staged {
 /// Writes `path` whole or not at all.
 pub fn atomically(
     path: &Path,
-    write: impl FnOnce(&mut File) -> Result<(), String>,
-) -> Result<(), String> {
+    write: impl FnOnce(&mut File) -> Result<(), OutputError>,
+) -> Result<(), OutputError> {
     stage(path, write)?.commit()
 }
 
@@ -198,11 +209,17 @@ pub fn atomically(
 /// first; then the old preview is removed, the EXR renamed into place, the PNG renamed
 /// beside it. Interrupted anywhere, this leaves the old pair, or an EXR without a
 /// preview — never an EXR beside the preview of another render.
-pub fn commit_pair(exr: Staged, png: Staged) -> Result<(), String> {
+pub fn commit_pair(exr: Staged, png: Staged) -> Result<(), OutputError> {
     match std::fs::remove_file(&png.target) {
         Ok(()) => {}
         Err(e) if e.kind() == std::io::ErrorKind::NotFound => {}
-        Err(e) => return Err(format!("cannot replace {}: {e}", png.target.display())),
+        Err(source) => {
+            return Err(OutputError::Remove {
+                what: "the old preview",
+                path: png.target.clone(),
+                source,
+            })
+        }
     }
     exr.commit()?;
     png.commit()
@@ -212,6 +229,13 @@ pub fn commit_pair(exr: Staged, png: Staged) -> Result<(), String> {
 mod tests {
     use super::*;
     use std::io::Write;
+
+    fn put(f: &mut File, bytes: &[u8], path: &Path) -> Result<(), OutputError> {
+        f.write_all(bytes).map_err(|source| OutputError::Write {
+            path: path.to_path_buf(),
+            source,
+        })
+    }
 
     fn scratch(tag: &str) -> PathBuf {
         let dir =
@@ -234,14 +258,19 @@ mod tests {
         let dir = scratch("stage");
         let target = dir.join("a.exr");
         std::fs::write(&target, b"old").unwrap();
-        let staged = stage(&target, |f| f.write_all(b"new").map_err(|e| e.to_string())).unwrap();
+        let staged = stage(&target, |f| put(f, b"new", &target)).unwrap();
         assert_eq!(std::fs::read(&target).unwrap(), b"old");
         drop(staged);
         assert_eq!(entries(&dir), vec!["a.exr"]);
-        let failed = stage(&target, |_| Err("no".into()));
+        let failed = stage(&target, |_| {
+            Err(OutputError::Encode {
+                path: target.clone(),
+                reason: "no".into(),
+            })
+        });
         assert!(failed.is_err());
         assert_eq!(entries(&dir), vec!["a.exr"]);
-        atomically(&target, |f| f.write_all(b"new").map_err(|e| e.to_string())).unwrap();
+        atomically(&target, |f| put(f, b"new", &target)).unwrap();
         assert_eq!(std::fs::read(&target).unwrap(), b"new");
         assert_eq!(entries(&dir), vec!["a.exr"]);
         std::fs::remove_dir_all(&dir).unwrap();
@@ -253,8 +282,8 @@ mod tests {
         let (exr, png) = (dir.join("a.exr"), dir.join("a.png"));
         std::fs::write(&exr, b"old exr").unwrap();
         std::fs::write(&png, b"old png").unwrap();
-        let e = stage(&exr, |f| f.write_all(b"new exr").map_err(|e| e.to_string())).unwrap();
-        let p = stage(&png, |f| f.write_all(b"new png").map_err(|e| e.to_string())).unwrap();
+        let e = stage(&exr, |f| put(f, b"new exr", &exr)).unwrap();
+        let p = stage(&png, |f| put(f, b"new png", &png)).unwrap();
         commit_pair(e, p).unwrap();
         assert_eq!(std::fs::read(&exr).unwrap(), b"new exr");
         assert_eq!(std::fs::read(&png).unwrap(), b"new png");

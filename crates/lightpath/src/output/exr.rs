@@ -2,6 +2,7 @@
 
 use super::atomic::{stage, Staged};
 use crate::aov::naming::{self, channel_names};
+use crate::error::OutputError;
 use crate::film::Film;
 use crate::scene::Aov;
 use ::exr::prelude::*;
@@ -117,7 +118,7 @@ pub fn write_exr(
     derived: Vec<DerivedAov>,
     options: ExrOptions,
     extra: &[(String, String)],
-) -> std::result::Result<(), String> {
+) -> std::result::Result<(), OutputError> {
     let header = ExrHeader {
         text: extra.to_vec(),
         ..ExrHeader::default()
@@ -135,7 +136,7 @@ pub fn write_film(
     derived: Vec<DerivedAov>,
     options: ExrOptions,
     header: ExrHeader,
-) -> std::result::Result<(), String> {
+) -> std::result::Result<(), OutputError> {
     stage_film(path, film, aovs, derived, options, header)?.commit()
 }
 
@@ -147,7 +148,7 @@ pub fn stage_film(
     derived: Vec<DerivedAov>,
     options: ExrOptions,
     mut header: ExrHeader,
-) -> std::result::Result<Staged, String> {
+) -> std::result::Result<Staged, OutputError> {
     let (width, height) = (film.width as usize, film.height as usize);
     let counts = film
         .sample_counts
@@ -281,7 +282,7 @@ pub fn write_channels(
     channels: Vec<(String, Vec<f32>)>,
     attributes: &[(String, String)],
     options: ExrOptions,
-) -> std::result::Result<(), String> {
+) -> std::result::Result<(), OutputError> {
     let header = ExrHeader {
         text: attributes.to_vec(),
         ..ExrHeader::default()
@@ -301,7 +302,7 @@ pub fn write_image(
     channels: Vec<(String, Vec<f32>)>,
     header: &ExrHeader,
     options: ExrOptions,
-) -> std::result::Result<(), String> {
+) -> std::result::Result<(), OutputError> {
     stage_image(path, width, height, channels, header, options)?.commit()
 }
 
@@ -313,7 +314,7 @@ pub fn stage_image(
     channels: Vec<(String, Vec<f32>)>,
     header: &ExrHeader,
     options: ExrOptions,
-) -> std::result::Result<Staged, String> {
+) -> std::result::Result<Staged, OutputError> {
     let layers = crate::post::cryptomatte::layers_in(&header.text);
     let channels: Vec<AnyChannel<FlatSamples>> = channels
         .into_iter()
@@ -369,7 +370,16 @@ pub fn stage_image(
             .write()
             .to_unbuffered(&mut *file)
             .and_then(|()| sort_header_attributes(file).map_err(exr::error::Error::from))
-            .map_err(|e| format!("cannot write {}: {e}", path.display()))
+            .map_err(|e| match e {
+                exr::error::Error::Io(source) => OutputError::Write {
+                    path: path.to_path_buf(),
+                    source,
+                },
+                other => OutputError::Encode {
+                    path: path.to_path_buf(),
+                    reason: other.to_string(),
+                },
+            })
     })
 }
 

@@ -1,6 +1,7 @@
 //! The PNG preview: sRGB, scaled by an exposure.
 
 use super::atomic::{stage, Staged};
+use crate::error::OutputError;
 use crate::film::Film;
 use std::path::Path;
 
@@ -15,22 +16,12 @@ fn srgb(linear: f32) -> u8 {
 }
 
 /// A PNG of AOV `k` in sRGB, scaled by 2^`exposure`.
-pub fn write_png(
-    path: &Path,
-    film: &Film,
-    k: usize,
-    exposure: f32,
-) -> std::result::Result<(), String> {
+pub fn write_png(path: &Path, film: &Film, k: usize, exposure: f32) -> Result<(), OutputError> {
     stage_png(path, film, k, exposure)?.commit()
 }
 
 /// [`write_png`] up to the rename: the file written and synced beside `path`.
-pub fn stage_png(
-    path: &Path,
-    film: &Film,
-    k: usize,
-    exposure: f32,
-) -> std::result::Result<Staged, String> {
+pub fn stage_png(path: &Path, film: &Film, k: usize, exposure: f32) -> Result<Staged, OutputError> {
     let rgb = [film.channel(k, 0), film.channel(k, 1), film.channel(k, 2)];
     stage_png_rgb(path, film.width, film.height, &rgb, exposure)
 }
@@ -42,7 +33,7 @@ pub fn write_png_rgb(
     height: u32,
     rgb: &[Vec<f32>; 3],
     exposure: f32,
-) -> std::result::Result<(), String> {
+) -> Result<(), OutputError> {
     stage_png_rgb(path, width, height, rgb, exposure)?.commit()
 }
 
@@ -53,7 +44,7 @@ pub fn stage_png_rgb(
     height: u32,
     rgb: &[Vec<f32>; 3],
     exposure: f32,
-) -> std::result::Result<Staged, String> {
+) -> Result<Staged, OutputError> {
     let scale = 2f32.powf(exposure);
     let mut bytes = Vec::with_capacity(rgb[0].len() * 3);
     for ((r, g), b) in rgb[0].iter().zip(&rgb[1]).zip(&rgb[2]) {
@@ -69,8 +60,13 @@ pub fn stage_png_rgb(
             image::ColorType::Rgb8,
             image::ImageFormat::Png,
         )
-        .map_err(|e| e.to_string())
-        .and_then(|()| std::io::Write::flush(&mut out).map_err(|e| e.to_string()))
-        .map_err(|e| format!("cannot write {}: {e}", path.display()))
+        .map_err(|e| OutputError::Encode {
+            path: path.to_path_buf(),
+            reason: e.to_string(),
+        })?;
+        std::io::Write::flush(&mut out).map_err(|source| OutputError::Write {
+            path: path.to_path_buf(),
+            source,
+        })
     })
 }

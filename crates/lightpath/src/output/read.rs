@@ -6,6 +6,7 @@
 //! so they are also inputs of the render's identity.
 
 use super::ExrHeader;
+use crate::error::{ExrFault, ExrReadError};
 use ::exr::meta::attribute::{AttributeValue, Text};
 use ::exr::meta::MetaData;
 use ::exr::prelude::*;
@@ -77,12 +78,12 @@ pub struct ExrLayout {
 }
 
 /// Opens an EXR file for reading: a regular file within the input-size limit.
-fn open(path: &Path) -> Result<std::fs::File, String> {
+fn open(path: &Path) -> Result<std::fs::File, ExrFault> {
     let limits = crate::limits::Limits::current();
-    let file = std::fs::File::open(path).map_err(|e| e.to_string())?;
-    let meta = file.metadata().map_err(|e| e.to_string())?;
+    let file = std::fs::File::open(path).map_err(ExrFault::Open)?;
+    let meta = file.metadata().map_err(ExrFault::Open)?;
     if !meta.is_file() {
-        return Err("not a regular file (a directory, device or pipe)".into());
+        return Err(ExrFault::NotRegular);
     }
     limits.check_file_bytes(meta.len(), "reading this file")?;
     Ok(file)
@@ -99,7 +100,7 @@ enum DataWindow {
 
 /// The first layer's layout, after checking that every layer's declared pixels fit the
 /// memory limit.
-fn layout(meta: &MetaData, window: DataWindow) -> Result<ExrLayout, String> {
+fn layout(meta: &MetaData, window: DataWindow) -> Result<ExrLayout, ExrFault> {
     let mut bytes = 0u64;
     for h in meta.headers.iter() {
         let pixels = h.layer_size.width() as u64 * h.layer_size.height() as u64;
@@ -107,7 +108,7 @@ fn layout(meta: &MetaData, window: DataWindow) -> Result<ExrLayout, String> {
         bytes = bytes.saturating_add(pixels.saturating_mul(h.channels.list.len() as u64 * 8));
     }
     crate::limits::Limits::current().check_memory(bytes, "the pixels its header declares")?;
-    let header = meta.headers.first().ok_or("no image in the file")?;
+    let header = meta.headers.first().ok_or(ExrFault::NoImage)?;
     let display = header.shared_attributes.display_window;
     let position = header.own_attributes.layer_position;
     let (x0, y0) = (
@@ -121,10 +122,12 @@ fn layout(meta: &MetaData, window: DataWindow) -> Result<ExrLayout, String> {
             || x0 as usize + size.width() > display.size.width()
             || y0 as usize + size.height() > display.size.height())
     {
-        return Err(format!(
-            "the data window ({:?} + {:?}) does not lie inside the display window ({:?} + {:?})",
-            position, size, display.position, display.size
-        ));
+        return Err(ExrFault::DataWindow {
+            data_origin: [position.x() as i64, position.y() as i64],
+            data_size: [size.width(), size.height()],
+            display_origin: [display.position.x() as i64, display.position.y() as i64],
+            display_size: [display.size.width(), display.size.height()],
+        });
     }
     Ok(ExrLayout {
         frame: [display.size.width() as u32, display.size.height() as u32],
@@ -154,35 +157,31 @@ fn text_attributes(
 }
 
 /// The header of an EXR file: its first layer's layout and text attributes.
-pub fn read_exr_header(path: &Path) -> Result<ExrLayout, String> {
-    let cannot = |e: String| format!("cannot read {}: {e}", path.display());
-    let file = open(path).map_err(cannot)?;
-    let meta = MetaData::read_from_unbuffered(file, false).map_err(|e| cannot(e.to_string()))?;
-    layout(&meta, DataWindow::InsideDisplay).map_err(|e| format!("{}: {e}", path.display()))
+pub fn read_exr_header(path: &Path) -> Result<ExrLayout, ExrReadError> {
+    let file = open(path).map_err(|f| f.of(path))?;
+    let meta = MetaData::read_from_unbuffered(file, false)
+        .map_err(|e| ExrFault::Decode(e.to_string()).of(path))?;
+    layout(&meta, DataWindow::InsideDisplay).map_err(|f| f.of(path))
 }
 
 /// Checks an EXR file as every read does, before reading its pixels.
-pub fn check_exr_file(path: &Path) -> Result<(), String> {
+pub fn check_exr_file(path: &Path) -> Result<(), ExrReadError> {
     read_exr_header(path).map(|_| ())
 }
 
 /// An EXR file's first layer: every channel (as f32) and the header.
-pub fn read_exr(path: &Path) -> Result<ExrContents, String> {
-    let cannot = |e: String| format!("cannot read {}: {e}", path.display());
-    let file = open(path).map_err(cannot)?;
-    read_first_layer(std::io::BufReader::new(file), DataWindow::InsideDisplay).map_err(cannot)
+pub fn read_exr(path: &Path) -> Result<ExrContents, ExrReadError> {
+    let file = open(path).map_err(|f| f.of(path))?;
+    read_first_layer(std::io::BufReader::new(file), DataWindow::InsideDisplay)
+        .map_err(|f| f.of(path))
 }
 
 /// An EXR held in memory (a texture or a dome map as `limits::read_input` read it): its
 /// first layer's size and its texels as RGBA (`A` is 1 where the image has none), rows
 /// from the top. The data window is the image, as a texture reader takes it.
-pub fn decode_exr_rgba(bytes: &[u8]) -> Result<(usize, usize, Vec<[f32; 4]>), String> {
+pub fn decode_exr_rgba(bytes: &[u8]) -> Result<(usize, usize, Vec<[f32; 4]>), ExrFault> {
     let image = read_first_layer(std::io::Cursor::new(bytes), DataWindow::Anywhere)?;
-    let channel = |name: &str| {
-        image
-            .channel(name)
-            .ok_or_else(|| format!("the image has no {name} channel"))
-    };
+    let channel = |name: &'static str| image.channel(name).ok_or(ExrFault::MissingChannel(name));
     let (r, g, b) = (channel("R")?, channel("G")?, channel("B")?);
     let a = image.channel("A");
     let texels = (0..image.width * image.height)
@@ -194,12 +193,13 @@ pub fn decode_exr_rgba(bytes: &[u8]) -> Result<(usize, usize, Vec<[f32; 4]>), St
 fn read_first_layer(
     mut source: impl Read + Seek + Send,
     window: DataWindow,
-) -> Result<ExrContents, String> {
-    let meta = MetaData::read_from_buffered(&mut source, false).map_err(|e| e.to_string())?;
+) -> Result<ExrContents, ExrFault> {
+    let decode = |e: ::exr::error::Error| ExrFault::Decode(e.to_string());
+    let meta = MetaData::read_from_buffered(&mut source, false).map_err(decode)?;
     let layout = layout(&meta, window)?;
     source
         .seek(std::io::SeekFrom::Start(0))
-        .map_err(|e| e.to_string())?;
+        .map_err(ExrFault::Open)?;
     let image = read()
         .no_deep_data()
         .largest_resolution_level()
@@ -207,7 +207,7 @@ fn read_first_layer(
         .first_valid_layer()
         .all_attributes()
         .from_buffered(source)
-        .map_err(|e| e.to_string())?;
+        .map_err(decode)?;
     let mut layer = image.layer_data;
     // Float channels are moved, not copied (a 1080p file with 40 AOVs holds 1 GB of them).
     let channels = std::mem::take(&mut layer.channel_data.list)

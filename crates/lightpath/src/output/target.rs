@@ -2,38 +2,32 @@
 //! input about to be overwritten, a symlink or device that would be replaced by a plain
 //! file, a directory that is missing or read-only.
 
+use crate::error::OutputError;
 use std::path::{Path, PathBuf};
 
 /// An EXR output must be named `.exr`: `-o x.png` wrote an EXR under a PNG's name, and
 /// `comp -o x.png` then wrote its PNG preview over it.
-pub fn check_exr_name(exr: &Path, preview: Option<&Path>) -> Result<(), String> {
+pub fn check_exr_name(exr: &Path, preview: Option<&Path>) -> Result<(), OutputError> {
     let is_exr = exr
         .extension()
         .is_some_and(|e| e.eq_ignore_ascii_case("exr"));
     if is_exr {
         return Ok(());
     }
-    let beside = preview.map_or(String::new(), |p| {
-        format!(
-            " (the PNG preview is written beside it, as {})",
-            p.display()
-        )
-    });
-    Err(format!(
-        "output {}: the output is OpenEXR, so its name must end in .exr{beside}",
-        exr.display(),
-    ))
+    Err(OutputError::NotExr {
+        path: exr.to_path_buf(),
+        preview: preview.map(Path::to_path_buf),
+    })
 }
 
 /// `path` can be written: it is none of `inputs`, it is a regular file or nothing, and
 /// its directory exists and takes new files.
-pub fn check(path: &Path, inputs: &[&Path]) -> Result<(), String> {
+pub fn check(path: &Path, inputs: &[&Path]) -> Result<(), OutputError> {
     if let Some(input) = inputs.iter().find(|i| same_file(path, i)) {
-        return Err(format!(
-            "output {} is the input {}: writing would destroy it",
-            path.display(),
-            input.display()
-        ));
+        return Err(OutputError::IsInput {
+            path: path.to_path_buf(),
+            input: input.to_path_buf(),
+        });
     }
     replaceable(path)?;
     writable_dir(path)
@@ -49,38 +43,37 @@ pub fn same_file(a: &Path, b: &Path) -> bool {
 
 /// An output may replace a regular file or nothing: a symlink, a device or a directory
 /// under that name would be replaced by a plain file (or fail only after the work).
-pub fn replaceable(path: &Path) -> Result<(), String> {
+pub fn replaceable(path: &Path) -> Result<(), OutputError> {
     match std::fs::symlink_metadata(path) {
         Err(_) => Ok(()),
         Ok(m) if m.file_type().is_file() => Ok(()),
         Ok(m) => {
-            let what = if m.file_type().is_symlink() {
+            let kind = if m.file_type().is_symlink() {
                 "a symbolic link"
             } else if m.is_dir() {
                 "a directory"
             } else {
                 "a device, pipe or socket"
             };
-            Err(format!(
-                "output {} is {what}: outputs replace regular files only; name a file",
-                path.display()
-            ))
+            Err(OutputError::NotRegular {
+                path: path.to_path_buf(),
+                kind,
+            })
         }
     }
 }
 
 /// The directory `path` goes in exists and a file can be created in it.
-pub fn writable_dir(path: &Path) -> Result<(), String> {
+pub fn writable_dir(path: &Path) -> Result<(), OutputError> {
     let dir = match path.parent() {
         Some(d) if !d.as_os_str().is_empty() => d.to_path_buf(),
         _ => PathBuf::from("."),
     };
     if !dir.is_dir() {
-        return Err(format!(
-            "cannot write {}: the directory {} does not exist",
-            path.display(),
-            dir.display()
-        ));
+        return Err(OutputError::NoDirectory {
+            path: path.to_path_buf(),
+            dir,
+        });
     }
     let probe = dir.join(format!(".lightpath-probe-{}", std::process::id()));
     match std::fs::OpenOptions::new()
@@ -92,11 +85,11 @@ pub fn writable_dir(path: &Path) -> Result<(), String> {
             let _ = std::fs::remove_file(&probe);
             Ok(())
         }
-        Err(e) => Err(format!(
-            "cannot write {}: cannot create files in {}: {e}",
-            path.display(),
-            dir.display()
-        )),
+        Err(source) => Err(OutputError::DirectoryNotWritable {
+            path: path.to_path_buf(),
+            dir,
+            source,
+        }),
     }
 }
 
@@ -112,22 +105,29 @@ mod tests {
         std::fs::write(&input, "x").unwrap();
         assert!(check_exr_name(Path::new("a.EXR"), None).is_ok());
         let e = check_exr_name(Path::new("a.png"), Some(Path::new("a.png"))).unwrap_err();
-        assert!(e.contains("must end in .exr"), "{e}");
+        assert!(matches!(e, OutputError::NotExr { .. }), "{e}");
+        assert!(e.to_string().contains("must end in .exr"), "{e}");
         assert!(check(&dir.join("out.exr"), &[&input]).is_ok());
         let e = check(&dir.join("./scene.toml"), &[&input]).unwrap_err();
-        assert!(e.contains("is the input"), "{e}");
+        assert!(
+            matches!(&e, OutputError::IsInput { input: i, .. } if *i == input),
+            "{e}"
+        );
         #[cfg(unix)]
         {
             let link = dir.join("link.exr");
             let _ = std::fs::remove_file(&link);
             std::os::unix::fs::symlink(&input, &link).unwrap();
             let e = check(&link, &[]).unwrap_err();
-            assert!(e.contains("symbolic link"), "{e}");
+            assert!(e.to_string().contains("symbolic link"), "{e}");
             let e = check(Path::new("/dev/null"), &[]).unwrap_err();
-            assert!(e.contains("device"), "{e}");
+            assert!(e.to_string().contains("device"), "{e}");
         }
         let e = check(&dir.join("missing/out.exr"), &[]).unwrap_err();
-        assert!(e.contains("does not exist"), "{e}");
+        assert!(
+            matches!(&e, OutputError::NoDirectory { dir: d, .. } if *d == dir.join("missing")),
+            "{e}"
+        );
         std::fs::remove_dir_all(&dir).unwrap();
     }
 }

@@ -2,6 +2,7 @@
 //! and subtraction, never a re-render.
 
 use crate::aov::naming::{self, channel_names};
+use crate::error::PostError;
 use crate::output::{read_exr, write_image, write_png_rgb, ExrContents};
 use glam::Vec3A;
 use std::path::PathBuf;
@@ -14,11 +15,22 @@ pub struct Term {
 }
 
 /// Parses `beauty + 0.5*beauty_key - indirectSpecular + (1,0.4,0.4)*caustics`.
-pub fn parse(expr: &str) -> Result<Vec<Term>, String> {
+pub fn parse(expr: &str) -> Result<Vec<Term>, PostError> {
     let mut p = Cursor {
         s: expr.as_bytes(),
         i: 0,
     };
+    terms(&mut p).map_err(|(at, expected)| PostError::Expression {
+        expression: expr.to_string(),
+        at,
+        expected,
+    })
+}
+
+/// Where a parse failed (a byte offset) and what was expected there.
+type Expected = (usize, &'static str);
+
+fn terms(p: &mut Cursor) -> Result<Vec<Term>, Expected> {
     let mut terms = Vec::new();
     let mut sign = 1.0;
     p.ws();
@@ -85,10 +97,10 @@ impl Cursor<'_> {
             false
         }
     }
-    fn error(&self, expected: &str) -> String {
-        format!("at {}: expected {expected}", self.i)
+    fn error(&self, expected: &'static str) -> Expected {
+        (self.i, expected)
     }
-    fn number(&mut self) -> Result<f32, String> {
+    fn number(&mut self) -> Result<f32, Expected> {
         let start = self.i;
         while self
             .peek()
@@ -109,7 +121,7 @@ impl Cursor<'_> {
             .and_then(|t| t.parse::<f32>().ok())
             .ok_or_else(|| self.error("a number"))
     }
-    fn factor(&mut self) -> Result<Vec3A, String> {
+    fn factor(&mut self) -> Result<Vec3A, Expected> {
         if self.eat(b'(') {
             let mut v = [0.0; 3];
             for (k, slot) in v.iter_mut().enumerate() {
@@ -128,7 +140,7 @@ impl Cursor<'_> {
             Ok(Vec3A::splat(self.number()?))
         }
     }
-    fn name(&mut self) -> Result<String, String> {
+    fn name(&mut self) -> Result<String, Expected> {
         let start = self.i;
         while self
             .peek()
@@ -144,25 +156,26 @@ impl Cursor<'_> {
 }
 
 /// The RGB planes of an AOV in an EXR.
-pub fn aov_planes<'a>(exr: &'a ExrContents, aov: &str) -> Result<[&'a [f32]; 3], String> {
+pub fn aov_planes<'a>(exr: &'a ExrContents, aov: &str) -> Result<[&'a [f32]; 3], PostError> {
     let names = channel_names(aov);
     let mut out: [&[f32]; 3] = [&[], &[], &[]];
     for (slot, name) in out.iter_mut().zip(&names) {
         *slot = exr.channel(name).ok_or_else(|| {
             let mut known: Vec<String> = exr.aovs().into_iter().map(|(n, _)| n).collect();
             known.sort();
-            format!(
-                "the EXR has no AOV '{aov}' (channel {name}){}; it has {}",
-                crate::suggest::did_you_mean(aov, known.iter().map(String::as_str)),
-                known.join(", ")
-            )
+            PostError::NoAov {
+                aov: aov.to_string(),
+                channel: name.clone(),
+                suggestion: crate::suggest::did_you_mean(aov, known.iter().map(String::as_str)),
+                known,
+            }
         })?;
     }
     Ok(out)
 }
 
 /// Evaluates a sum of scaled AOVs, pixel by pixel.
-pub fn evaluate(exr: &ExrContents, terms: &[Term]) -> Result<[Vec<f32>; 3], String> {
+pub fn evaluate(exr: &ExrContents, terms: &[Term]) -> Result<[Vec<f32>; 3], PostError> {
     let n = exr.width * exr.height;
     let mut out = [vec![0.0f32; n], vec![0.0f32; n], vec![0.0f32; n]];
     for t in terms {
@@ -184,7 +197,7 @@ pub fn gain_terms(
     exr: &ExrContents,
     base: &str,
     gains: &[(String, Vec3A)],
-) -> Result<Vec<Term>, String> {
+) -> Result<Vec<Term>, PostError> {
     let parts: Vec<naming::PartOf> = naming::parts_from_attributes(&exr.attributes)
         .into_iter()
         .filter(|p| p.whole == base && p.kind == naming::PartitionKind::LightGroups)
@@ -207,12 +220,15 @@ pub fn gain_terms(
                     })
                     .collect();
                 known.sort();
-                format!(
-                    "the EXR has no light-group part of '{base}' for group '{group}'{} \
-                     (its light groups of '{base}': {})",
-                    crate::suggest::did_you_mean(group, known.iter().map(String::as_str)),
-                    known.join(", ")
-                )
+                PostError::NoLightGroup {
+                    base: base.to_string(),
+                    group: group.clone(),
+                    suggestion: crate::suggest::did_you_mean(
+                        group,
+                        known.iter().map(String::as_str),
+                    ),
+                    known,
+                }
             })?;
         terms.push(Term {
             scale: *gain - Vec3A::ONE,
@@ -223,13 +239,18 @@ pub fn gain_terms(
 }
 
 /// Parses `--gain GROUP=GAIN` (one number or `R,G,B`).
-pub fn parse_gain(arg: &str) -> Result<(String, Vec3A), String> {
-    let (group, value) = arg.split_once('=').ok_or("expected GROUP=GAIN")?;
+pub fn parse_gain(arg: &str) -> Result<(String, Vec3A), PostError> {
+    let bad = |expected| PostError::Gain {
+        written: arg.to_string(),
+        expected,
+    };
+    let (group, value) = arg.split_once('=').ok_or(bad("GROUP=GAIN"))?;
     let nums: Result<Vec<f32>, _> = value.split(',').map(|v| v.trim().parse::<f32>()).collect();
-    match nums.map_err(|_| format!("bad gain '{value}'"))?.as_slice() {
+    let numbers = "a gain of one number or R,G,B after the '='";
+    match nums.map_err(|_| bad(numbers))?.as_slice() {
         [g] => Ok((group.trim().to_string(), Vec3A::splat(*g))),
         [r, g, b] => Ok((group.trim().to_string(), Vec3A::new(*r, *g, *b))),
-        _ => Err("a gain is one number or R,G,B".into()),
+        _ => Err(bad(numbers)),
     }
 }
 
@@ -304,7 +325,7 @@ pub fn relight_caveat(attributes: &[(String, String)]) -> Option<String> {
 
 /// Runs a comp: writes the output EXR (R, G, B and the input's A) and a PNG beside it,
 /// whose path it returns.
-pub fn run(job: &CompJob) -> Result<PathBuf, String> {
+pub fn run(job: &CompJob) -> Result<PathBuf, PostError> {
     let png = crate::output::naming::preview_path(&job.output);
     crate::output::target::check_exr_name(&job.output, Some(&png))?;
     for out in [&job.output, &png] {
@@ -312,7 +333,7 @@ pub fn run(job: &CompJob) -> Result<PathBuf, String> {
     }
     let exr = read_exr(&job.exr)?;
     let mut terms = match &job.expression {
-        Some(e) => parse(e).map_err(|m| format!("in the expression {e:?}: {m}"))?,
+        Some(e) => parse(e)?,
         None => vec![],
     };
     let gains: Vec<(String, Vec3A)> = job
@@ -414,7 +435,12 @@ mod tests {
         assert_eq!(t[0].scale, Vec3A::splat(-0.5));
         assert_eq!(t[1].scale, Vec3A::splat(2.0));
         assert!(parse("beauty +").is_err());
-        assert!(parse("beauty ^ 2").is_err());
+        match parse("beauty ^ 2").unwrap_err() {
+            PostError::Expression { at, expected, .. } => {
+                assert_eq!((at, expected), (7, "'+', '-' or the end"))
+            }
+            other => panic!("{other}"),
+        }
     }
 
     #[test]

@@ -1,6 +1,14 @@
 //! `lightpath denoise`: every light AOV of an EXR filtered with Intel Open Image Denoise,
 //! the partitions the file declares still adding up afterwards.
 //!
+//! OIDN's recommended final-frame setup: the `albedo` and `normal` AOVs are prefiltered
+//! once (each by an `RT` filter of its own) and every filter then takes them as clean
+//! auxiliary images (`cleanAux`), so their noise is not read as detail. Beauty is filtered
+//! at `high`; every other AOV at the job's quality (`--quality`, default `fast`: about half
+//! `high`'s CPU time, for AOVs that are comped rather than looked at whole). Filters are
+//! made one at a time, in the order beauty, AOVs as they are, AOVs divided by albedo, so
+//! OIDN's working memory is one filter's.
+//!
 //! Per AOV (its kind from the header's `lightpath/kind/<name>`, see `aov::naming`):
 //! - light AOVs are filtered with OIDN's `RT` filter (HDR), with the `albedo` and `normal`
 //!   AOVs as auxiliary images. Following RenderMan's naming convention, AOVs whose names
@@ -8,8 +16,12 @@
 //!   by the albedo first (textures do not smear) and multiplied back after, with a white
 //!   albedo as their auxiliary image; the others (`specular…`, `emission`, light-group
 //!   parts of beauty, user AOVs) are filtered as they are. Light-group parts are filtered
-//!   one by one, like any AOV. An AOV that is zero (or one constant) everywhere stays as
-//!   it is (no filtering).
+//!   one by one, like any AOV; an AOV split by light group (beauty excepted) is then the
+//!   sum of its denoised groups, as a compositor rebuilds it, instead of a filter run of
+//!   its own. An AOV that is zero (or one constant) everywhere stays as
+//!   it is (no filtering), and so does one already converged: where the file holds its
+//!   variance (`<aov>_var`, `--variance`), an AOV whose noise (the root mean variance of
+//!   its pixel means) is below [`CONVERGED_NOISE`] of its mean level, in every channel.
 //! - emission seen directly (`emission`, `bounce0`) is kept as rendered: it has only
 //!   antialiasing noise, and filtering blurs a light's HDR edges into its surroundings.
 //!   Beauty is filtered without it (`beauty − emission`) and gets it back after.
@@ -24,12 +36,18 @@
 //!   not zero (`Σ parts < 10⁻³·whole`), the whole is shared in the noisy parts'
 //!   proportions (equally if those are zero too). Wholes are reconciled before their own
 //!   parts (beauty, then `directDiffuse`, then `directDiffuse_<group>`), and denoised
-//!   light is clamped at zero first. So `lightpath aovs` passes on the result, and
+//!   light is clamped at zero first. Parts kept as they are (emission, zero, constant or
+//!   converged AOVs) keep their values exactly: where the whole is below them, or no part
+//!   was filtered, what the parts cannot hold goes to an explicit remainder AOV,
+//!   `<whole>__remainder_<kind>`, declared a part of the partition (written only where
+//!   needed). So `lightpath aovs` passes on the result, and
 //!   relighting with `comp --gain` from the denoised light groups equals the denoised
 //!   beauty when every gain is 1.
 
 use crate::aov::naming::{self, channel_names, AovKind};
+use crate::error::{DenoiseFault, OidnError, PostError};
 use crate::output::{read_exr, stage_image, ExrContents, ExrOptions};
+use crate::progress::{Progress, Silent, Task};
 use std::collections::HashMap;
 use std::path::PathBuf;
 
@@ -52,13 +70,22 @@ const MIN_ALBEDO: f32 = 0.01;
 /// OIDN's quality setting.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
 pub enum Quality {
-    /// The best images (OIDN's default for final frames).
-    #[default]
+    /// The best images (OIDN's default for final frames): always the beauty's.
     High,
     Balanced,
-    /// A smaller network: about twice as fast on a CPU, for previews.
+    /// A smaller network: about half `high`'s CPU time. The default for AOVs other than
+    /// beauty (`--quality`).
+    #[default]
     Fast,
 }
+
+/// The quality beauty is always filtered at, whatever `--quality` says of the AOVs.
+pub const BEAUTY_QUALITY: Quality = Quality::High;
+
+/// An AOV whose noise is below this fraction of its mean level in every channel is left
+/// as it is: half a step of an 8-bit display at the AOV's mean level (1/512), noise no
+/// viewer sees and a filter could only blur.
+pub const CONVERGED_NOISE: f64 = 1.0 / 512.0;
 
 impl Quality {
     pub fn parse(s: &str) -> Result<Quality, crate::error::InvalidValue> {
@@ -87,6 +114,7 @@ pub struct DenoiseJob {
     pub output: PathBuf,
     /// Keep each filtered AOV's input as `<aov>_noisy`.
     pub keep_noisy: bool,
+    /// The quality of every AOV but beauty (always [`BEAUTY_QUALITY`]).
     pub quality: Quality,
     /// Exposure of the PNG preview of the denoised beauty written beside the output, in
     /// stops.
@@ -117,6 +145,12 @@ pub struct DenoiseSummary {
     pub filtered: usize,
     /// Light AOVs that were zero (or one constant) everywhere, left as they are.
     pub zero: usize,
+    /// Light AOVs whose variance says they are converged, left as they are.
+    pub converged: usize,
+    /// Wholes split by light group made as the sum of their denoised groups.
+    pub summed: usize,
+    /// Remainder AOVs written to keep partitions summing.
+    pub remainders: usize,
     /// Partitions reconciled.
     pub partitions: usize,
     /// Auxiliary images used: albedo, normal.
@@ -134,9 +168,16 @@ impl DenoiseSummary {
             _ => "no auxiliary images (no albedo AOV)",
         };
         format!(
-            "denoised {} AOVs ({} zero or constant AOVs left as they are) with {aux}, {} partitions \
-             reconciled: {:.2} s",
-            self.filtered, self.zero, self.partitions, self.seconds
+            "denoised {} AOVs ({} more as sums of their light groups; {} zero or constant and \
+             {} converged AOVs left as they are) with {aux}, {} partitions reconciled ({} \
+             remainders): {:.2} s",
+            self.filtered,
+            self.summed,
+            self.zero,
+            self.converged,
+            self.partitions,
+            self.remainders,
+            self.seconds
         )
     }
 }
@@ -192,11 +233,21 @@ type Planes = [Vec<f32>; 3];
 /// An EXR's named channels.
 type Channels = Vec<(String, Vec<f32>)>;
 
+/// How one AOV is filtered.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct How {
+    /// The input was divided by the albedo: filter it with a white albedo.
+    pub albedo_divided: bool,
+    pub quality: Quality,
+}
+
 /// An image filter over interleaved RGB of the file's size: OIDN, or a stand-in in
-/// tests. `albedo_divided`: the input was divided by the albedo (filter it with a white
-/// albedo).
+/// tests.
 pub trait Filter {
-    fn filter(&mut self, rgb: &mut [f32], albedo_divided: bool) -> Result<(), String>;
+    /// Prefilters the auxiliary images in place, once, before any AOV is filtered.
+    fn prefilter(&mut self, aux: &mut Aux) -> Result<(), DenoiseFault>;
+    /// Filters one image with the (prefiltered) auxiliary images.
+    fn filter(&mut self, rgb: &mut [f32], how: How, aux: &Aux) -> Result<(), OidnError>;
 }
 
 /// The auxiliary images, interleaved RGB: albedo clamped to [0, 1], normal as rendered.
@@ -253,22 +304,28 @@ pub fn aux_images(exr: &ExrContents) -> Aux {
 fn filter_aov(
     planes: &Planes,
     treatment: Treatment,
-    albedo: Option<&[f32]>,
+    quality: Quality,
+    aux: &Aux,
     filter: &mut dyn Filter,
-) -> Result<Planes, String> {
+) -> Result<Planes, OidnError> {
     let mut rgb = interleave([&planes[0], &planes[1], &planes[2]]);
     for v in &mut rgb {
         if !v.is_finite() || *v < 0.0 {
             *v = 0.0;
         }
     }
+    let albedo = aux.albedo.as_deref();
     let divide = treatment == Treatment::AlbedoDivided && albedo.is_some();
     if let (true, Some(a)) = (divide, albedo) {
         for (v, a) in rgb.iter_mut().zip(a) {
             *v /= a.max(MIN_ALBEDO);
         }
     }
-    filter.filter(&mut rgb, divide)?;
+    let how = How {
+        albedo_divided: divide,
+        quality,
+    };
+    filter.filter(&mut rgb, how, aux)?;
     if let (true, Some(a)) = (divide, albedo) {
         for (v, a) in rgb.iter_mut().zip(a) {
             *v *= a.max(MIN_ALBEDO);
@@ -297,6 +354,7 @@ fn minus(a: &Planes, b: &Planes) -> Planes {
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct Partition {
     pub whole: String,
+    pub kind: naming::PartitionKind,
     pub parts: Vec<String>,
 }
 
@@ -331,78 +389,94 @@ pub fn partitions(exr: &ExrContents) -> Vec<Partition> {
     groups.sort_by(|a, b| (a.0, &a.1, a.2).cmp(&(b.0, &b.1, b.2)));
     groups
         .into_iter()
-        .map(|(_, whole, _, parts)| Partition { whole, parts })
+        .map(|(_, whole, kind, parts)| Partition { whole, kind, parts })
         .collect()
 }
 
 /// Scales `parts` so they sum to `whole`, per pixel and channel (see the module doc);
 /// `noisy` are the parts before filtering, for pixels where the filtered parts are empty.
-/// `fixed` parts (emission, kept as rendered) keep their value where the whole holds it,
-/// and the others share the rest.
-pub fn reconcile(whole: &Planes, parts: &mut [&mut Planes], noisy: &[&Planes], fixed: &[bool]) {
+/// `fixed` parts (kept as rendered) keep their value; the others share the rest of the
+/// whole. What the free parts cannot hold (the whole below the fixed parts, or no free
+/// part) is returned as the remainder, `None` where it is zero everywhere.
+pub fn reconcile(
+    whole: &Planes,
+    parts: &mut [&mut Planes],
+    noisy: &[&Planes],
+    fixed: &[bool],
+) -> Option<Planes> {
     let n = whole[0].len();
     let free: Vec<usize> = (0..parts.len()).filter(|k| !fixed[*k]).collect();
+    let mut remainder: Option<Planes> = None;
     for c in 0..3 {
         for i in 0..n {
             let kept: f32 = (0..parts.len())
                 .filter(|k| fixed[*k])
                 .map(|k| parts[k][c][i])
                 .sum();
-            // Where the whole is below its fixed parts, every part is scaled instead.
-            let (w, share): (f32, &[usize]) = if whole[c][i] >= kept && !free.is_empty() {
-                (whole[c][i] - kept, &free)
-            } else {
-                (whole[c][i], &[])
-            };
-            let all: Vec<usize>;
-            let share = if share.is_empty() {
-                all = (0..parts.len()).collect();
-                &all[..]
-            } else {
-                share
-            };
-            let sum: f32 = share.iter().map(|&k| parts[k][c][i]).sum();
-            if sum > 0.0 && sum >= 1e-3 * w {
-                let s = w / sum;
-                share.iter().for_each(|&k| parts[k][c][i] *= s);
+            let w = whole[c][i] - kept;
+            if w < 0.0 || free.is_empty() {
+                free.iter().for_each(|&k| parts[k][c][i] = 0.0);
+                if w != 0.0 {
+                    let r = remainder.get_or_insert_with(|| [0, 1, 2].map(|_| vec![0.0; n]));
+                    r[c][i] = w;
+                }
                 continue;
             }
-            let noisy_sum: f32 = share.iter().map(|&k| noisy[k][c][i].max(0.0)).sum();
-            for &k in share {
+            let sum: f32 = free.iter().map(|&k| parts[k][c][i]).sum();
+            if sum > 0.0 && sum >= 1e-3 * w {
+                let s = w / sum;
+                free.iter().for_each(|&k| parts[k][c][i] *= s);
+                continue;
+            }
+            let noisy_sum: f32 = free.iter().map(|&k| noisy[k][c][i].max(0.0)).sum();
+            for &k in &free {
                 parts[k][c][i] = if noisy_sum > 0.0 {
                     w * noisy[k][c][i].max(0.0) / noisy_sum
                 } else {
-                    w / share.len() as f32
+                    w / free.len() as f32
                 };
             }
         }
     }
+    remainder
 }
 
 /// Denoises an EXR's contents with `filter`: the output's channels and attributes.
+/// `aux` (from [`aux_images`]) is prefiltered first; `quality` is every AOV's but
+/// beauty's; `progress` counts filter runs.
 pub fn denoise_contents(
     exr: &ExrContents,
-    aux: &Aux,
+    mut aux: Aux,
     filter: &mut dyn Filter,
-    keep_noisy: bool,
+    options: ContentOptions,
     summary: &mut DenoiseSummary,
-) -> Result<(Channels, Vec<(String, String)>), String> {
+    progress: &dyn Progress,
+) -> Result<(Channels, Vec<(String, String)>), DenoiseFault> {
     if exr
         .attributes
         .iter()
         .any(|(k, _)| k == naming::DENOISED_ATTRIBUTE)
     {
-        return Err(
-            "it is already denoised (it has a lightpath/denoised attribute): \
-                    denoise the noisy render instead"
-                .into(),
-        );
+        return Err(DenoiseFault::AlreadyDenoised);
     }
     let plan = plan(exr);
     summary.albedo = aux.albedo.is_some();
     summary.normal = aux.normal.is_some();
-    let (noisy, mut denoised) = filter_aovs(exr, &plan, aux, filter, summary)?;
-    reconcile_partitions(exr, &noisy, &mut denoised, summary);
+    let work = work(exr, &plan, summary);
+    let pixels = (exr.width * exr.height) as u64;
+    let prefilters = aux.albedo.iter().chain(&aux.normal).count() as u64;
+    progress.task(Task::DENOISE);
+    progress.start(prefilters + work.filter.len() as u64, 0);
+    filter.prefilter(&mut aux)?;
+    progress.advance(prefilters, prefilters * pixels);
+    let (noisy, mut denoised) = filter_aovs(exr, &work, &aux, filter, options.quality, progress)?;
+    progress.finish();
+    let mut attributes = exr.attributes.clone();
+    let remainders = reconcile_partitions(exr, &noisy, &mut denoised, &work.kept, summary);
+    for r in &remainders {
+        attributes.extend(r.attributes());
+        denoised.insert(r.name.clone(), r.planes.clone());
+    }
     if plan
         .iter()
         .any(|(n, t)| n == naming::SHADOW && *t == Treatment::Recomputed)
@@ -410,7 +484,7 @@ pub fn denoise_contents(
         let matte = shadow_matte_of(exr, &denoised);
         denoised.insert(naming::SHADOW.into(), matte);
     }
-    // Every input channel, the denoised AOVs' replaced.
+    // Every input channel, the denoised AOVs' replaced; remainders after them.
     let mut replaced: HashMap<String, Vec<f32>> = HashMap::new();
     for (name, planes) in &denoised {
         for (ch, v) in channel_names(name).into_iter().zip(planes) {
@@ -422,34 +496,50 @@ pub fn denoise_contents(
         .iter()
         .map(|(n, v)| (n.clone(), replaced.remove(n).unwrap_or_else(|| v.clone())))
         .collect();
-    let mut attributes = exr.attributes.clone();
-    if keep_noisy {
+    for r in &remainders {
+        for ch in channel_names(&r.name) {
+            if let Some(v) = replaced.remove(&ch) {
+                channels.push((ch, v));
+            }
+        }
+    }
+    if options.keep_noisy {
         keep_noisy_aovs(exr, &noisy, &mut channels, &mut attributes)?;
     }
-    attributes.push((naming::DENOISED_ATTRIBUTE.into(), describe(summary)));
+    attributes.push((
+        naming::DENOISED_ATTRIBUTE.into(),
+        describe(summary, options.quality),
+    ));
     Ok((channels, attributes))
+}
+
+/// What [`denoise_contents`] is asked besides the file.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct ContentOptions {
+    /// Keep each filtered AOV's input as `<aov>_noisy`.
+    pub keep_noisy: bool,
+    /// The quality of every AOV but beauty.
+    pub quality: Quality,
 }
 
 /// Each AOV the plan filters or keeps, by name: as read (`noisy`) and as it goes out.
 type AovPlanes = HashMap<String, Planes>;
 
-/// Filters the AOVs the plan says to; emission is kept as rendered (negative and
-/// non-finite values zeroed), AOVs constant everywhere are kept as they are.
-fn filter_aovs(
-    exr: &ExrContents,
-    plan: &[(String, Treatment)],
-    aux: &Aux,
-    filter: &mut dyn Filter,
-    summary: &mut DenoiseSummary,
-) -> Result<(AovPlanes, AovPlanes), String> {
-    let mut noisy = AovPlanes::new();
-    let mut denoised = AovPlanes::new();
-    // Beauty is filtered without the emission seen directly, which is added back after.
-    let emission = plan
-        .iter()
-        .any(|(n, t)| n == EMISSION && *t == Treatment::Emission)
-        .then(|| planes_of(exr, EMISSION))
-        .flatten();
+/// The light AOVs of a file, sorted by what is done with them.
+struct Work {
+    /// Filtered, in the order filters are made: beauty, AOVs as they are, AOVs divided
+    /// by albedo (so each filter is made once).
+    filter: Vec<(String, Treatment)>,
+    /// Kept as rendered: emission, and AOVs zero, constant or converged everywhere.
+    kept: std::collections::HashSet<String>,
+    /// Wholes split by light group (beauty excepted) made as the sum of their denoised
+    /// parts, with those parts.
+    summed: Vec<(String, Vec<String>)>,
+}
+
+fn work(exr: &ExrContents, plan: &[(String, Treatment)], summary: &mut DenoiseSummary) -> Work {
+    let mut filter = Vec::new();
+    let mut kept = std::collections::HashSet::new();
     for (name, t) in plan {
         if !matches!(
             t,
@@ -460,24 +550,123 @@ fn filter_aovs(
         let Some(p) = planes_of(exr, name) else {
             continue;
         };
-        let out = if *t == Treatment::Emission {
-            p.clone().map(|c| {
-                c.into_iter()
-                    .map(|v| if v.is_finite() { v.max(0.0) } else { 0.0 })
-                    .collect()
-            })
+        if *t == Treatment::Emission {
+            kept.insert(name.clone());
         } else if p.iter().all(|c| c.iter().all(|v| *v == c[0])) {
             // Zero or constant everywhere: no noise to remove (and no OIDN run to pay).
             summary.zero += 1;
-            p.clone()
+            kept.insert(name.clone());
+        } else if converged(exr, name, &p) {
+            summary.converged += 1;
+            kept.insert(name.clone());
         } else {
-            summary.filtered += 1;
-            let emission = emission.as_ref().filter(|_| name == naming::BEAUTY);
-            filter_lit(&p, *t, emission, aux, filter)
-                .map_err(|e| format!("filtering AOV '{name}': {e}"))?
+            filter.push((name.clone(), *t));
+        }
+    }
+    // A whole split by light group is what a compositor rebuilds from its groups: the
+    // sum of the denoised parts, one OIDN run fewer per split AOV. Beauty, the image
+    // looked at whole, is filtered itself (at high) and stays authoritative.
+    let mut summed = Vec::new();
+    for p in partitions(exr) {
+        let filtered = filter.iter().position(|(n, _)| *n == p.whole);
+        let complete = p.parts.iter().all(|n| planes_of(exr, n).is_some());
+        if p.kind != naming::PartitionKind::LightGroups || p.whole == naming::BEAUTY || !complete {
+            continue;
+        }
+        if let Some(i) = filtered {
+            filter.remove(i);
+            summed.push((p.whole, p.parts));
+        }
+    }
+    filter.sort_by_key(|(name, t)| (name != naming::BEAUTY, *t == Treatment::AlbedoDivided));
+    summary.filtered = filter.len();
+    summary.summed = summed.len();
+    Work {
+        filter,
+        kept,
+        summed,
+    }
+}
+
+/// Whether the file's variance of AOV `name` (its `<name>_var`, if written) says its
+/// noise is below [`CONVERGED_NOISE`] of its mean level in every channel.
+fn converged(exr: &ExrContents, name: &str, planes: &Planes) -> bool {
+    let Some(variance) = planes_of(exr, &naming::variance_name(name)) else {
+        return false;
+    };
+    (0..3).all(|c| {
+        let n = planes[c].len().max(1) as f64;
+        let level = planes[c].iter().map(|v| v.abs() as f64).sum::<f64>() / n;
+        let noise = (variance[c].iter().map(|v| v.max(0.0) as f64).sum::<f64>() / n).sqrt();
+        level.is_finite() && noise.is_finite() && noise <= CONVERGED_NOISE * level
+    })
+}
+
+/// Filters the work's AOVs; the kept ones go out as read (emission with negative and
+/// non-finite values zeroed).
+fn filter_aovs(
+    exr: &ExrContents,
+    work: &Work,
+    aux: &Aux,
+    filter: &mut dyn Filter,
+    quality: Quality,
+    progress: &dyn Progress,
+) -> Result<(AovPlanes, AovPlanes), DenoiseFault> {
+    let mut noisy = AovPlanes::new();
+    let mut denoised = AovPlanes::new();
+    for name in &work.kept {
+        let Some(p) = planes_of(exr, name) else {
+            continue;
         };
+        let out = p.clone().map(|c| {
+            c.into_iter()
+                .map(|v| if v.is_finite() { v.max(0.0) } else { 0.0 })
+                .collect()
+        });
+        denoised.insert(
+            name.clone(),
+            if is_emission(name) { out } else { p.clone() },
+        );
+        noisy.insert(name.clone(), p);
+    }
+    // Beauty is filtered without the emission seen directly, which is added back after.
+    let emission = work
+        .kept
+        .contains(EMISSION)
+        .then(|| planes_of(exr, EMISSION))
+        .flatten();
+    let pixels = (exr.width * exr.height) as u64;
+    for (name, t) in &work.filter {
+        let Some(p) = planes_of(exr, name) else {
+            continue;
+        };
+        let is_beauty = name == naming::BEAUTY;
+        let quality = if is_beauty { BEAUTY_QUALITY } else { quality };
+        let emission = emission.as_ref().filter(|_| is_beauty);
+        let out = filter_lit(&p, *t, quality, emission, aux, filter).map_err(|source| {
+            DenoiseFault::Filtering {
+                aov: name.clone(),
+                source,
+            }
+        })?;
+        progress.advance(1, pixels);
         denoised.insert(name.clone(), out);
         noisy.insert(name.clone(), p);
+    }
+    for (whole, parts) in &work.summed {
+        let (Some(p), Some(first)) = (planes_of(exr, whole), parts.first()) else {
+            continue;
+        };
+        let mut sum = denoised.get(first).cloned().unwrap_or_default();
+        for part in &parts[1..] {
+            if let Some(q) = denoised.get(part) {
+                for c in 0..3 {
+                    sum[c].iter_mut().zip(&q[c]).for_each(|(s, v)| *s += v);
+                }
+            }
+        }
+        denoised.insert(whole.clone(), sum);
+        noisy.insert(whole.clone(), p);
     }
     Ok((noisy, denoised))
 }
@@ -487,17 +676,13 @@ fn filter_aovs(
 fn filter_lit(
     p: &Planes,
     t: Treatment,
+    quality: Quality,
     emission: Option<&Planes>,
     aux: &Aux,
     filter: &mut dyn Filter,
-) -> Result<Planes, String> {
+) -> Result<Planes, OidnError> {
     let unlit = emission.map(|e| minus(p, e));
-    let mut out = filter_aov(
-        unlit.as_ref().unwrap_or(p),
-        t,
-        aux.albedo.as_deref(),
-        filter,
-    )?;
+    let mut out = filter_aov(unlit.as_ref().unwrap_or(p), t, quality, aux, filter)?;
     if let Some(e) = emission {
         for c in 0..3 {
             for (o, e) in out[c].iter_mut().zip(&e[c]) {
@@ -508,13 +693,53 @@ fn filter_lit(
     Ok(out)
 }
 
-/// Scales each declared partition's denoised parts to sum to its denoised whole.
+/// What a partition's parts kept as rendered could not hold of its denoised whole.
+struct Remainder {
+    name: String,
+    whole: String,
+    kind: naming::PartitionKind,
+    planes: Planes,
+}
+
+impl Remainder {
+    /// Its definition, kind and place in the partition, as the header declares them.
+    fn attributes(&self) -> Vec<(String, String)> {
+        vec![
+            (
+                naming::aov_attribute(&self.name),
+                format!(
+                    "denoise remainder: '{}' minus its {} parts, where the parts kept as \
+                     rendered exceed it or none was filtered",
+                    self.whole,
+                    self.kind.as_str()
+                ),
+            ),
+            (
+                naming::kind_attribute(&self.name),
+                AovKind::Light.as_str().into(),
+            ),
+            (
+                format!("{}{}", naming::PART_ATTRIBUTE_PREFIX, self.name),
+                self.whole.clone(),
+            ),
+            (
+                format!("{}{}", naming::PARTITION_ATTRIBUTE_PREFIX, self.name),
+                self.kind.as_str().into(),
+            ),
+        ]
+    }
+}
+
+/// Scales each declared partition's denoised parts to sum to its denoised whole; the
+/// remainders that takes.
 fn reconcile_partitions(
     exr: &ExrContents,
     noisy: &AovPlanes,
     denoised: &mut AovPlanes,
+    kept: &std::collections::HashSet<String>,
     summary: &mut DenoiseSummary,
-) {
+) -> Vec<Remainder> {
+    let mut remainders = Vec::new();
     for part in partitions(exr) {
         let all = std::iter::once(&part.whole).chain(&part.parts);
         if !all.clone().all(|n| denoised.contains_key(n)) {
@@ -528,13 +753,27 @@ fn reconcile_partitions(
             .map(|p| denoised.remove(p).unwrap_or_default())
             .collect();
         let mut refs: Vec<&mut Planes> = taken.iter_mut().collect();
-        let fixed: Vec<bool> = part.parts.iter().map(|p| is_emission(p)).collect();
-        reconcile(&whole, &mut refs, &noisy_parts, &fixed);
+        let fixed: Vec<bool> = part.parts.iter().map(|p| kept.contains(p)).collect();
+        if let Some(planes) = reconcile(&whole, &mut refs, &noisy_parts, &fixed) {
+            let name = format!("{}__remainder_{}", part.whole, part.kind.as_str());
+            // A file that already has the name keeps it (its parts then sum to the whole
+            // only up to this remainder, which `lightpath aovs` reports).
+            if !exr.aovs().iter().any(|(n, _)| *n == name) {
+                summary.remainders += 1;
+                remainders.push(Remainder {
+                    name,
+                    whole: part.whole.clone(),
+                    kind: part.kind,
+                    planes,
+                });
+            }
+        }
         for (name, planes) in part.parts.iter().zip(taken) {
             denoised.insert(name.clone(), planes);
         }
         summary.partitions += 1;
     }
+    remainders
 }
 
 /// The shadow matte made again from the denoised `occluded` and `unoccluded`.
@@ -559,17 +798,17 @@ fn keep_noisy_aovs(
     noisy: &AovPlanes,
     channels: &mut Channels,
     attributes: &mut Vec<(String, String)>,
-) -> Result<(), String> {
+) -> Result<(), DenoiseFault> {
     let definitions: HashMap<String, String> = exr.aovs().into_iter().collect();
     let mut names: Vec<&String> = noisy.keys().filter(|n| !is_emission(n)).collect();
     names.sort();
     for name in names {
         let kept = naming::noisy_name(name);
         if definitions.contains_key(&kept) {
-            return Err(format!(
-                "--keep-noisy would name the noisy '{name}' '{kept}', which the file \
-                 already has"
-            ));
+            return Err(DenoiseFault::NoisyNameTaken {
+                aov: name.clone(),
+                name: kept,
+            });
         }
         for (ch, v) in channel_names(&kept).into_iter().zip(&noisy[name]) {
             channels.push((ch, v.clone()));
@@ -591,16 +830,21 @@ fn keep_noisy_aovs(
 }
 
 /// The `lightpath/denoised` attribute: how the file was filtered.
-fn describe(s: &DenoiseSummary) -> String {
+fn describe(s: &DenoiseSummary, quality: Quality) -> String {
     let aux = match (s.albedo, s.normal) {
-        (true, true) => "albedo and normal auxiliary images",
-        (true, false) => "albedo auxiliary image",
+        (true, true) => "prefiltered albedo and normal auxiliary images (cleanAux)",
+        (true, false) => "prefiltered albedo auxiliary image (cleanAux)",
         _ => "no auxiliary images",
     };
     format!(
-        "Intel Open Image Denoise RT filter (hdr), {aux}; AOVs named diffuse*, \
-         directDiffuse*, indirectDiffuse*, subsurface* divided by albedo; every declared \
-         partition's parts scaled to sum to its denoised whole"
+        "Intel Open Image Denoise RT filter (hdr), {aux}; beauty at {}, other AOVs at {}; \
+         AOVs named diffuse*, directDiffuse*, indirectDiffuse*, subsurface* divided by \
+         albedo; AOVs split by light group (beauty excepted) the sum of their denoised \
+         groups; zero, constant and converged AOVs kept; every declared partition's \
+         filtered parts scaled to sum to its denoised whole, with a remainder AOV where \
+         its kept parts cannot",
+        BEAUTY_QUALITY.as_str(),
+        quality.as_str()
     )
 }
 
@@ -619,11 +863,23 @@ pub fn memory_needed(width: usize, height: usize, channels: usize) -> u64 {
 }
 
 /// Runs a denoise: reads the input, filters, writes the output atomically.
-pub fn run(job: &DenoiseJob) -> Result<DenoiseSummary, String> {
+pub fn run(job: &DenoiseJob) -> Result<DenoiseSummary, PostError> {
+    run_with_progress(job, &Silent)
+}
+
+/// [`run`], reporting each filter run to `progress`.
+pub fn run_with_progress(
+    job: &DenoiseJob,
+    progress: &dyn Progress,
+) -> Result<DenoiseSummary, PostError> {
     // Said first: without the denoiser no input could be of use.
     if !AVAILABLE {
-        return Err(UNAVAILABLE.into());
+        return Err(PostError::DenoiseUnavailable);
     }
+    let cannot = |fault: DenoiseFault| PostError::Denoise {
+        path: job.input.clone(),
+        fault,
+    };
     let start = std::time::Instant::now();
     let exr = read_exr(&job.input)?;
     // Checked before Open Image Denoise allocates: the library's allocation failures
@@ -639,14 +895,19 @@ pub fn run(job: &DenoiseJob) -> Result<DenoiseSummary, String> {
                 exr.channels.len()
             ),
         )
-        .map_err(|e| format!("cannot denoise {}: {e}", job.input.display()))?;
+        .map_err(|e| cannot(e.into()))?;
     let aux = aux_images(&exr);
     let mut summary = DenoiseSummary::default();
-    let (channels, attributes) = with_oidn(exr.width, exr.height, &aux, job.quality, |f| {
-        denoise_contents(&exr, &aux, f, job.keep_noisy, &mut summary)
+    let options = ContentOptions {
+        keep_noisy: job.keep_noisy,
+        quality: job.quality,
+    };
+    let (channels, attributes) = with_oidn(exr.width, exr.height, |f| {
+        denoise_contents(&exr, aux, f, options, &mut summary, progress)
     })
+    .map_err(DenoiseFault::from)
     .and_then(|r| r)
-    .map_err(|e| format!("cannot denoise {}: {e}", job.input.display()))?;
+    .map_err(cannot)?;
     // The input's header with the denoiser's attributes: a crop stays a crop of its frame.
     let header = exr.derived_header(attributes);
     let png_path = crate::output::naming::preview_path(&job.output);
@@ -677,79 +938,119 @@ pub fn run(job: &DenoiseJob) -> Result<DenoiseSummary, String> {
     Ok(summary)
 }
 
-/// Runs `body` with OIDN's RT filter for images of this size and these auxiliary images.
+/// Runs `body` with OIDN filters for images of this size: made when first asked for
+/// and kept while the next image asks for the same (one filter's memory at a time).
 #[cfg(feature = "denoise")]
 fn with_oidn<R>(
     width: usize,
     height: usize,
-    aux: &Aux,
-    quality: Quality,
     body: impl FnOnce(&mut dyn Filter) -> R,
-) -> Result<R, String> {
-    let device = oidn::Device::new().map_err(|e| format!("Open Image Denoise: {e}"))?;
-    let quality = match quality {
-        Quality::High => oidn::Quality::High,
-        Quality::Balanced => oidn::Quality::Balanced,
-        Quality::Fast => oidn::Quality::Fast,
+) -> Result<R, OidnError> {
+    use super::oidn::{Device, Filter as Rt, Inputs};
+    let device = Device::new()?;
+    let raw = |q: Quality| match q {
+        Quality::High => super::oidn::Quality::High,
+        Quality::Balanced => super::oidn::Quality::Balanced,
+        Quality::Fast => super::oidn::Quality::Fast,
     };
-    let new_filter = |albedo: Option<&[f32]>| -> Result<oidn::RayTracing<'_>, String> {
-        let mut f =
-            oidn::RayTracing::try_new(&device).map_err(|e| format!("Open Image Denoise: {e}"))?;
-        f.image_dimensions(width, height)
-            .hdr(true)
-            .filter_quality(quality);
-        match (albedo, &aux.normal) {
-            (Some(a), Some(n)) => {
-                f.albedo_normal(a, n);
-            }
-            (Some(a), None) => {
-                f.albedo(a);
-            }
-            _ => {}
-        }
-        Ok(f)
-    };
-    let white = aux.albedo.as_ref().map(|a| vec![1.0f32; a.len()]);
-    let plain = new_filter(aux.albedo.as_deref())?;
-    let divided = match &white {
-        Some(w) => Some(new_filter(Some(w))?),
-        None => None,
-    };
-    struct Oidn<'a> {
-        device: &'a oidn::Device,
-        plain: oidn::RayTracing<'a>,
-        divided: Option<oidn::RayTracing<'a>>,
+    struct Oidn<'d> {
+        device: &'d Device,
+        width: usize,
+        height: usize,
+        current: Option<((Inputs, super::oidn::Quality), Rt<'d>)>,
+        white: Vec<f32>,
     }
-    impl Filter for Oidn<'_> {
-        fn filter(&mut self, rgb: &mut [f32], albedo_divided: bool) -> Result<(), String> {
-            let f = match (&self.divided, albedo_divided) {
-                (Some(d), true) => d,
-                _ => &self.plain,
+    impl<'d> Oidn<'d> {
+        fn filter_for(
+            &mut self,
+            inputs: Inputs,
+            quality: super::oidn::Quality,
+        ) -> Result<&mut Rt<'d>, OidnError> {
+            if self.current.as_ref().map(|c| c.0) != Some((inputs, quality)) {
+                // The old filter's memory is freed before the new one's is taken.
+                self.current = None;
+                let f = Rt::new(self.device, self.width, self.height, inputs, quality)?;
+                self.current = Some(((inputs, quality), f));
+            }
+            match &mut self.current {
+                Some((_, f)) => Ok(f),
+                None => Err(OidnError("no filter".into())),
+            }
+        }
+    }
+    struct Run<'d> {
+        oidn: Oidn<'d>,
+        raw: fn(Quality) -> super::oidn::Quality,
+    }
+    impl Filter for Run<'_> {
+        fn prefilter(&mut self, aux: &mut Aux) -> Result<(), DenoiseFault> {
+            // At the beauty's quality: the clean images steer every filter after.
+            let q = (self.raw)(BEAUTY_QUALITY);
+            if let Some(a) = aux.albedo.as_mut() {
+                let f = self.oidn.filter_for(Inputs::Albedo, q);
+                f.and_then(|f| f.run(a, None, None)).map_err(|source| {
+                    DenoiseFault::Prefiltering {
+                        aux: "albedo",
+                        source,
+                    }
+                })?;
+            }
+            if let Some(n) = aux.normal.as_mut() {
+                let f = self.oidn.filter_for(Inputs::Normal, q);
+                f.and_then(|f| f.run(n, None, None)).map_err(|source| {
+                    DenoiseFault::Prefiltering {
+                        aux: "normal",
+                        source,
+                    }
+                })?;
+            }
+            self.oidn.current = None;
+            Ok(())
+        }
+        fn filter(&mut self, rgb: &mut [f32], how: How, aux: &Aux) -> Result<(), OidnError> {
+            let inputs = Inputs::Color {
+                albedo: aux.albedo.is_some(),
+                normal: aux.normal.is_some(),
             };
-            f.filter_in_place(rgb)
-                .map_err(|e| format!("Open Image Denoise: {e}"))?;
-            self.device
-                .get_error()
-                .map_err(|e| format!("Open Image Denoise: {e}"))
+            let q = (self.raw)(how.quality);
+            if how.albedo_divided && self.oidn.white.len() != rgb.len() {
+                self.oidn.white = vec![1.0; rgb.len()];
+            }
+            // Divided by the albedo, an AOV is filtered with a white one.
+            let white = std::mem::take(&mut self.oidn.white);
+            let albedo = if how.albedo_divided {
+                Some(white.as_slice())
+            } else {
+                aux.albedo.as_deref()
+            };
+            let result = self
+                .oidn
+                .filter_for(inputs, q)
+                .and_then(|f| f.run(rgb, albedo, aux.normal.as_deref()));
+            self.oidn.white = white;
+            result
         }
     }
-    let mut filter = Oidn {
-        device: &device,
-        plain,
-        divided,
+    let mut run = Run {
+        oidn: Oidn {
+            device: &device,
+            width,
+            height,
+            current: None,
+            white: Vec::new(),
+        },
+        raw,
     };
-    Ok(body(&mut filter))
+    Ok(body(&mut run))
 }
 
 #[cfg(not(feature = "denoise"))]
 fn with_oidn<R>(
     _width: usize,
     _height: usize,
-    _aux: &Aux,
-    _quality: Quality,
     _body: impl FnOnce(&mut dyn Filter) -> R,
-) -> Result<R, String> {
-    Err(UNAVAILABLE.into())
+) -> Result<R, OidnError> {
+    Err(OidnError(UNAVAILABLE.into()))
 }
 
 #[cfg(test)]
@@ -761,11 +1062,23 @@ mod tests {
         width: usize,
         height: usize,
         divided_calls: usize,
+        /// The quality of each call, in order.
+        qualities: Vec<Quality>,
+        prefiltered: bool,
     }
 
-    impl Filter for BoxBlur {
-        fn filter(&mut self, rgb: &mut [f32], albedo_divided: bool) -> Result<(), String> {
-            self.divided_calls += albedo_divided as usize;
+    impl BoxBlur {
+        fn new() -> BoxBlur {
+            BoxBlur {
+                width: 6,
+                height: 5,
+                divided_calls: 0,
+                qualities: Vec::new(),
+                prefiltered: false,
+            }
+        }
+
+        fn blur(&self, rgb: &mut [f32]) {
             let src = rgb.to_vec();
             let (w, h) = (self.width as i64, self.height as i64);
             for y in 0..h {
@@ -785,6 +1098,30 @@ mod tests {
                     }
                 }
             }
+        }
+    }
+
+    impl Filter for BoxBlur {
+        fn prefilter(&mut self, aux: &mut Aux) -> Result<(), DenoiseFault> {
+            assert!(
+                !self.prefiltered,
+                "the auxiliary images are prefiltered once"
+            );
+            self.prefiltered = true;
+            for image in aux.albedo.iter_mut().chain(aux.normal.iter_mut()) {
+                self.blur(image);
+            }
+            Ok(())
+        }
+        fn filter(&mut self, rgb: &mut [f32], how: How, aux: &Aux) -> Result<(), OidnError> {
+            assert!(
+                self.prefiltered,
+                "every filter runs with prefiltered auxiliary images"
+            );
+            assert!(aux.albedo.is_some());
+            self.divided_calls += how.albedo_divided as usize;
+            self.qualities.push(how.quality);
+            self.blur(rgb);
             Ok(())
         }
     }
@@ -865,15 +1202,19 @@ mod tests {
         }
     }
 
-    fn run_box(exr: &ExrContents, keep: bool) -> (ExrContents, DenoiseSummary, usize) {
+    fn options(keep_noisy: bool) -> ContentOptions {
+        ContentOptions {
+            keep_noisy,
+            quality: Quality::Fast,
+        }
+    }
+
+    fn run_box(exr: &ExrContents, keep: bool) -> (ExrContents, DenoiseSummary, BoxBlur) {
         let aux = aux_images(exr);
-        let mut f = BoxBlur {
-            width: 6,
-            height: 5,
-            divided_calls: 0,
-        };
+        let mut f = BoxBlur::new();
         let mut s = DenoiseSummary::default();
-        let (channels, attributes) = denoise_contents(exr, &aux, &mut f, keep, &mut s).unwrap();
+        let (channels, attributes) =
+            denoise_contents(exr, aux, &mut f, options(keep), &mut s, &Silent).unwrap();
         let out = ExrContents {
             width: exr.width,
             height: exr.height,
@@ -885,7 +1226,7 @@ mod tests {
             world_to_ndc: None,
             capture_date: None,
         };
-        (out, s, f.divided_calls)
+        (out, s, f)
     }
 
     #[test]
@@ -903,11 +1244,15 @@ mod tests {
     #[test]
     fn partitions_sum_after_filtering_and_data_is_kept() {
         let exr = file();
-        let (out, s, divided) = run_box(&exr, false);
+        let (out, s, f) = run_box(&exr, false);
         // beauty, directDiffuse, directSpecular and the two light-group parts; four zero
         // members of the standard set are left alone, and emission is kept as it is.
         assert_eq!((s.filtered, s.zero, s.partitions), (5, 4, 2));
-        assert_eq!(divided, 1);
+        assert_eq!((s.converged, s.remainders), (0, 0));
+        assert_eq!(f.divided_calls, 1);
+        // Beauty first, at high; the other AOVs at the job's quality.
+        assert_eq!(f.qualities[0], BEAUTY_QUALITY);
+        assert!(f.qualities[1..].iter().all(|q| *q == Quality::Fast));
         let checks = crate::post::check_partitions(&out);
         assert_eq!(checks.len(), 2);
         for c in &checks {
@@ -932,7 +1277,10 @@ mod tests {
     fn albedo_division_round_trips_where_filtering_is_the_identity() {
         struct Identity;
         impl Filter for Identity {
-            fn filter(&mut self, _: &mut [f32], _: bool) -> Result<(), String> {
+            fn prefilter(&mut self, _: &mut Aux) -> Result<(), DenoiseFault> {
+                Ok(())
+            }
+            fn filter(&mut self, _: &mut [f32], _: How, _: &Aux) -> Result<(), OidnError> {
                 Ok(())
             }
         }
@@ -942,7 +1290,8 @@ mod tests {
         let out = filter_aov(
             &p,
             Treatment::AlbedoDivided,
-            aux.albedo.as_deref(),
+            Quality::Fast,
+            &aux,
             &mut Identity,
         )
         .unwrap();
@@ -965,14 +1314,10 @@ mod tests {
         // The noisy copies are in no partition: the checks are the same two.
         assert_eq!(crate::post::check_partitions(&out).len(), 2);
         let aux = aux_images(&out);
-        let mut f = BoxBlur {
-            width: 6,
-            height: 5,
-            divided_calls: 0,
-        };
-        let err = denoise_contents(&out, &aux, &mut f, false, &mut DenoiseSummary::default())
-            .unwrap_err();
-        assert!(err.contains("already denoised"), "{err}");
+        let mut f = BoxBlur::new();
+        let mut s = DenoiseSummary::default();
+        let err = denoise_contents(&out, aux, &mut f, options(false), &mut s, &Silent).unwrap_err();
+        assert!(matches!(err, DenoiseFault::AlreadyDenoised), "{err}");
     }
 
     #[test]
@@ -982,7 +1327,8 @@ mod tests {
         let mut b: Planes = [vec![3.0, 0.0], vec![0.5, 0.0], vec![0.0, 0.0]];
         let na: Planes = [vec![0.0, 1.0], vec![0.0, 0.0], vec![0.0, 0.0]];
         let nb: Planes = [vec![0.0, 3.0], vec![0.0, 0.0], vec![0.0, 0.0]];
-        reconcile(&whole, &mut [&mut a, &mut b], &[&na, &nb], &[false, false]);
+        let rest = reconcile(&whole, &mut [&mut a, &mut b], &[&na, &nb], &[false, false]);
+        assert!(rest.is_none());
         // Scaled: 1 and 3 of 2 → 0.5 and 1.5.
         assert_eq!((a[0][0], b[0][0]), (0.5, 1.5));
         // The filtered parts are empty: the noisy proportions, 1:3.
@@ -1000,11 +1346,19 @@ mod tests {
         let mut a: Planes = [vec![3.0, 1.0], vec![0.0; 2], vec![0.0; 2]];
         let ne = e.clone();
         let na = a.clone();
-        reconcile(&whole, &mut [&mut e, &mut a], &[&ne, &na], &[true, false]);
+        let rest = reconcile(&whole, &mut [&mut e, &mut a], &[&ne, &na], &[true, false]);
         // Emission 4 kept, the other part takes 5 − 4.
         assert_eq!((e[0][0], a[0][0]), (4.0, 1.0));
-        // A whole below its emission: both scaled by 1/3.
-        assert!((e[0][1] - 2.0 / 3.0).abs() < 1e-6 && (a[0][1] - 1.0 / 3.0).abs() < 1e-6);
+        // A whole below its emission: the emission is kept exactly, the free part
+        // empties and the remainder holds the difference, 1 − 2.
+        assert_eq!((e[0][1], a[0][1]), (2.0, 0.0));
+        let rest = rest.unwrap();
+        assert_eq!((rest[0][0], rest[0][1], rest[1][1]), (0.0, -1.0, 0.0));
+        // Every part kept: the remainder is all of the difference.
+        let mut k: Planes = [vec![0.5, 3.0], vec![0.0; 2], vec![0.0; 2]];
+        let nk = k.clone();
+        let rest = reconcile(&whole, &mut [&mut k], &[&nk], &[true]).unwrap();
+        assert_eq!((k[0][0], rest[0][0], rest[0][1]), (0.5, 4.5, -2.0));
     }
 
     #[test]
@@ -1047,6 +1401,94 @@ mod tests {
         assert_eq!(p.len(), 2);
         assert_eq!(p[0].whole, "beauty");
         assert_eq!(p[1].whole, "directDiffuse");
+    }
+
+    #[test]
+    fn a_converged_aov_is_kept_and_the_partition_still_sums_with_a_remainder() {
+        let mut exr = file();
+        // directSpecular's variance: far below 1/512 of its level, so it is converged;
+        // directDiffuse's: large, so it is filtered.
+        for (aov, v) in [("directSpecular", 1e-12f32), ("directDiffuse", 1.0)] {
+            let name = naming::variance_name(aov);
+            for ch in channel_names(&name) {
+                exr.channels.push((ch, vec![v; 30]));
+            }
+            exr.attributes.push((
+                naming::kind_attribute(&name),
+                AovKind::Variance.as_str().into(),
+            ));
+            exr.attributes
+                .push((naming::aov_attribute(&name), format!("variance of {aov}")));
+        }
+        let (out, s, _) = run_box(&exr, false);
+        assert_eq!(s.converged, 1);
+        assert_eq!(
+            out.channel("directSpecular.R"),
+            exr.channel("directSpecular.R")
+        );
+        assert_eq!(s.filtered, 4);
+        for c in crate::post::check_partitions(&out) {
+            assert!(c.max_relative_error < 1e-5, "{c:?}");
+        }
+    }
+
+    #[test]
+    fn a_remainder_is_declared_a_part_and_makes_the_sum_exact() {
+        let mut exr = file();
+        // A part kept as it is (constant) brighter than beauty: the standard partition
+        // needs a remainder.
+        for ch in channel_names("subsurface") {
+            exr.channels.iter_mut().find(|(n, _)| *n == ch).unwrap().1 = vec![100.0; 30];
+        }
+        let (out, s, _) = run_box(&exr, false);
+        assert_eq!(s.remainders, 1);
+        let name = "beauty__remainder_standard";
+        assert_eq!(out.channel("subsurface.G"), Some(&[100.0f32; 30][..]));
+        assert!(out.channel(&format!("{name}.R")).unwrap()[0] < 0.0);
+        let checks = crate::post::check_partitions(&out);
+        let standard = checks
+            .iter()
+            .find(|c| c.parts.iter().any(|p| p == name))
+            .expect("the remainder is a part of the standard partition");
+        assert!(standard.max_relative_error < 1e-5, "{standard:?}");
+    }
+
+    #[test]
+    fn a_whole_split_by_light_group_is_the_sum_of_its_denoised_groups() {
+        let mut exr = file();
+        let dd = planes_of(&exr, "directDiffuse").unwrap();
+        let infos = [
+            ("directDiffuse_key", 0.3f32),
+            ("directDiffuse__default", 0.7),
+        ];
+        for (name, share) in infos {
+            for (ch, v) in channel_names(name).into_iter().zip(&dd) {
+                exr.channels
+                    .push((ch, v.iter().map(|x| x * share).collect()));
+            }
+            exr.attributes
+                .push((naming::kind_attribute(name), AovKind::Light.as_str().into()));
+            exr.attributes
+                .push((naming::aov_attribute(name), "lpe:directDiffuse".into()));
+        }
+        let parts: Vec<naming::PartInfo> = infos
+            .iter()
+            .map(|(name, _)| naming::PartInfo {
+                name,
+                definition: "lpe:directDiffuse",
+                split_of: Some("directDiffuse"),
+            })
+            .collect();
+        exr.attributes.extend(naming::partition_attributes(&parts));
+        let (out, s, f) = run_box(&exr, false);
+        // directDiffuse is not filtered itself; its two groups are.
+        assert_eq!((s.summed, s.filtered), (1, 6));
+        assert_eq!(f.qualities.len(), 6);
+        let checks = crate::post::check_partitions(&out);
+        assert_eq!(checks.len(), 3);
+        for c in &checks {
+            assert!(c.max_relative_error < 1e-5, "{c:?}");
+        }
     }
 
     #[test]

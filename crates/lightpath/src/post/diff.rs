@@ -3,6 +3,7 @@
 //! compared as what they mean, per pixel each id's coverage, since ids of equal coverage
 //! may trade ranks.
 
+use crate::error::PostError;
 use crate::output::read_exr;
 use crate::post::cryptomatte;
 use std::path::Path;
@@ -23,33 +24,25 @@ pub struct Difference {
 
 /// Compares every channel of `a` and `b`; refuses files with different windows or
 /// channel sets.
-pub fn diff(a: &Path, b: &Path) -> Result<Difference, String> {
+pub fn diff(a: &Path, b: &Path) -> Result<Difference, PostError> {
     let (x, y) = (read_exr(a)?, read_exr(b)?);
     if (x.frame, x.origin, x.width, x.height) != (y.frame, y.origin, y.width, y.height) {
-        return Err(format!(
-            "{} and {} cover different pixels (frame {:?} at {:?} + {}x{} against {:?} at {:?} + {}x{})",
-            a.display(),
-            b.display(),
-            x.frame,
-            x.origin,
-            x.width,
-            x.height,
-            y.frame,
-            y.origin,
-            y.width,
-            y.height
-        ));
+        return Err(PostError::DifferentPixels {
+            first: a.to_path_buf(),
+            second: b.to_path_buf(),
+            first_window: (x.frame, x.origin, [x.width, x.height]),
+            second_window: (y.frame, y.origin, [y.width, y.height]),
+        });
     }
     let mut names: Vec<&String> = x.channels.iter().map(|(n, _)| n).collect();
     let mut other: Vec<&String> = y.channels.iter().map(|(n, _)| n).collect();
     names.sort();
     other.sort();
     if names != other {
-        return Err(format!(
-            "{} and {} have different channels",
-            a.display(),
-            b.display()
-        ));
+        return Err(PostError::DifferentChannels {
+            first: a.to_path_buf(),
+            second: b.to_path_buf(),
+        });
     }
     let mut out = Difference {
         channels: names.len(),

@@ -22,6 +22,7 @@ use crate::aov::naming::{
     INPUTS_ATTRIBUTE, INTERRUPTED_ATTRIBUTE, SAMPLES_ATTRIBUTE, SAMPLE_COUNT_CHANNEL,
     SCENE_ATTRIBUTE, SPP_ATTRIBUTE,
 };
+use crate::error::{FrameMismatch, PostError};
 use crate::film::PixelWindow;
 use crate::output::{read_exr, read_exr_header, write_image, ExrHeader, ExrOptions};
 use crate::post::cryptomatte;
@@ -64,7 +65,7 @@ struct Part {
 }
 
 impl Part {
-    fn read(path: &Path) -> Result<Part, String> {
+    fn read(path: &Path) -> Result<Part, PostError> {
         let layout = read_exr_header(path)?;
         let window = PixelWindow {
             x0: layout.origin[0],
@@ -74,25 +75,26 @@ impl Part {
         };
         let text: BTreeMap<String, String> = layout.attributes.into_iter().collect();
         if text.contains_key(INTERRUPTED_ATTRIBUTE) {
-            return Err(format!(
-                "{} is an interrupted render (some rows are empty): finish it with --resume first",
-                path.display()
-            ));
+            return Err(PostError::Interrupted {
+                path: path.to_path_buf(),
+            });
         }
         let ranges = match text.get(SAMPLES_ATTRIBUTE) {
             Some(s) => parse_ranges(s).filter(|r| !r.is_empty()).ok_or_else(|| {
-                format!(
-                    "{}: {SAMPLES_ATTRIBUTE} is '{s}', expected ranges like '0-64 64-128'",
-                    path.display()
-                )
+                PostError::BadAttribute {
+                    path: path.to_path_buf(),
+                    attribute: SAMPLES_ATTRIBUTE,
+                    value: s.clone(),
+                    expected: "ranges like '0-64 64-128'",
+                }
             })?,
             // Files written before sample ranges were recorded: first_sample and spp.
             None => {
                 let Some(spp) = text.get(SPP_ATTRIBUTE) else {
-                    return Err(format!(
-                        "{} has no {SPP_ATTRIBUTE} header: not a Lightpath render",
-                        path.display()
-                    ));
+                    return Err(PostError::NotARender {
+                        path: path.to_path_buf(),
+                        attribute: SPP_ATTRIBUTE,
+                    });
                 };
                 let first = match text.get(FIRST_SAMPLE_ATTRIBUTE) {
                     Some(f) => f.parse::<u64>().ok(),
@@ -105,11 +107,13 @@ impl Part {
                         vec![(first, first + n)]
                     }
                     _ => {
-                        return Err(format!(
-                            "{}: {SPP_ATTRIBUTE} is '{spp}': expected a sample count \
-                             (a whole number from 1, after a valid {FIRST_SAMPLE_ATTRIBUTE})",
-                            path.display()
-                        ))
+                        return Err(PostError::BadAttribute {
+                            path: path.to_path_buf(),
+                            attribute: SPP_ATTRIBUTE,
+                            value: spp.clone(),
+                            expected: "a sample count (a whole number from 1, after a valid \
+                                       lightpath/first_sample)",
+                        })
                     }
                 }
             }
@@ -129,24 +133,17 @@ impl Part {
     fn spp(&self) -> u64 {
         self.ranges.iter().map(|(a, b)| b - a).sum()
     }
-
-    fn name(&self) -> String {
-        self.path.display().to_string()
-    }
 }
 
 /// Checks that `b` is a part of the same frame as `a`, naming the first difference.
-fn same_frame(a: &Part, b: &Part) -> Result<(), String> {
+fn same_frame(a: &Part, b: &Part) -> Result<(), PostError> {
     if a.frame != b.frame {
-        return Err(format!(
-            "{} is a {}x{} frame but {} is {}x{}",
-            b.name(),
-            b.frame[0],
-            b.frame[1],
-            a.name(),
-            a.frame[0],
-            a.frame[1]
-        ));
+        return Err(PostError::FrameSize {
+            path: b.path.clone(),
+            size: b.frame,
+            other: a.path.clone(),
+            other_size: a.frame,
+        });
     }
     if a.channels != b.channels {
         let only = |x: &Part, y: &Part| -> Vec<String> {
@@ -156,13 +153,12 @@ fn same_frame(a: &Part, b: &Part) -> Result<(), String> {
                 .cloned()
                 .collect()
         };
-        return Err(format!(
-            "{} and {} have different channels (only in the first: {:?}; only in the second: {:?})",
-            a.name(),
-            b.name(),
-            only(a, b),
-            only(b, a)
-        ));
+        return Err(PostError::Channels {
+            first: a.path.clone(),
+            second: b.path.clone(),
+            only_first: only(a, b),
+            only_second: only(b, a),
+        });
     }
     changed_inputs(a, b)?;
     let keys: std::collections::BTreeSet<&String> = a.text.keys().chain(b.text.keys()).collect();
@@ -176,20 +172,14 @@ fn same_frame(a: &Part, b: &Part) -> Result<(), String> {
         }
         let (va, vb) = (a.text.get(k), b.text.get(k));
         if va != vb {
-            let show = |v: Option<&String>| match v {
-                Some(v) if v.chars().count() > 80 => {
-                    format!("'{}…'", v.chars().take(80).collect::<String>())
-                }
-                Some(v) => format!("'{v}'"),
-                None => "nothing".to_string(),
-            };
-            return Err(format!(
-                "{} and {} are not parts of one frame: {k} is {} in the first and {} in the second",
-                a.name(),
-                b.name(),
-                show(va),
-                show(vb)
-            ));
+            return Err(PostError::NotOneFrame(Box::new(FrameMismatch {
+                first: a.path.clone(),
+                second: b.path.clone(),
+                attribute: k.clone(),
+                flag: crate::settings::flag_of_attribute(k),
+                in_first: va.cloned(),
+                in_second: vb.cloned(),
+            })));
         }
     }
     Ok(())
@@ -198,7 +188,7 @@ fn same_frame(a: &Part, b: &Part) -> Result<(), String> {
 /// Parts of different scenes (`lightpath/identity` differs): the files that changed
 /// between them, from their manifests (`identity.rs`). A differing setting is left to
 /// the attribute that names it.
-fn changed_inputs(a: &Part, b: &Part) -> Result<(), String> {
+fn changed_inputs(a: &Part, b: &Part) -> Result<(), PostError> {
     if a.text.get(IDENTITY_ATTRIBUTE) == b.text.get(IDENTITY_ATTRIBUTE) {
         return Ok(());
     }
@@ -214,13 +204,11 @@ fn changed_inputs(a: &Part, b: &Part) -> Result<(), String> {
     if changes.is_empty() {
         return Ok(());
     }
-    Err(format!(
-        "{} and {} are renders of different scenes: {} (from the first to the second; \
-         render every part from the same files)",
-        a.name(),
-        b.name(),
-        changes.join("; ")
-    ))
+    Err(PostError::InputsChanged {
+        first: a.path.clone(),
+        second: b.path.clone(),
+        changes,
+    })
 }
 
 fn overlaps(a: &PixelWindow, b: &PixelWindow) -> bool {
@@ -228,9 +216,9 @@ fn overlaps(a: &PixelWindow, b: &PixelWindow) -> bool {
 }
 
 /// Merges the parts of one frame into `output` (see the module's description).
-pub fn merge(inputs: &[PathBuf], output: &Path) -> Result<Merged, String> {
+pub fn merge(inputs: &[PathBuf], output: &Path) -> Result<Merged, PostError> {
     if inputs.is_empty() {
-        return Err("give the EXRs to merge".into());
+        return Err(PostError::NothingToMerge);
     }
     crate::output::target::check_exr_name(output, None)?;
     let input_refs: Vec<&Path> = inputs.iter().map(|p| p.as_path()).collect();
@@ -306,7 +294,7 @@ type Ranges = Vec<(u64, u64)>;
 
 /// The parts grouped by window (each group: the sample ranges of one tile), with each
 /// tile's ranges sorted; overlapping ranges within a tile are an error.
-fn group_tiles(parts: &[Part]) -> Result<(Tiles<'_>, Vec<Ranges>), String> {
+fn group_tiles(parts: &[Part]) -> Result<(Tiles<'_>, Vec<Ranges>), PostError> {
     let mut groups: Tiles = Vec::new();
     for p in parts {
         match groups.iter_mut().find(|g| g.0 == p.window) {
@@ -320,15 +308,12 @@ fn group_tiles(parts: &[Part]) -> Result<(Tiles<'_>, Vec<Ranges>), String> {
         for p in members {
             for &r in &p.ranges {
                 if let Some((o, q)) = held.iter().find(|(o, _)| r.0 < o.1 && o.0 < r.1) {
-                    return Err(format!(
-                        "{} holds samples {}-{} and {} holds {}-{}: they overlap, so those samples would count twice",
-                        q.name(),
-                        o.0,
-                        o.1,
-                        p.name(),
-                        r.0,
-                        r.1
-                    ));
+                    return Err(PostError::SamplesOverlap {
+                        first: q.path.clone(),
+                        first_range: *o,
+                        second: p.path.clone(),
+                        second_range: r,
+                    });
                 }
                 held.push((r, p));
             }
@@ -345,26 +330,24 @@ fn group_tiles(parts: &[Part]) -> Result<(Tiles<'_>, Vec<Ranges>), String> {
 fn check_tiles(
     groups: &[(PixelWindow, Vec<&'_ Part>)],
     tile_ranges: &[Ranges],
-) -> Result<PixelWindow, String> {
+) -> Result<PixelWindow, PostError> {
     for (i, a) in groups.iter().enumerate() {
         for (j, b) in groups.iter().enumerate().skip(i + 1) {
             if overlaps(&a.0, &b.0) {
-                return Err(format!(
-                    "{} covers pixels {} and {} covers {}: tiles may not overlap",
-                    a.1[0].name(),
-                    a.0,
-                    b.1[0].name(),
-                    b.0
-                ));
+                return Err(PostError::TilesOverlap {
+                    first: a.1[0].path.clone(),
+                    first_window: a.0,
+                    second: b.1[0].path.clone(),
+                    second_window: b.0,
+                });
             }
             if tile_ranges[i] != tile_ranges[j] {
-                return Err(format!(
-                    "tile {} holds samples {} but tile {} holds {}: tiles of one frame need the same samples",
-                    a.0,
-                    format_ranges(&tile_ranges[i]),
-                    b.0,
-                    format_ranges(&tile_ranges[j])
-                ));
+                return Err(PostError::TileSamples {
+                    first_window: a.0,
+                    first_samples: format_ranges(&tile_ranges[i]),
+                    second_window: b.0,
+                    second_samples: format_ranges(&tile_ranges[j]),
+                });
             }
         }
     }
@@ -380,11 +363,11 @@ fn check_tiles(
         .sum();
     let area = window.width() as u64 * window.height() as u64;
     if covered != area {
-        return Err(format!(
-            "the tiles leave {} of the {} pixels of window {window} uncovered",
-            area - covered,
-            area
-        ));
+        return Err(PostError::Uncovered {
+            uncovered: area - covered,
+            area,
+            window,
+        });
     }
     Ok(window)
 }
@@ -396,7 +379,7 @@ fn merge_tile(
     layers: &[String],
     keep_header: bool,
     header: &mut ExrHeader,
-) -> Result<BTreeMap<String, Vec<f32>>, String> {
+) -> Result<BTreeMap<String, Vec<f32>>, PostError> {
     if let [only] = members {
         // One part: its values as they are (a tile is exactly what was rendered).
         let exr = read_exr(&only.path)?;
@@ -593,6 +576,59 @@ fn add_squares(
             for (((s, v), m), n) in sq.iter_mut().zip(v).zip(m).zip(weights) {
                 *s += (n - 1.0) * n * *v as f64 + n * (*m as f64).powi(2);
             }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn part(name: &str, attributes: &[(&str, &str)]) -> Part {
+        Part {
+            path: PathBuf::from(name),
+            frame: [4, 4],
+            window: PixelWindow {
+                x0: 0,
+                y0: 0,
+                x1: 4,
+                y1: 4,
+            },
+            ranges: vec![(0, 4)],
+            channels: vec!["R".into()],
+            text: attributes
+                .iter()
+                .map(|(k, v)| (k.to_string(), v.to_string()))
+                .collect(),
+        }
+    }
+
+    #[test]
+    fn a_differing_setting_is_named_by_its_attribute_and_its_flag() {
+        let depth = crate::aov::naming::setting_attribute("max_depth");
+        let a = part("a.exr", &[(&depth, "8")]);
+        let b = part("b.exr", &[(&depth, "4")]);
+        let e = same_frame(&a, &b).unwrap_err();
+        match &e {
+            PostError::NotOneFrame(m) => assert_eq!(
+                (m.attribute.as_str(), m.flag),
+                (depth.as_str(), Some("max-depth"))
+            ),
+            other => panic!("{other}"),
+        }
+        let text = e.to_string();
+        assert!(
+            text.contains("lightpath/setting/max_depth (--max-depth) is '8' in the first and '4'"),
+            "{text}"
+        );
+        // An attribute no setting writes has no flag to name.
+        let c = part(
+            "c.exr",
+            &[(&depth, "8"), ("lightpath/aov/key", "C<L.'key'>")],
+        );
+        match same_frame(&a, &c).unwrap_err() {
+            PostError::NotOneFrame(m) => assert_eq!(m.flag, None),
+            other => panic!("{other}"),
         }
     }
 }

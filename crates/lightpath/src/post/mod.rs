@@ -8,6 +8,8 @@ pub mod cryptomatte;
 pub mod denoise;
 pub mod diff;
 pub mod merge;
+#[cfg(feature = "denoise")]
+mod oidn;
 pub mod partitions;
 
 pub use comp::{aov_planes, evaluate, gain_terms, parse, Term};

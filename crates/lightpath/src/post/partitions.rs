@@ -15,7 +15,7 @@ pub const DEFAULT_TOLERANCE: f32 = 1e-4;
 /// `lightpath aovs`: an EXR's AOVs with their expressions and each declared partition's
 /// check, as the text to print; `Ok(false)` when a partition is off by more than
 /// `tolerance`.
-pub fn report(path: &Path, tolerance: f32) -> Result<(String, bool), String> {
+pub fn report(path: &Path, tolerance: f32) -> Result<(String, bool), crate::error::ExrReadError> {
     let exr = crate::output::read_exr(path)?;
     let mut aovs = exr.aovs();
     aovs.sort();

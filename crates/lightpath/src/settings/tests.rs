@@ -169,7 +169,17 @@ fn min_spp_above_spp_is_refused_and_its_default_never_is() {
         ..RenderDesc::default()
     };
     let e = check(&render).unwrap_err();
-    assert!(e.starts_with("min_spp (32) is above spp (16)"), "{e}");
+    assert_eq!(
+        e,
+        crate::error::SettingError::MinSppAboveSpp {
+            min_spp: 32,
+            spp: 16
+        }
+    );
+    assert!(
+        e.to_string().starts_with("min_spp (32) is above spp (16)"),
+        "{e}"
+    );
     render.min_spp = Some(16);
     assert_eq!(check(&render), Ok(()));
     // The default pilot is 16 samples, or spp if fewer.

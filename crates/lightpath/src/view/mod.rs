@@ -78,7 +78,7 @@ pub struct Viewer {
 }
 
 /// Reads an EXR for viewing.
-pub fn open(path: &Path) -> Result<ViewData, String> {
+pub fn open(path: &Path) -> Result<ViewData, crate::error::ExrReadError> {
     let exr = crate::output::read_exr(path)?;
     let title = path
         .file_name()
@@ -90,7 +90,11 @@ pub fn open(path: &Path) -> Result<ViewData, String> {
 impl Viewer {
     /// Serves `data` on 127.0.0.1:`port` (0: a free port the system picks). `exr` is the
     /// file the data came from, if any (comps need it).
-    pub fn start(data: ViewData, exr: Option<PathBuf>, port: u16) -> Result<Viewer, String> {
+    pub fn start(
+        data: ViewData,
+        exr: Option<PathBuf>,
+        port: u16,
+    ) -> Result<Viewer, crate::error::ViewError> {
         // The handler needs the port (to check Host) before the server has one.
         let port_cell = Arc::new(std::sync::OnceLock::new());
         let shared = Arc::new(Shared {
@@ -104,7 +108,7 @@ impl Viewer {
             Arc::new(move |r: &Request| answer(&shared, r))
         };
         let http = http::Server::bind(port, handler)
-            .map_err(|e| format!("cannot listen on 127.0.0.1:{port}: {e}"))?;
+            .map_err(|source| crate::error::ViewError::Listen { port, source })?;
         let _ = port_cell.set(http.addr().port());
         prepare(&shared, true);
         Ok(Viewer { http, shared })

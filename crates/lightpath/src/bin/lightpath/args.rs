@@ -51,8 +51,9 @@ pub(crate) enum Command {
         /// Keep each filtered AOV's input as <aov>_noisy.
         #[arg(long)]
         keep_noisy: bool,
-        /// Open Image Denoise quality: high, balanced or fast.
-        #[arg(long, default_value = "high", value_parser = lightpath::post::denoise::Quality::parse)]
+        /// Open Image Denoise quality of every AOV but beauty (always filtered at high):
+        /// high, balanced or fast (about half high's time).
+        #[arg(long, default_value = "fast", value_parser = lightpath::post::denoise::Quality::parse)]
         quality: lightpath::post::denoise::Quality,
     },
     /// Compare two EXRs of one frame channel by channel: print the largest relative
@@ -253,8 +254,9 @@ pub(crate) struct RenderArgs {
     /// With --denoise: keep each filtered AOV's input as <aov>_noisy.
     #[arg(long, requires = "denoise")]
     pub(crate) keep_noisy: bool,
-    /// With --denoise: Open Image Denoise quality, high, balanced or fast.
-    #[arg(long, default_value = "high", value_parser = lightpath::post::denoise::Quality::parse)]
+    /// With --denoise: Open Image Denoise quality of every AOV but beauty (always filtered
+    /// at high): high, balanced or fast (about half high's time).
+    #[arg(long, default_value = "fast", value_parser = lightpath::post::denoise::Quality::parse)]
     pub(crate) denoise_quality: lightpath::post::denoise::Quality,
     /// What traces the rays: bvh (Lightpath's own, the default) or embree (Intel Embree 3;
     /// needs a build with the `embree` feature). Same hits up to float rounding.

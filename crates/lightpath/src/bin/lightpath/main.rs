@@ -122,7 +122,9 @@ fn main() -> ExitCode {
                 quality,
                 preview_exposure: 0.0,
             };
-            match lightpath::post::denoise::run(&job) {
+            let progress =
+                progress_reporter(choose_progress(false, std::io::stderr().is_terminal()));
+            match lightpath::post::denoise::run_with_progress(&job, progress.as_ref()) {
                 Ok(summary) => {
                     say!("{}", summary.line());
                     say!(
