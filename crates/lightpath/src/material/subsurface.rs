@@ -64,7 +64,7 @@ impl LobeModel for Subsurface {
         } else {
             1.0
         };
-        let smooth = !(self.alpha >= SMOOTH_ALPHA);
+        let smooth = self.alpha.is_nan() || self.alpha < SMOOTH_ALPHA;
         let (m, pdf) = if smooth {
             (Vec3A::Z, 1.0)
         } else {
