@@ -14,6 +14,7 @@ mod pixel;
 mod routing;
 mod shading;
 pub mod subsurface;
+mod volume;
 
 use crate::film::mattes::{MatteTable, PixelMatte};
 use crate::film::{Film, Mattes, PixelWindow, SampleAccumulator};

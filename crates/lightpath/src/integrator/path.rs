@@ -3,7 +3,10 @@
 //! roulette. Each step reads the path state; only `scatter` and `roulette` change it.
 
 use super::routing::{Origin, Via};
+use super::volume::{media_seed, MediumVertex, MAX_CROSSINGS};
 use super::{Sink, Tracer};
+use crate::media::{Collision, MediumStack};
+use crate::sampling::Rng;
 use crate::geometry::{Hit, Ray, Visibility};
 use crate::material::{Bsdf, Shading};
 use crate::sampler::{dim, Sampler};
@@ -36,6 +39,13 @@ pub(super) struct PathState {
     /// spread angle (shading.rs).
     pub cone_width: f32,
     pub cone_spread: f32,
+    /// The interiors the path is in (volume.rs).
+    pub media: MediumStack,
+    /// Distance from `prev_p` to the current ray's origin: the boundaries passed since
+    /// the last scatter (for the light pdf of what the ray finds).
+    pub travelled: f32,
+    /// Free-flight and channel choices, and shadow-ray transmittance estimates.
+    pub rng: Rng,
 }
 
 /// A scattering vertex: the hit and what is there.
@@ -47,6 +57,8 @@ pub(super) struct Vertex<'a> {
     /// or its regularised one after a diffuse bounce.
     pub bsdf: &'a Bsdf,
     pub sh: Shading,
+    /// The direction the path arrived along (world space).
+    pub dir: Vec3A,
 }
 
 impl Tracer<'_> {
@@ -68,10 +80,14 @@ impl Tracer<'_> {
             depth: 0,
             cone_width: 0.0,
             cone_spread: scene.camera.pixel_spread(),
+            media: scene.camera_media,
+            travelled: 0.0,
+            rng: Rng::for_sample(media_seed(&ray), 0, 0),
         };
         let mut alpha = 0.0;
         out.holdout = false;
         out.first_object = None;
+        let mut crossings = 0;
         loop {
             out.rays += 1;
             let mask = if path.depth == 0 {
@@ -80,7 +96,8 @@ impl Tracer<'_> {
                 Visibility::INDIRECT
             };
             let found = scene.accel.intersect(&ray, 0.0, mask);
-            if let Some(hit) = &found {
+            let passes = scene.has_media && found.as_ref().is_some_and(|h| self.passes(&path.media, h));
+            if let Some(hit) = found.as_ref().filter(|_| !passes) {
                 let holdout = scene.objects[hit.object as usize].holdout;
                 if path.depth == 0 {
                     alpha = if holdout { 0.0 } else { 1.0 };
@@ -89,16 +106,71 @@ impl Tracer<'_> {
                 out.holdout |= holdout;
             }
             // Here, after the roulette and with the real ray's result, so that the
-            // lights-only estimate is the beauty's own, sample by sample.
-            if path.depth > 0 && scene.any_unoccluded {
+            // lights-only estimate is the beauty's own, sample by sample; once per
+            // scatter, not again past a null boundary.
+            if path.depth > 0 && scene.any_unoccluded && path.travelled == 0.0 {
                 self.lights_only(out, &path, &ray, found.as_ref());
+            }
+            if scene.has_media {
+                if let Some((m, object)) = self.medium_of(&path.media) {
+                    let seg = Ray {
+                        tmax: found.as_ref().map_or(f32::INFINITY, |h| h.t),
+                        ..ray
+                    };
+                    self.medium_emission(out, &path, m, &seg);
+                    let volume = &scene.volumes[m.volume as usize];
+                    match volume.medium.sample(&seg, path.throughput, &mut path.rng) {
+                        Collision::Pass { weight } => path.throughput *= weight,
+                        Collision::Scatter { t, weight } => {
+                            path.throughput *= weight;
+                            if path.depth == 0 {
+                                alpha = 1.0;
+                            }
+                            path.cone_width += path.cone_spread * t;
+                            if path.depth + 1 >= scene.settings.max_depth {
+                                break;
+                            }
+                            let v = MediumVertex {
+                                p: ray.origin + ray.dir * t,
+                                dir: ray.dir,
+                                medium: m,
+                                object,
+                            };
+                            let Some(next) = self.medium_scatter(out, &mut path, &v, sampler)
+                            else {
+                                break;
+                            };
+                            ray = next;
+                            crossings = 0;
+                            if !self.roulette(&mut path, sampler) {
+                                break;
+                            }
+                            continue;
+                        }
+                    }
+                    if path.throughput == Vec3A::ZERO {
+                        break;
+                    }
+                }
             }
             let Some(hit) = found else {
                 self.escaped(out, &path, &ray);
                 break;
             };
-            let obj = &scene.objects[hit.object as usize];
             path.cone_width += path.cone_spread * hit.t;
+            if passes {
+                // A null surface or a false boundary: no event, the ray goes on.
+                crossings += 1;
+                if crossings > MAX_CROSSINGS {
+                    break;
+                }
+                self.cross(&mut path.media, &hit, ray.dir);
+                path.travelled += hit.t;
+                ray = self.spawn(&hit, ray.dir, f32::INFINITY);
+                continue;
+            }
+            crossings = 0;
+            let obj = &scene.objects[hit.object as usize];
             self.emission_at_hit(out, &path, &ray, &hit, obj);
 
             // Mitsuba's convention: `max_depth` counts segments; scattering here adds one.
@@ -127,12 +199,16 @@ impl Tracer<'_> {
                 material,
                 bsdf,
                 sh,
+                dir: ray.dir,
             };
             self.data_lobes(out, &path, &v);
-            self.direct_light(out, &path, &v, sampler);
+            self.direct_light(out, &mut path, &v, sampler);
             let Some(next) = self.scatter(out, &mut path, &v, sampler) else {
                 break;
             };
+            if obj.interior.is_some() {
+                path.media = self.stack_after(&path.media, &hit, ray.dir, next.dir);
+            }
             ray = next;
             if !self.roulette(&mut path, sampler) {
                 break;
@@ -170,7 +246,7 @@ impl Tracer<'_> {
             let le = light.emitted_at(hit.ng, ray.dir);
             if le != Vec3A::ZERO && self.lit(path.prev_object, li) {
                 self.light_seen(out, path, li, le, |light| {
-                    light.pdf_hit(path.prev_p, ray.dir, hit.t, hit.ng)
+                    light.pdf_hit(path.prev_p, ray.dir, hit.t + path.travelled, hit.ng)
                 });
             }
         } else if let Some(glow) = obj.glow_class {
@@ -178,7 +254,7 @@ impl Tracer<'_> {
             let emission = obj.emission * self.glow_texture(obj, hit, ray.dir, path.cone_width);
             let weight = obj.glow_light.map_or(1.0, |li| {
                 self.bsdf_weight(path, li, |light| {
-                    light.pdf_hit(path.prev_p, ray.dir, hit.t, hit.ng)
+                    light.pdf_hit(path.prev_p, ray.dir, hit.t + path.travelled, hit.ng)
                 })
             });
             let origin = Origin {
@@ -275,6 +351,7 @@ impl Tracer<'_> {
         path.prev_pdf = bs.pdf;
         path.prev_delta = bs.delta;
         path.prev_object = v.hit.object;
+        path.travelled = 0.0;
         if !bs.delta {
             path.cone_spread = path.cone_spread.max(super::shading::SCATTERED_SPREAD);
         }
