@@ -88,6 +88,9 @@ impl Tracer<'_> {
         out.holdout = false;
         out.first_object = None;
         let mut crossings = 0;
+        // Past a boundary without an event the ray starts on it and skips this much of
+        // itself instead of being moved off it, so media see their whole thickness.
+        let mut tmin = 0.0;
         loop {
             out.rays += 1;
             let mask = if path.depth == 0 {
@@ -95,7 +98,8 @@ impl Tracer<'_> {
             } else {
                 Visibility::INDIRECT
             };
-            let found = scene.accel.intersect(&ray, 0.0, mask);
+            let found = scene.accel.intersect(&ray, tmin, mask);
+            tmin = 0.0;
             let passes = scene.has_media && found.as_ref().is_some_and(|h| self.passes(&path.media, h));
             if let Some(hit) = found.as_ref().filter(|_| !passes) {
                 let holdout = scene.objects[hit.object as usize].holdout;
@@ -166,7 +170,8 @@ impl Tracer<'_> {
                 }
                 self.cross(&mut path.media, &hit, ray.dir);
                 path.travelled += hit.t;
-                ray = self.spawn(&hit, ray.dir, f32::INFINITY);
+                ray.origin = hit.p;
+                tmin = scene.epsilon;
                 continue;
             }
             crossings = 0;

@@ -115,9 +115,12 @@ impl Tracer<'_> {
         let mut tr = Vec3A::ONE;
         let mut stack = *stack;
         let mut ray = *ray;
+        // Past a boundary the ray starts on it and skips `tmin` (path.rs does the same).
+        let mut tmin = 0.0;
         for _ in 0..MAX_CROSSINGS {
             out.rays += 1;
-            let hit = scene.accel.intersect(&ray, 0.0, Visibility::SHADOW);
+            let hit = scene.accel.intersect(&ray, tmin, Visibility::SHADOW);
+            tmin = scene.epsilon;
             if let Some((m, _)) = self.medium_of(&stack) {
                 let seg = Ray {
                     tmax: hit.as_ref().map_or(ray.tmax, |h| h.t),
@@ -137,9 +140,9 @@ impl Tracer<'_> {
                 }
                 self.cross(&mut stack, &hit, ray.dir);
             }
-            let next = self.spawn(&hit, ray.dir, ray.tmax - hit.t);
-            ray = next;
-            if ray.tmax <= 0.0 {
+            ray.origin = hit.p;
+            ray.tmax -= hit.t;
+            if ray.tmax <= tmin {
                 return tr;
             }
         }

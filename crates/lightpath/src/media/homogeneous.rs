@@ -4,7 +4,8 @@
 //! throughput; the estimator divides by the mixture of all channels' densities (spectral
 //! MIS with the balance heuristic, the one-sample model of Veach & Guibas 1995, as
 //! Cycles and Mitsuba 3's `volpath` handle chromatic media), so it is unbiased in every
-//! channel whose throughput is not zero.
+//! channel whose throughput is not zero. A medium that does not scatter attenuates by
+//! its exact transmittance instead.
 
 use super::{channel_pmf, pick_channel, Collision};
 use crate::sampling::Rng;
@@ -39,6 +40,13 @@ impl Homogeneous {
     /// channel mixture with probabilities from `throughput` gives pdf and P.
     pub fn sample(&self, tmax: f32, throughput: Vec3A, rng: &mut Rng) -> Collision {
         let st = self.sigma_t;
+        // A medium that only absorbs has no real collision to sample: its transmittance
+        // is the exact weight (absorbing glass costs no noise).
+        if self.sigma_s == Vec3A::ZERO {
+            return Collision::Pass {
+                weight: beer(st, tmax),
+            };
+        }
         let p = channel_pmf(throughput);
         let c = pick_channel(p, rng.next_f32());
         let u = rng.next_f32();
