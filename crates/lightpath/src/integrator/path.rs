@@ -3,9 +3,9 @@
 //! roulette. Each step reads the path state; only `scatter` and `roulette` change it.
 
 use super::routing::{Origin, Via};
-use super::volume::{media_seed, MediumVertex, MAX_CROSSINGS};
+use super::volume::{media_seed, Flight, MAX_CROSSINGS};
 use super::{Sink, Tracer};
-use crate::media::{Collision, MediumStack};
+use crate::media::MediumStack;
 use crate::sampling::Rng;
 use crate::geometry::{Hit, Ray, Visibility};
 use crate::material::{Bsdf, Shading};
@@ -61,12 +61,11 @@ pub(super) struct Vertex<'a> {
     pub dir: Vec3A,
 }
 
-impl Tracer<'_> {
-    /// Traces one camera path; returns its alpha.
-    pub(super) fn trace<S: Sampler>(&self, mut ray: Ray, sampler: &mut S, out: &mut Sink) -> f32 {
-        let scene = self.scene;
+impl PathState {
+    /// A path at the camera, about to trace `ray`.
+    fn start(scene: &crate::scene::Scene, ray: &Ray) -> PathState {
         let a = &scene.automaton;
-        let mut path = PathState {
+        PathState {
             state: a.step(a.start(), scene.camera_class),
             throughput: Vec3A::ONE,
             eta_scale: 1.0,
@@ -82,8 +81,16 @@ impl Tracer<'_> {
             cone_spread: scene.camera.pixel_spread(),
             media: scene.camera_media,
             travelled: 0.0,
-            rng: Rng::for_sample(media_seed(&ray), 0, 0),
-        };
+            rng: Rng::for_sample(media_seed(ray), 0, 0),
+        }
+    }
+}
+
+impl Tracer<'_> {
+    /// Traces one camera path; returns its alpha.
+    pub(super) fn trace<S: Sampler>(&self, mut ray: Ray, sampler: &mut S, out: &mut Sink) -> f32 {
+        let scene = self.scene;
+        let mut path = PathState::start(scene, &ray);
         let mut alpha = 0.0;
         out.holdout = false;
         out.first_object = None;
@@ -116,45 +123,18 @@ impl Tracer<'_> {
                 self.lights_only(out, &path, &ray, found.as_ref());
             }
             if scene.has_media {
-                if let Some((m, object)) = self.medium_of(&path.media) {
-                    let seg = Ray {
-                        tmax: found.as_ref().map_or(f32::INFINITY, |h| h.t),
-                        ..ray
-                    };
-                    self.medium_emission(out, &path, m, &seg);
-                    let volume = &scene.volumes[m.volume as usize];
-                    match volume.medium.sample(&seg, path.throughput, &mut path.rng) {
-                        Collision::Pass { weight } => path.throughput *= weight,
-                        Collision::Scatter { t, weight } => {
-                            path.throughput *= weight;
-                            if path.depth == 0 {
-                                alpha = 1.0;
-                            }
-                            path.cone_width += path.cone_spread * t;
-                            if path.depth + 1 >= scene.settings.max_depth {
-                                break;
-                            }
-                            let v = MediumVertex {
-                                p: ray.origin + ray.dir * t,
-                                dir: ray.dir,
-                                medium: m,
-                                object,
-                            };
-                            let Some(next) = self.medium_scatter(out, &mut path, &v, sampler)
-                            else {
-                                break;
-                            };
-                            ray = next;
-                            crossings = 0;
-                            if !self.roulette(&mut path, sampler) {
-                                break;
-                            }
-                            continue;
-                        }
-                    }
-                    if path.throughput == Vec3A::ZERO {
-                        break;
-                    }
+                let camera_ray = path.depth == 0;
+                let flight = self.fly(out, &mut path, &ray, found.as_ref(), sampler);
+                if camera_ray && !matches!(flight, Flight::Reached) {
+                    alpha = 1.0;
+                }
+                match flight {
+                    Flight::Reached => {}
+                    Flight::Scattered(next) => (ray, crossings) = (next, 0),
+                    Flight::Ended => break,
+                }
+                if !matches!(flight, Flight::Reached) {
+                    continue;
                 }
             }
             let Some(hit) = found else {
@@ -366,7 +346,7 @@ impl Tracer<'_> {
 
     /// Russian roulette as Mitsuba does it: from `rr_depth` on, continue with
     /// probability max(throughput)·η², at most 0.95. `false`: the path ends.
-    fn roulette<S: Sampler>(&self, path: &mut PathState, sampler: &mut S) -> bool {
+    pub(super) fn roulette<S: Sampler>(&self, path: &mut PathState, sampler: &mut S) -> bool {
         let t_max = path.throughput.max_element();
         if t_max <= 0.0 || !t_max.is_finite() {
             return false;

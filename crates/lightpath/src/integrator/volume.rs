@@ -16,7 +16,7 @@ use super::path::PathState;
 use super::routing::{Origin, Via};
 use super::{Sink, Tracer};
 use crate::geometry::{Hit, Ray, Visibility};
-use crate::media::MediumStack;
+use crate::media::{Collision, MediumStack};
 use crate::sampler::{dim, Sampler};
 use crate::sampling::{splitmix64, Rng};
 use crate::scene::MediumUse;
@@ -45,7 +45,68 @@ pub(super) struct MediumVertex {
     pub object: u32,
 }
 
+/// How a ray's flight through the medium it is in ended.
+pub(super) enum Flight {
+    /// At the surface it found (or out of the scene), the throughput attenuated.
+    Reached,
+    /// At a scattering vertex, which sent the path on along this ray.
+    Scattered(Ray),
+    /// The path ended in the medium (depth limit, dead state, roulette, no throughput).
+    Ended,
+}
+
 impl Tracer<'_> {
+    /// The flight of `ray` up to what it `found`, in the medium the path is in (none:
+    /// it reaches it): the medium's emission along it, then a free-flight distance; a
+    /// real collision before the surface is a scattering vertex.
+    pub(super) fn fly<S: Sampler>(
+        &self,
+        out: &mut Sink,
+        path: &mut PathState,
+        ray: &Ray,
+        found: Option<&Hit>,
+        sampler: &mut S,
+    ) -> Flight {
+        let scene = self.scene;
+        let Some((m, object)) = self.medium_of(&path.media) else {
+            return Flight::Reached;
+        };
+        let seg = Ray {
+            tmax: found.map_or(f32::INFINITY, |h| h.t),
+            ..*ray
+        };
+        self.medium_emission(out, path, m, &seg);
+        let volume = &scene.volumes[m.volume as usize];
+        match volume.medium.sample(&seg, path.throughput, &mut path.rng) {
+            Collision::Pass { weight } => {
+                path.throughput *= weight;
+                if path.throughput == Vec3A::ZERO {
+                    Flight::Ended
+                } else {
+                    Flight::Reached
+                }
+            }
+            Collision::Scatter { t, weight } => {
+                path.throughput *= weight;
+                path.cone_width += path.cone_spread * t;
+                // `max_depth` counts segments, as at a surface (path.rs).
+                if path.depth + 1 >= scene.settings.max_depth {
+                    return Flight::Ended;
+                }
+                let v = MediumVertex {
+                    p: ray.origin + ray.dir * t,
+                    dir: ray.dir,
+                    medium: m,
+                    object,
+                };
+                match self.medium_scatter(out, path, &v, sampler) {
+                    Some(next) if self.roulette(path, sampler) => Flight::Scattered(next),
+                    _ => Flight::Ended,
+                }
+            }
+        }
+    }
+
     /// The medium of `stack` and the object that bounds it (`u32::MAX` for the
     /// atmosphere), if any.
     #[inline]

@@ -363,4 +363,46 @@ fn media_errors_name_the_file_and_line() {
     let atmosphere = ROOM.replace("atmosphere = \"haze\"", "atmosphere = \"smoke\"");
     let err = build(&atmosphere, vec![]).err().unwrap();
     assert!(err.contains("unknown medium 'smoke'"), "{err}");
+    // One triangle is no closed surface.
+    let open = format!(
+        "{ROOM}\n[[objects]]\nname = \"sheet\"\nshape = \"mesh\"\nmaterial = \"null\"\n\
+         interior = \"fog\"\npositions = [[0, 0, 0], [1, 0, 0], [0, 1, 0]]\n\
+         indices = [[0, 1, 2]]\n"
+    );
+    let err = build(&open, vec![]).err().unwrap();
+    assert!(err.contains("open mesh"), "{err}");
+}
+
+/// An OpenPBR glass with a transmission depth holds its own medium: seen through, the
+/// dome behind it is darker in the channels its colour absorbs.
+#[test]
+fn openpbr_transmission_depth_makes_an_interior() {
+    let text = r#"
+[camera]
+position = [0, 0, 6]
+look_at = [0, 0, 0]
+fov = 1
+[film]
+resolution = [8, 8]
+[materials.tinted]
+type = "openpbr"
+transmission_weight = 1
+transmission_color = [0.5, 0.9, 0.9]
+transmission_depth = 1
+specular_weight = 0
+[[objects]]
+name = "slab"
+shape = "cube"
+scale = [20, 20, 1]
+material = "tinted"
+[[lights]]
+type = "dome"
+"#;
+    let scene = build(text, vec![]).unwrap();
+    assert_eq!(scene.volumes.len(), 1);
+    let (scene, film) = render_aovs(text, 4, vec![]);
+    // Two units of a medium whose one unit transmits the colour: its square.
+    let want = DVec3::new(0.25, 0.81, 0.81);
+    let exact = want * off_axis_excess(1.0, 8) * 2.0;
+    assert_close("openpbr", mean_se(&film, index(&scene, "beauty")), want, exact);
 }

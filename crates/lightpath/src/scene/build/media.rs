@@ -5,7 +5,7 @@
 use crate::geometry::{Accel, Ray, Visibility};
 use crate::media::{HenyeyGreenstein, Homogeneous, Medium, MediumStack, Volume};
 use crate::material::openpbr::OpenPbr;
-use crate::scene::desc::{MaterialKind, MediumDesc, NameRef, SceneDesc};
+use crate::scene::desc::{MaterialKind, MediumDesc, NameRef, SceneDesc, ShapeDesc};
 use crate::scene::{MediumUse, Object, SceneError};
 use glam::Vec3A;
 use std::collections::HashMap;
@@ -46,6 +46,17 @@ pub fn build(
     };
     for i in &desc.media.interiors {
         let volume = find(&i.medium)?;
+        // In a file with lines (a TOML scene) an open mesh is an error; an imported
+        // file's (glTF) is taken as it is.
+        if i.medium.origin.line > 0 {
+            if let Some(e) = desc.objects.get(i.object).and_then(|o| open_edge(&o.shape)) {
+                return Err(i.medium.origin.error(format!(
+                    "interior '{}' on an open mesh: the edge {:?}–{:?} borders {} \
+                     triangle(s), not 2 (a medium needs a closed surface)",
+                    i.medium.name, e.0, e.1, e.2
+                )));
+            }
+        }
         let Some(o) = objects.get_mut(i.object) else {
             return Err(i.medium.origin.error(format!(
                 "interior of object {} of {}: there is no such object",
@@ -113,6 +124,33 @@ pub fn openpbr_interior(material: &str, p: &OpenPbr) -> Option<Volume> {
         phase: HenyeyGreenstein::new(p.transmission_scatter_anisotropy),
         emission: Vec3A::ZERO,
     })
+}
+
+/// An edge of a mesh shape that does not border exactly two triangles (vertices
+/// welded by position, degenerate edges skipped), with its count; `None` for a closed
+/// mesh or a shape that is not a mesh (cubes and spheres are closed).
+fn open_edge(shape: &ShapeDesc) -> Option<([f32; 3], [f32; 3], usize)> {
+    let parts = shape.mesh_parts()?;
+    let key = |p: [f32; 3]| p.map(f32::to_bits);
+    let mut edges: HashMap<([u32; 3], [u32; 3]), (usize, [f32; 3], [f32; 3])> = HashMap::new();
+    for part in parts {
+        for tri in &part.indices {
+            let p = tri.map(|i| part.positions.get(i as usize).copied().unwrap_or_default());
+            for (a, b) in [(p[0], p[1]), (p[1], p[2]), (p[2], p[0])] {
+                let (ka, kb) = (key(a), key(b));
+                if ka == kb {
+                    continue;
+                }
+                let k = if ka < kb { (ka, kb) } else { (kb, ka) };
+                edges.entry(k).or_insert((0, a, b)).0 += 1;
+            }
+        }
+    }
+    edges
+        .into_values()
+        .filter(|e| e.0 != 2)
+        .min_by(|a, b| a.1.partial_cmp(&b.1).unwrap_or(std::cmp::Ordering::Equal))
+        .map(|(n, a, b)| (a, b, n))
 }
 
 /// The interiors that contain `p`: along a fixed ray out of the scene, an interior
