@@ -5,11 +5,11 @@
 use super::routing::{Origin, Via};
 use super::volume::{media_seed, Flight, MAX_CROSSINGS};
 use super::{Sink, Tracer};
-use crate::media::MediumStack;
-use crate::sampling::Rng;
 use crate::geometry::{Hit, Ray, Visibility};
 use crate::material::{Bsdf, Shading};
+use crate::media::MediumStack;
 use crate::sampler::{dim, Sampler};
+use crate::sampling::Rng;
 use crate::scene::{DataLobe, Material, Object};
 use glam::Vec3A;
 use lpe::{ScatterClass, StateId};
@@ -107,7 +107,8 @@ impl Tracer<'_> {
             };
             let found = scene.accel.intersect(&ray, tmin, mask);
             tmin = 0.0;
-            let passes = scene.has_media && found.as_ref().is_some_and(|h| self.passes(&path.media, h));
+            let passes =
+                scene.has_media && found.as_ref().is_some_and(|h| self.passes(&path.media, h));
             if let Some(hit) = found.as_ref().filter(|_| !passes) {
                 let holdout = scene.objects[hit.object as usize].holdout;
                 if path.depth == 0 {

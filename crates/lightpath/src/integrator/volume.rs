@@ -31,7 +31,9 @@ pub(super) const MAX_CROSSINGS: u32 = 256;
 /// origin and direction come from that sample's pixel-filter and lens numbers).
 pub(super) fn media_seed(ray: &Ray) -> u64 {
     let bits = |v: Vec3A| {
-        u64::from(v.x.to_bits()) ^ (u64::from(v.y.to_bits()) << 21) ^ (u64::from(v.z.to_bits()) << 42)
+        u64::from(v.x.to_bits())
+            ^ (u64::from(v.y.to_bits()) << 21)
+            ^ (u64::from(v.z.to_bits()) << 42)
     };
     splitmix64(bits(ray.dir) ^ splitmix64(bits(ray.origin)))
 }
@@ -132,7 +134,8 @@ impl Tracer<'_> {
     /// Whether a ray passes `hit` without an event: a null surface or a false boundary.
     #[inline]
     pub(super) fn passes(&self, stack: &MediumStack, hit: &Hit) -> bool {
-        self.scene.objects[hit.object as usize].null_surface || self.false_boundary(stack, hit.object)
+        self.scene.objects[hit.object as usize].null_surface
+            || self.false_boundary(stack, hit.object)
     }
 
     /// `stack` after a ray travelling along `dir` crosses `hit`'s surface.
@@ -187,7 +190,9 @@ impl Tracer<'_> {
                     tmax: hit.as_ref().map_or(ray.tmax, |h| h.t),
                     ..ray
                 };
-                tr *= scene.volumes[m.volume as usize].medium.transmittance(&seg, rng);
+                tr *= scene.volumes[m.volume as usize]
+                    .medium
+                    .transmittance(&seg, rng);
                 if tr == Vec3A::ZERO {
                     return tr;
                 }
@@ -228,7 +233,9 @@ impl Tracer<'_> {
         self.medium_light(out, path, s_v, v, sampler);
         let bounce = dim::bounce(path.depth);
         let volume = &scene.volumes[v.medium.volume as usize];
-        let (wi, pdf) = volume.phase.sample(v.dir, sampler.get_2d(bounce + dim::DIRECTION));
+        let (wi, pdf) = volume
+            .phase
+            .sample(v.dir, sampler.get_2d(bounce + dim::DIRECTION));
         // The phase function is sampled exactly: its weight is one.
         path.state = s_v;
         path.prev_p = v.p;
@@ -303,7 +310,13 @@ impl Tracer<'_> {
         let tr = if tmax <= 0.0 {
             Vec3A::ONE
         } else {
-            self.transmittance(out, &shadow, &path.media, light.shadow_exempt(), &mut path.rng)
+            self.transmittance(
+                out,
+                &shadow,
+                &path.media,
+                light.shadow_exempt(),
+                &mut path.rng,
+            )
         };
         let value = ls.radiance * (f / light_pdf);
         self.split_by_transmittance(out, s_light, path, value, w, tr, light.glow, light.part);
@@ -345,7 +358,13 @@ impl Tracer<'_> {
     }
 
     /// The emission a medium adds along the segment `seg` (an `O` with its groups).
-    pub(super) fn medium_emission(&self, out: &mut Sink, path: &PathState, m: MediumUse, seg: &Ray) {
+    pub(super) fn medium_emission(
+        &self,
+        out: &mut Sink,
+        path: &PathState,
+        m: MediumUse,
+        seg: &Ray,
+    ) {
         let scene = self.scene;
         let volume = &scene.volumes[m.volume as usize];
         if volume.emission == Vec3A::ZERO {

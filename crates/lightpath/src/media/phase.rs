@@ -79,7 +79,12 @@ mod tests {
             let mut rng = Rng::for_sample(11, k as u64, 0);
             let mut sample = || Some(hg.sample(dir, rng.next_2d()).0);
             let pdf = |w: Vec3A| hg.eval(dir, w);
-            failures.extend(chi2_case(&format!("HG g={g}"), &mut sample, &pdf, threshold));
+            failures.extend(chi2_case(
+                &format!("HG g={g}"),
+                &mut sample,
+                &pdf,
+                threshold,
+            ));
         }
         assert!(failures.is_empty(), "{failures:?}");
     }

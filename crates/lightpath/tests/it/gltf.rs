@@ -1141,8 +1141,8 @@ fn khr_materials_volume_with_a_thickness_is_an_absorbing_interior() {
     }
     // Outward-facing, counter-clockwise seen from outside.
     let faces: [u32; 36] = [
-        0, 2, 1, 1, 2, 3, 4, 5, 6, 5, 7, 6, 0, 1, 4, 1, 5, 4, 2, 6, 3, 3, 6, 7, 0, 4, 2, 2,
-        4, 6, 1, 3, 5, 3, 7, 5,
+        0, 2, 1, 1, 2, 3, 4, 5, 6, 5, 7, 6, 0, 1, 4, 1, 5, 4, 2, 6, 3, 3, 6, 7, 0, 4, 2, 2, 4, 6,
+        1, 3, 5, 3, 7, 5,
     ];
     let thick = doc.mesh(&pos, &faces, None, Some(0));
     let thin = doc.mesh(&pos, &faces, None, Some(1));
@@ -1156,7 +1156,10 @@ fn khr_materials_volume_with_a_thickness_is_an_absorbing_interior() {
     doc.write_glb(&path);
     let desc = load(&path);
     assert!(
-        !desc.warnings.iter().any(|w| w.contains("KHR_materials_volume")),
+        !desc
+            .warnings
+            .iter()
+            .any(|w| w.contains("KHR_materials_volume")),
         "{:?}",
         desc.warnings
     );
@@ -1164,7 +1167,11 @@ fn khr_materials_volume_with_a_thickness_is_an_absorbing_interior() {
     let medium = &desc.media.media["thick (volume)"];
     let want = [0.5f32, 0.25, 1.0].map(|c| -c.ln() / 2.0);
     for c in 0..3 {
-        assert!((medium.sigma_a[c] - want[c]).abs() < 1e-6, "{:?}", medium.sigma_a);
+        assert!(
+            (medium.sigma_a[c] - want[c]).abs() < 1e-6,
+            "{:?}",
+            medium.sigma_a
+        );
     }
     assert_eq!(medium.sigma_s, [0.0; 3]);
     assert_eq!(desc.media.interiors.len(), 1);
@@ -1179,13 +1186,23 @@ fn khr_materials_volume_with_a_thickness_is_an_absorbing_interior() {
         other => panic!("{name}: {other:?}"),
     };
     assert_eq!(openpbr("thick").transmission_depth, 0.0);
-    assert_eq!(openpbr("thick").transmission_color, Vec3A::new(0.9, 1.0, 0.9));
+    assert_eq!(
+        openpbr("thick").transmission_color,
+        Vec3A::new(0.9, 1.0, 0.9)
+    );
     assert_eq!(
         openpbr("thin").transmission_color,
         Vec3A::new(0.5, 0.25, 1.0)
     );
     let scene = Scene::build(&desc, &aov::assemble(aov::standard())).unwrap();
     assert_eq!(scene.volumes.len(), 1);
-    assert!(scene.objects.iter().filter(|o| o.interior.is_some()).count() == 1);
+    assert!(
+        scene
+            .objects
+            .iter()
+            .filter(|o| o.interior.is_some())
+            .count()
+            == 1
+    );
     let _ = std::fs::remove_dir_all(&dir);
 }

@@ -130,7 +130,12 @@ fn a_camera_inside_a_medium_starts_in_it() {
     let (scene, film) = render_aovs(&text, 4, vec![]);
     let want = DVec3::new(-0.1f64, -0.6, -1.5).exp();
     let exact = want * DVec3::new(0.1, 0.6, 1.5) * off_axis_excess(1.0, 16);
-    assert_close("inside", mean_se(&film, index(&scene, "beauty")), want, exact);
+    assert_close(
+        "inside",
+        mean_se(&film, index(&scene, "beauty")),
+        want,
+        exact,
+    );
 }
 
 /// How much longer than on the axis a ray through a slab is, relatively, at most, for
@@ -225,8 +230,8 @@ fn single_scattering_integral() -> DVec3 {
         let to = light - x;
         let r = to.length();
         let cos = d.dot(to / r);
-        let hg = (1.0 - g * g)
-            / (4.0 * std::f64::consts::PI * (1.0 + g * g - 2.0 * g * cos).powf(1.5));
+        let hg =
+            (1.0 - g * g) / (4.0 * std::f64::consts::PI * (1.0 + g * g - 2.0 * g * cos).powf(1.5));
         let tr = (-st * (t + r)).exp();
         sum += tr * ss * hg * intensity / (r * r) * (2.0 / n as f64);
     }
@@ -241,7 +246,12 @@ fn single_scattering_from_a_point_light_matches_the_integral() {
     // The integral is along the axis; the 1° field's rays see the light from up to
     // 0.5° away (a relative change of the integrand below 1e-3 at this distance).
     let exact = want * 1e-3;
-    assert_close("single scattering", mean_se(&film, index(&scene, "beauty")), want, exact);
+    assert_close(
+        "single scattering",
+        mean_se(&film, index(&scene, "beauty")),
+        want,
+        exact,
+    );
     // All of it is direct volume light, `CV<L.>`.
     let (b, v) = (index(&scene, "beauty"), index(&scene, "volumeDirect"));
     for y in 0..film.height {
@@ -340,10 +350,16 @@ fn partitions_with_volume_events_sum_to_beauty() {
     assert!(total("volumeDirect") > 0.0 && total("volumeIndirect") > 0.0);
     assert!(total("shadows") > 0.0);
     let volume = index(&scene, "volume");
-    let (vd, vi) = (index(&scene, "volumeDirect"), index(&scene, "volumeIndirect"));
+    let (vd, vi) = (
+        index(&scene, "volumeDirect"),
+        index(&scene, "volumeIndirect"),
+    );
     for y in 0..film.height {
         for x in 0..film.width {
-            let (a, b) = (film.pixel(volume, x, y), film.pixel(vd, x, y) + film.pixel(vi, x, y));
+            let (a, b) = (
+                film.pixel(volume, x, y),
+                film.pixel(vd, x, y) + film.pixel(vi, x, y),
+            );
             assert!((a - b).abs().max_element() <= 1e-4 * a.max_element().max(1e-3));
         }
     }
@@ -353,10 +369,16 @@ fn partitions_with_volume_events_sum_to_beauty() {
 fn media_errors_name_the_file_and_line() {
     let unknown = ROOM.replace("interior = \"fog\"", "interior = \"smog\"");
     let err = build(&unknown, vec![]).err().unwrap();
-    assert!(err.contains("media.toml:") && err.contains("unknown medium 'smog'"), "{err}");
+    assert!(
+        err.contains("media.toml:") && err.contains("unknown medium 'smog'"),
+        "{err}"
+    );
     let negative = ROOM.replace("sigma_a = [2.0, 0.2, 1.5]", "sigma_a = [2.0, -0.2, 1.5]");
     let err = build(&negative, vec![]).err().unwrap();
-    assert!(err.contains("media.toml:") && err.contains("sigma_a"), "{err}");
+    assert!(
+        err.contains("media.toml:") && err.contains("sigma_a"),
+        "{err}"
+    );
     let g = ROOM.replace("g = 0.3", "g = 1.0");
     let err = build(&g, vec![]).err().unwrap();
     assert!(err.contains("expected a number between -1 and 1"), "{err}");
@@ -404,5 +426,10 @@ type = "dome"
     // Two units of a medium whose one unit transmits the colour: its square.
     let want = DVec3::new(0.25, 0.81, 0.81);
     let exact = want * off_axis_excess(1.0, 8) * 2.0;
-    assert_close("openpbr", mean_se(&film, index(&scene, "beauty")), want, exact);
+    assert_close(
+        "openpbr",
+        mean_se(&film, index(&scene, "beauty")),
+        want,
+        exact,
+    );
 }

@@ -3,8 +3,8 @@
 //! starts in are found by walking a ray out of the scene.
 
 use crate::geometry::{Accel, Ray, Visibility};
-use crate::media::{HenyeyGreenstein, Homogeneous, Medium, MediumStack, Volume};
 use crate::material::openpbr::OpenPbr;
+use crate::media::{HenyeyGreenstein, Homogeneous, Medium, MediumStack, Volume};
 use crate::scene::desc::{MaterialKind, MediumDesc, NameRef, SceneDesc, ShapeDesc};
 use crate::scene::{MediumUse, Object, SceneError};
 use glam::Vec3A;

@@ -53,8 +53,7 @@ impl Scene {
 
         let (volumes, atmosphere) = media::build(desc, &mut objects)?;
 
-        let vocabulary =
-            Vocabulary::of_scene(&objects, &materials, &lights, atmosphere.is_some());
+        let vocabulary = Vocabulary::of_scene(&objects, &materials, &lights, atmosphere.is_some());
         let automaton = compile_aovs(desc, aovs, &vocabulary)?;
         let classes = vocabulary.classify(&automaton, &mut objects, &mut lights);
         let atmosphere = atmosphere.map(|volume| crate::scene::MediumUse {

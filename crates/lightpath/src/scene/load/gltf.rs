@@ -24,8 +24,9 @@ use crate::material::openpbr::{self, InputMut, OpenPbr};
 use crate::material::texture::{UvTransform, Wrap};
 use crate::scene::desc::InputTexture;
 use crate::scene::desc::{
-    CameraDesc, ImageSource, InteriorDesc, LightDesc, LightKind, MaterialDesc, MaterialKind, MediumDesc, MeshData, NameRef,
-    NamedCamera, ObjectDesc, Origin, SceneDesc, ShapeDesc, TextureDesc, TexturesDesc,
+    CameraDesc, ImageSource, InteriorDesc, LightDesc, LightKind, MaterialDesc, MaterialKind,
+    MediumDesc, MeshData, NameRef, NamedCamera, ObjectDesc, Origin, SceneDesc, ShapeDesc,
+    TextureDesc, TexturesDesc,
 };
 use crate::scene::SceneError;
 use glam::{Affine3A, Mat4, Vec3, Vec3A};
@@ -895,7 +896,13 @@ impl Loader {
                 ])
             })
             .unwrap_or([1.0; 3])
-            .map(|c| if c.is_finite() { c.clamp(0.0, 1.0) } else { 1.0 });
+            .map(|c| {
+                if c.is_finite() {
+                    c.clamp(0.0, 1.0)
+                } else {
+                    1.0
+                }
+            });
         let thickness = v
             .get("thicknessFactor")
             .and_then(|t| t.as_f64())

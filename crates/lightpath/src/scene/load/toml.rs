@@ -474,13 +474,26 @@ fn medium(src: &Source, name: &str, m: &Spanned<MediumToml>) -> Result<d::Medium
     let fail = |key: &str, msg: String| {
         Err(src.error(key_span(src, &span, key), format!("medium '{name}': {msg}")))
     };
-    for (key, v) in [("sigma_a", Some(m.sigma_a)), ("sigma_s", Some(m.sigma_s)), ("emission", m.emission)] {
+    for (key, v) in [
+        ("sigma_a", Some(m.sigma_a)),
+        ("sigma_s", Some(m.sigma_s)),
+        ("emission", m.emission),
+    ] {
         if let Some(v) = v.filter(|v| v.iter().any(|c| !c.is_finite() || *c < 0.0)) {
-            return fail(key, format!("{key} is {v:?}: expected finite numbers ≥ 0 (per scene unit)"));
+            return fail(
+                key,
+                format!("{key} is {v:?}: expected finite numbers ≥ 0 (per scene unit)"),
+            );
         }
     }
     if !(m.g.abs() < 1.0) {
-        return fail("g", format!("g is {}: expected a number between -1 and 1 (exclusive)", m.g));
+        return fail(
+            "g",
+            format!(
+                "g is {}: expected a number between -1 and 1 (exclusive)",
+                m.g
+            ),
+        );
     }
     Ok(d::MediumDesc {
         sigma_a: m.sigma_a,
