@@ -84,7 +84,9 @@ def mitsuba_scene(mi, spp, max_depth, res):
     d["shape_ball"] = {
         "type": "sphere", "center": list(BALL_CENTER), "radius": BALL_RADIUS,
         "bsdf": {"type": "dielectric", "int_ior": IOR, "ext_ior": 1.0},
-        "interior": {"type": "homogeneous", "sigma_t": {"type": "rgb", "value": list(BALL_SIGMA_A)},
+        # An RGB parameter is a reflectance (at most 1) to Mitsuba: the scale carries the rest.
+        "interior": {"type": "homogeneous", "scale": max(BALL_SIGMA_A),
+                     "sigma_t": {"type": "rgb", "value": [c / max(BALL_SIGMA_A) for c in BALL_SIGMA_A]},
                      "albedo": 0.0},
     }
     return d, (w, h)
@@ -105,9 +107,15 @@ def project_box(lo, hi, w, h):
     return int(max(min(xs), 0)), int(min(max(xs), w)), int(max(min(ys), 0)), int(min(max(ys), h))
 
 
-def load(path):
+def load(path, layer=None):
+    """An EXR's beauty (its first three channels), or the RGB of AOV `layer`."""
     import mitsuba as mi
-    return np.array(mi.Bitmap(path))[..., :3].astype(np.float64)
+    bmp = mi.Bitmap(path)
+    img = np.array(bmp).astype(np.float64)
+    if layer is None:
+        return img[..., :3]
+    names = [f.name for f in bmp.struct_()]
+    return img[..., [names.index(f"{layer}.{c}") for c in "RGB"]]
 
 
 def main():
@@ -119,6 +127,7 @@ def main():
     ap.add_argument("--res", type=int, default=128)
     ap.add_argument("--out", default=os.path.join(HERE, "out"))
     ap.add_argument("--reuse-mitsuba", action="store_true", help="keep an existing Mitsuba image")
+    ap.add_argument("--reuse-lightpath", action="store_true", help="keep an existing Lightpath image")
     args = ap.parse_args()
     os.makedirs(args.out, exist_ok=True)
     res = (args.res, args.res)
@@ -127,8 +136,9 @@ def main():
     lightpath_scene(toml)
     lp_exr = os.path.join(args.out, f"lightpath_{args.spp}spp.exr")
     t = time.perf_counter()
-    subprocess.run([args.lightpath, "render", toml, "--spp", str(args.spp), "--max-depth", str(args.max_depth),
-                    "--resolution", f"{args.res}x{args.res}", "-o", lp_exr], check=True)
+    if not (args.reuse_lightpath and os.path.exists(lp_exr)):
+        subprocess.run([args.lightpath, "render", toml, "--spp", str(args.spp), "--max-depth", str(args.max_depth),
+                        "--resolution", f"{args.res}x{args.res}", "-o", lp_exr], check=True)
     lp_s = time.perf_counter() - t
     mts_exr = os.path.join(args.out, f"mitsuba_{args.mitsuba_spp}spp_{args.res}.exr")
     mts_s = float("nan")
@@ -155,6 +165,11 @@ def main():
         a = lp[y0:y1, x0:x1].reshape(-1, 3).mean(0)
         b = mts[y0:y1, x0:x1].reshape(-1, 3).mean(0)
         rel = (a - b) / b
+        if name == "fog":
+            # The fog's own light, `C.*<V.'fog'>.*[LO]`, and how much of the region it is.
+            fl = load(lp_exr, "fog_light")[y0:y1, x0:x1].reshape(-1, 3).mean(0)
+            print(f"   fog_light AOV in the fog's region {np.round(fl, 4).tolist()} = "
+                  f"{np.round(100 * fl / a, 1).tolist()} % of it")
         print(f"{name:>6} px[{x0}:{x1}, {y0}:{y1}]  lightpath {np.round(a, 4).tolist()}  mitsuba "
               f"{np.round(b, 4).tolist()}  rel diff {np.round(100 * rel, 2).tolist()} %  (mean of channels "
               f"{100 * (a.mean() - b.mean()) / b.mean():+.2f} %)")
