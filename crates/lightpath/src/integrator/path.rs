@@ -189,11 +189,19 @@ impl Tracer<'_> {
             };
             self.data_lobes(out, &path, &v);
             self.direct_light(out, &mut path, &v, sampler);
-            let Some(next) = self.scatter(out, &mut path, &v, sampler) else {
+            let Some(mut next) = self.scatter(out, &mut path, &v, sampler) else {
                 break;
             };
-            if obj.interior.is_some() {
+            // Through an interior's boundary (not a subsurface walk's exit, elsewhere):
+            // the medium changes, and its flight starts on the surface (see `tmin`).
+            let through = ray.dir.dot(hit.ng) * next.dir.dot(hit.ng) > 0.0;
+            if obj.interior.is_some()
+                && through
+                && next.origin.distance(hit.p) <= 2.0 * scene.epsilon
+            {
                 path.media = self.stack_after(&path.media, &hit, ray.dir, next.dir);
+                next.origin = hit.p;
+                tmin = scene.epsilon;
             }
             ray = next;
             if !self.roulette(&mut path, sampler) {

@@ -16,11 +16,13 @@ use super::path::PathState;
 use super::routing::{Origin, Via};
 use super::{Sink, Tracer};
 use crate::geometry::{Hit, Ray, Visibility};
+use crate::light::{Light, LightShape};
+use crate::media::equiangular::Equiangular;
 use crate::media::{Collision, MediumStack};
 use crate::sampler::{dim, Sampler};
 use crate::sampling::{splitmix64, Rng};
 use crate::scene::MediumUse;
-use glam::Vec3A;
+use glam::{Vec2, Vec3A};
 use lpe::StateId;
 
 /// Boundaries a ray may pass without an event before it counts as lost: a cap on the
@@ -45,6 +47,19 @@ pub(super) struct MediumVertex {
     pub dir: Vec3A,
     pub medium: MediumUse,
     pub object: u32,
+    /// The flight's segment and the density of its distance (0: unknown, no MIS with
+    /// equiangular sampling).
+    pub seg: Ray,
+    pub pdf: f32,
+}
+
+/// Where a point or spot light is: equiangular sampling aims at it.
+pub(super) fn point_of(light: &Light) -> Option<Vec3A> {
+    match &light.shape {
+        LightShape::Point(p) => Some(p.position),
+        LightShape::Spot(s) => Some(s.position),
+        _ => None,
+    }
 }
 
 /// How a ray's flight through the medium it is in ended.
@@ -78,8 +93,12 @@ impl Tracer<'_> {
             ..*ray
         };
         self.medium_emission(out, path, m, &seg);
+        if self.equiangular {
+            self.equiangular_light(out, path, m, object, &seg);
+        }
         let volume = &scene.volumes[m.volume as usize];
-        match volume.medium.sample(&seg, path.throughput, &mut path.rng) {
+        let throughput = path.throughput;
+        match volume.medium.sample(&seg, throughput, &mut path.rng) {
             Collision::Pass { weight } => {
                 path.throughput *= weight;
                 if path.throughput == Vec3A::ZERO {
@@ -100,6 +119,14 @@ impl Tracer<'_> {
                     dir: ray.dir,
                     medium: m,
                     object,
+                    seg,
+                    pdf: match self.equiangular {
+                        true => volume
+                            .medium
+                            .collision_terms(t, throughput)
+                            .map_or(0.0, |c| c.2),
+                        false => 0.0,
+                    },
                 };
                 match self.medium_scatter(out, path, &v, sampler) {
                     Some(next) if self.roulette(path, sampler) => Flight::Scattered(next),
@@ -292,10 +319,11 @@ impl Tracer<'_> {
             return;
         }
         let light_pdf = select_pmf * ls.pdf;
-        let w = if ls.delta {
-            1.0
-        } else {
-            power_heuristic(light_pdf, f)
+        let w = match self.equiangular_pdf(&v.seg, li, light, v.p) {
+            // A point or spot light: weighed against equiangular sampling of the flight.
+            Some(pdf_e) if v.pdf > 0.0 => power_heuristic(v.pdf * light_pdf, pdf_e),
+            _ if ls.delta => 1.0,
+            _ => power_heuristic(light_pdf, f),
         };
         let tmax = if ls.dist.is_finite() {
             ls.dist - 2.0 * scene.epsilon
@@ -320,6 +348,87 @@ impl Tracer<'_> {
         };
         let value = ls.radiance * (f / light_pdf);
         self.split_by_transmittance(out, s_light, path, value, w, tr, light.glow, light.part);
+    }
+
+    /// The density with which [`equiangular_light`](Self::equiangular_light) picks light
+    /// `li` and the distance of `p` along `seg` (`None`: it never aims at that light).
+    fn equiangular_pdf(&self, seg: &Ray, li: usize, light: &Light, p: Vec3A) -> Option<f32> {
+        if !self.equiangular {
+            return None;
+        }
+        let c = point_of(light)?;
+        let e = Equiangular::new(seg, c)?;
+        let pmf = self.scene.light_select.pmf(li, seg.origin, Vec3A::ZERO);
+        Some(pmf * e.pdf((p - seg.origin).dot(seg.dir)))
+    }
+
+    /// Single scattering towards a point or spot light along a flight's segment `seg`,
+    /// the distance sampled equiangularly (media/equiangular.rs) and weighed against the
+    /// free-flight distance and light sampling at its vertex (power heuristic): the
+    /// same `V` then `L` events as a medium vertex's light sample. The light is chosen
+    /// from the segment's origin; other lights are left to the vertices.
+    fn equiangular_light(
+        &self,
+        out: &mut Sink,
+        path: &mut PathState,
+        m: MediumUse,
+        object: u32,
+        seg: &Ray,
+    ) {
+        let scene = self.scene;
+        let a = &scene.automaton;
+        let (u_light, u_t) = (path.rng.next_f32(), path.rng.next_f32());
+        if path.depth + 1 >= scene.settings.max_depth {
+            return;
+        }
+        let s_v = a.step(path.state, m.scatter_class);
+        let Some((li, pmf)) = scene.light_select.sample(u_light, seg.origin, Vec3A::ZERO) else {
+            return;
+        };
+        let light = &scene.lights[li];
+        let s_light = a.step(s_v, light.classes.light);
+        let (Some(c), false) = (point_of(light), a.accepting(s_light).is_empty()) else {
+            return;
+        };
+        let volume = &scene.volumes[m.volume as usize];
+        let Some(e) = Equiangular::new(seg, c).filter(|_| self.lit(object, li as u32)) else {
+            return;
+        };
+        let (t, pdf_t) = e.sample(u_t);
+        let Some((sigma_s, tr, pdf_d)) = volume.medium.collision_terms(t, path.throughput) else {
+            return;
+        };
+        let p = seg.origin + seg.dir * t;
+        let Some(ls) = light.sample(p, Vec2::ZERO, scene.accel.prims()) else {
+            return;
+        };
+        let f = volume.phase.eval(seg.dir, ls.wi);
+        let pdf_e = pmf * pdf_t;
+        if f <= 0.0 || !(pdf_e > 0.0) {
+            return;
+        }
+        let light_pdf = scene.light_select.pmf(li, p, Vec3A::ZERO) * ls.pdf;
+        let w = power_heuristic(pdf_e, pdf_d * light_pdf);
+        let shadow = Ray {
+            origin: p,
+            dir: ls.wi,
+            tmax: ls.dist - 2.0 * scene.epsilon,
+        };
+        let t_shadow = if shadow.tmax <= 0.0 {
+            Vec3A::ONE
+        } else {
+            self.transmittance(
+                out,
+                &shadow,
+                &path.media,
+                light.shadow_exempt(),
+                &mut path.rng,
+            )
+        };
+        let value = sigma_s * tr * ls.radiance * (f / (pdf_e * ls.pdf));
+        self.split_by_transmittance(
+            out, s_light, path, value, w, t_shadow, light.glow, light.part,
+        );
     }
 
     /// Adds a light sample `value` (weight `w`) reached with transmittance `tr`: the

@@ -72,6 +72,18 @@ impl Homogeneous {
         }
     }
 
+    /// σs, the transmittance to `t` and the density with which `sample` (steered by
+    /// `throughput`) returns a collision at `t`; `None` for a medium that does not
+    /// scatter (it has no collisions to weigh).
+    pub fn collision_terms(&self, t: f32, throughput: Vec3A) -> Option<(Vec3A, Vec3A, f32)> {
+        if self.sigma_s == Vec3A::ZERO {
+            return None;
+        }
+        let tr = beer(self.sigma_t, t);
+        let pdf = (channel_pmf(throughput) * self.sigma_t * tr).element_sum();
+        Some((self.sigma_s, tr, pdf))
+    }
+
     /// Transmittance over `[0, t]`, exactly.
     #[inline]
     pub fn transmittance(&self, t: f32) -> Vec3A {

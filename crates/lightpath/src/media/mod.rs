@@ -9,6 +9,7 @@
 //! resolved by priority (Schmidt & Budge 2002, "Simple Nested Dielectrics in Ray Traced
 //! Images", as Cycles and OSL's testrender resolve overlaps).
 
+pub mod equiangular;
 pub mod homogeneous;
 pub mod phase;
 
@@ -52,6 +53,18 @@ impl Medium {
     pub fn transmittance(&self, ray: &Ray, _rng: &mut Rng) -> Vec3A {
         match self {
             Medium::Homogeneous(m) => m.transmittance(ray.tmax),
+        }
+    }
+
+    /// What a real collision at distance `t` of `ray` would carry, exactly, for other
+    /// sampling techniques to weigh against this one (equiangular sampling, MIS):
+    /// σs there, the transmittance from the ray's origin, and the density with which
+    /// [`sample`](Self::sample) (steered by `throughput`) picks it. `None`: this kind
+    /// cannot say (it tracks collisions instead).
+    #[inline]
+    pub fn collision_terms(&self, t: f32, throughput: Vec3A) -> Option<(Vec3A, Vec3A, f32)> {
+        match self {
+            Medium::Homogeneous(m) => m.collision_terms(t, throughput),
         }
     }
 

@@ -395,8 +395,11 @@ fn media_errors_name_the_file_and_line() {
     assert!(err.contains("open mesh"), "{err}");
 }
 
-/// An OpenPBR glass with a transmission depth holds its own medium: seen through, the
-/// dome behind it is darker in the channels its colour absorbs.
+/// An OpenPBR glass with a transmission depth holds its own medium: light straight
+/// through the slab (`C<TS><TS><L.>`: in and out, nothing reflected) is that of a
+/// nearly clear one (depth 10⁶) times the medium's transmittance over the slab's two
+/// units, the square of `transmission_color` (the same samples, as a medium that only
+/// absorbs draws no numbers).
 #[test]
 fn openpbr_transmission_depth_makes_an_interior() {
     let text = r#"
@@ -411,7 +414,7 @@ type = "openpbr"
 transmission_weight = 1
 transmission_color = [0.5, 0.9, 0.9]
 transmission_depth = 1
-specular_weight = 0
+specular_roughness = 0
 [[objects]]
 name = "slab"
 shape = "cube"
@@ -422,14 +425,18 @@ type = "dome"
 "#;
     let scene = build(text, vec![]).unwrap();
     assert_eq!(scene.volumes.len(), 1);
-    let (scene, film) = render_aovs(text, 4, vec![]);
-    // Two units of a medium whose one unit transmits the colour: its square.
+    let through = || vec![AovSpec::new("through", "C<TS><TS><L.>")];
+    let (scene, tinted) = render_aovs(text, 4, through());
+    // The same material with a depth so large that its medium attenuates by 1e-6 at
+    // most over the slab: the same lobes, so the same samples.
+    let clear = text.replace("transmission_depth = 1\n", "transmission_depth = 1e6\n");
+    let (_, clear) = render_aovs(&clear, 4, through());
+    let k = index(&scene, "through");
+    let (a, b) = (mean_se(&tinted, k).0, mean_se(&clear, k).0);
     let want = DVec3::new(0.25, 0.81, 0.81);
-    let exact = want * off_axis_excess(1.0, 8) * 2.0;
-    assert_close(
-        "openpbr",
-        mean_se(&film, index(&scene, "beauty")),
-        want,
-        exact,
-    );
+    // Path lengths off the axis (σt·L per unit of relative length), and the nearly
+    // clear medium's own 2·0.7/10⁶.
+    let sigma_l = -2.0 * DVec3::new(0.5f64, 0.9, 0.9).ln();
+    let exact = want * (sigma_l * off_axis_excess(1.0, 8) + 2e-6);
+    assert_close("openpbr", (a / b, DVec3::ZERO), want, exact);
 }
