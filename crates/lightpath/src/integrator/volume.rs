@@ -1,8 +1,9 @@
 //! Paths through participating media (media/): the medium a path is in, free flights
 //! that end at a scattering vertex (a `V` event, light sampled there with MIS against
-//! the phase function, the next direction from the phase function), and the
-//! transmittance of shadow rays, which pass null boundaries and media and stop at any
-//! other surface.
+//! the phase function, the next direction from the phase function), single scattering
+//! towards point and spot lights at equiangularly sampled distances (MIS against the
+//! free-flight vertices), and the transmittance of shadow rays, which pass null
+//! boundaries and media and stop at any other surface.
 //!
 //! A `V` vertex is a bounce like a surface's: it takes the same sampler dimensions of
 //! its depth (light choice and point, direction, roulette), counts toward `max_depth`
@@ -404,7 +405,7 @@ impl Tracer<'_> {
         };
         let f = volume.phase.eval(seg.dir, ls.wi);
         let pdf_e = pmf * pdf_t;
-        if f <= 0.0 || !(pdf_e > 0.0) {
+        if f <= 0.0 || pdf_e.is_nan() || pdf_e <= 0.0 {
             return;
         }
         let light_pdf = scene.light_select.pmf(li, p, Vec3A::ZERO) * ls.pdf;

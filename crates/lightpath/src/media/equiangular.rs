@@ -21,7 +21,7 @@ impl Equiangular {
     pub fn new(ray: &Ray, point: glam::Vec3A) -> Option<Equiangular> {
         let foot = (point - ray.origin).dot(ray.dir);
         let dist = (ray.origin + ray.dir * foot - point).length();
-        if !(dist > 1e-6 && ray.tmax > 0.0) || !foot.is_finite() {
+        if !(dist > 1e-6 && ray.tmax > 0.0 && foot.is_finite()) {
             return None;
         }
         let theta_a = (-foot / dist).atan();

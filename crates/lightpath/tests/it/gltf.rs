@@ -1166,12 +1166,8 @@ fn khr_materials_volume_with_a_thickness_is_an_absorbing_interior() {
     // σa = −ln(colour) / distance, the extension's Beer–Lambert law.
     let medium = &desc.media.media["thick (volume)"];
     let want = [0.5f32, 0.25, 1.0].map(|c| -c.ln() / 2.0);
-    for c in 0..3 {
-        assert!(
-            (medium.sigma_a[c] - want[c]).abs() < 1e-6,
-            "{:?}",
-            medium.sigma_a
-        );
+    for (got, want) in medium.sigma_a.iter().zip(want) {
+        assert!((got - want).abs() < 1e-6, "{:?}", medium.sigma_a);
     }
     assert_eq!(medium.sigma_s, [0.0; 3]);
     assert_eq!(desc.media.interiors.len(), 1);

@@ -132,7 +132,9 @@ pub fn openpbr_interior(material: &str, p: &OpenPbr) -> Option<Volume> {
 fn open_edge(shape: &ShapeDesc) -> Option<([f32; 3], [f32; 3], usize)> {
     let parts = shape.mesh_parts()?;
     let key = |p: [f32; 3]| p.map(f32::to_bits);
-    let mut edges: HashMap<([u32; 3], [u32; 3]), (usize, [f32; 3], [f32; 3])> = HashMap::new();
+    // Edge (by its ends' bits, ordered) → triangles bordering it, and its ends.
+    type Ends = ([u32; 3], [u32; 3]);
+    let mut edges: HashMap<Ends, (usize, [f32; 3], [f32; 3])> = HashMap::new();
     for part in parts {
         for tri in &part.indices {
             let p = tri.map(|i| part.positions.get(i as usize).copied().unwrap_or_default());

@@ -486,7 +486,7 @@ fn medium(src: &Source, name: &str, m: &Spanned<MediumToml>) -> Result<d::Medium
             );
         }
     }
-    if !(m.g.abs() < 1.0) {
+    if m.g.is_nan() || m.g.abs() >= 1.0 {
         return fail(
             "g",
             format!(
