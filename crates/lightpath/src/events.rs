@@ -8,10 +8,10 @@ use crate::scene::{Material, Object};
 use glam::Vec3A;
 use lpe::{Automaton, ClassId, Event, EventType, Profile, Scatter};
 
-/// What Lightpath's paths contain: no volume (`V`) or background (`B`) events.
+/// What Lightpath's paths contain: every type but background (`B`).
 pub fn profile() -> Profile {
     use EventType::*;
-    Profile::new(&[Camera, Reflect, Transmit, Light, Emission])
+    Profile::new(&[Camera, Reflect, Transmit, Light, Emission, Volume])
 }
 
 /// What a user (data) lobe reports (docs/lpe.md#paths-and-events).
@@ -65,6 +65,17 @@ enum Use {
     LightSeen {
         light: u32,
     },
+    /// A scattering vertex in an object's interior: `V`.
+    VolumeScatter {
+        object: u32,
+    },
+    /// An object's interior's emission: `O`.
+    VolumeGlow {
+        object: u32,
+    },
+    /// The atmosphere's `V` and `O` (no labels).
+    AtmosphereScatter,
+    AtmosphereGlow,
 }
 
 /// Every event a scene can emit, each with what emits it.
@@ -77,10 +88,19 @@ pub struct Vocabulary {
 pub struct Classes {
     pub camera: ClassId,
     pub data_light: ClassId,
+    /// The atmosphere's `V` and `O` (the camera's class when there is none).
+    pub atmosphere_scatter: ClassId,
+    pub atmosphere_glow: ClassId,
 }
 
 impl Vocabulary {
-    pub fn of_scene(objects: &[Object], materials: &[Material], lights: &[Light]) -> Vocabulary {
+    /// `atmosphere`: whether the scene has one.
+    pub fn of_scene(
+        objects: &[Object],
+        materials: &[Material],
+        lights: &[Light],
+        atmosphere: bool,
+    ) -> Vocabulary {
         let mut v = Vocabulary {
             events: Vec::new(),
             uses: Vec::new(),
@@ -119,6 +139,16 @@ impl Vocabulary {
                 let e = Event::new(EventType::Emission, None, o.groups.iter());
                 v.push(e, Use::Glow { object });
             }
+            if o.interior.is_some() {
+                let e = Event::new(EventType::Volume, None, o.groups.iter());
+                v.push(e, Use::VolumeScatter { object });
+                let e = Event::new(EventType::Emission, None, o.groups.iter());
+                v.push(e, Use::VolumeGlow { object });
+            }
+        }
+        if atmosphere {
+            v.push(Event::bare(EventType::Volume), Use::AtmosphereScatter);
+            v.push(Event::bare(EventType::Emission), Use::AtmosphereGlow);
         }
         // A glow's events are its object's `O` (above), not a light's.
         for (id, l) in lights.iter().enumerate().filter(|(_, l)| !l.glow) {
@@ -154,6 +184,8 @@ impl Vocabulary {
         let mut out = Classes {
             camera: classes[0],
             data_light: classes[1],
+            atmosphere_scatter: classes[0],
+            atmosphere_glow: classes[0],
         };
         for o in objects.iter_mut() {
             o.lobe_classes.clear();
@@ -171,6 +203,18 @@ impl Vocabulary {
                 Use::Glow { object } => objects[object as usize].glow_class = Some(class),
                 Use::Light { light } => lights[light as usize].classes.light = class,
                 Use::LightSeen { light } => lights[light as usize].classes.seen = class,
+                Use::VolumeScatter { object } => {
+                    if let Some(i) = &mut objects[object as usize].interior {
+                        i.scatter_class = class;
+                    }
+                }
+                Use::VolumeGlow { object } => {
+                    if let Some(i) = &mut objects[object as usize].interior {
+                        i.glow_class = class;
+                    }
+                }
+                Use::AtmosphereScatter => out.atmosphere_scatter = class,
+                Use::AtmosphereGlow => out.atmosphere_glow = class,
             }
         }
         // A light sample of a glow, like a ray that finds it, is its object's `O`.

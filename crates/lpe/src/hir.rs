@@ -276,5 +276,5 @@ fn label_list<'a>(items: impl Iterator<Item = &'a Item>) -> Vec<String> {
     v
 }
 
-/// The event types the generic profile does not emit (docs/lpe.md#paths-and-events): V and B.
-pub const RESERVED_TYPES: u8 = (1 << EventType::Volume as u8) | (1 << EventType::Background as u8);
+/// The event types the generic profile does not emit (docs/lpe.md#paths-and-events): B.
+pub const RESERVED_TYPES: u8 = 1 << EventType::Background as u8;

@@ -82,17 +82,19 @@ impl FromIterator<Prefix> for Flags {
 }
 
 /// The standard names of docs/lpe.md#standard-aovs, with their definitions (prefixes included).
-pub const STANDARD_NAMES: [(&str, &str); 11] = [
-    ("beauty", "C[DS]*[<L.>O]"),
+pub const STANDARD_NAMES: [(&str, &str); 13] = [
+    ("beauty", "C[DSV]*[<L.>O]"),
     ("emission", "CO"),
-    ("diffuse", "C<.D>[DS]*[<L.>O]"),
-    ("specular", "C<.S>[DS]*[<L.>O]"),
+    ("diffuse", "C<.D>[DSV]*[<L.>O]"),
+    ("specular", "C<.S>[DSV]*[<L.>O]"),
     ("directDiffuse", "C<RD>[<L.>O]"),
-    ("indirectDiffuse", "C<RD>[DS]+[<L.>O]"),
+    ("indirectDiffuse", "C<RD>[DSV]+[<L.>O]"),
     ("directSpecular", "C<RS>[<L.>O]"),
-    ("indirectSpecular", "C<RS>[DS]+[<L.>O]"),
-    ("subsurface", "C<TD>[DS]*[<L.>O]"),
-    ("transmissive", "C<TS>[DS]*[<L.>O]"),
+    ("indirectSpecular", "C<RS>[DSV]+[<L.>O]"),
+    ("subsurface", "C<TD>[DSV]*[<L.>O]"),
+    ("transmissive", "C<TS>[DSV]*[<L.>O]"),
+    ("volumeDirect", "CV[<L.>O]"),
+    ("volumeIndirect", "CV[DSV]+[<L.>O]"),
     (
         "albedo",
         "nothruput;noinfinitecheck;noclamp;unoccluded;overwrite;C<.S'passthru'>*((U2L)|O)",
@@ -100,7 +102,7 @@ pub const STANDARD_NAMES: [(&str, &str); 11] = [
 ];
 
 /// The names whose AOVs partition `beauty` (their sum equals it).
-pub const BEAUTY_PARTITION: [&str; 7] = [
+pub const BEAUTY_PARTITION: [&str; 9] = [
     "emission",
     "directDiffuse",
     "indirectDiffuse",
@@ -108,6 +110,8 @@ pub const BEAUTY_PARTITION: [&str; 7] = [
     "indirectSpecular",
     "subsurface",
     "transmissive",
+    "volumeDirect",
+    "volumeIndirect",
 ];
 
 /// Looks up a standard name in its exact or all-lowercase spelling; returns the canonical

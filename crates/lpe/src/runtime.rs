@@ -127,8 +127,8 @@ pub struct Profile {
 }
 
 impl Profile {
-    /// Paths of camera, reflection, transmission, light and emission events; no volume
-    /// (`V`) or background (`B`) events.
+    /// Paths of camera, reflection, transmission, light, emission and volume events; no
+    /// background (`B`) events.
     pub const GENERIC: Profile = Profile {
         emits: !RESERVED_TYPES,
     };

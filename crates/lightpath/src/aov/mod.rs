@@ -72,14 +72,16 @@ pub const STANDARD_DATA: [(&str, &str); 2] = [
     ),
 ];
 
-/// Lightpath's standard AOVs of single specular lobes (docs/lpe.md#standard-aovs): light
-/// that left the camera's first surface by that lobe. They overlap `directSpecular` and
-/// `indirectSpecular`, so they are beside the partition, not in it. `sheen` is `fuzz`.
-pub const STANDARD_LOBES: [(&str, &str); 4] = [
-    ("coat", "C<RS4>[DS]*[<L.>O]"),
-    ("iridescence", "C<RS5>[DS]*[<L.>O]"),
-    ("fuzz", "C<RS6>[DS]*[<L.>O]"),
-    ("sheen", "C<RS6>[DS]*[<L.>O]"),
+/// Lightpath's standard AOVs beside the partition (docs/lpe.md#standard-aovs): light
+/// that left the camera's first surface by a single specular lobe (they overlap
+/// `directSpecular` and `indirectSpecular`; `sheen` is `fuzz`), and `volume`, light
+/// first scattered by a medium (`volumeDirect` + `volumeIndirect`).
+pub const STANDARD_LOBES: [(&str, &str); 5] = [
+    ("coat", "C<RS4>[DSV]*[<L.>O]"),
+    ("iridescence", "C<RS5>[DSV]*[<L.>O]"),
+    ("fuzz", "C<RS6>[DSV]*[<L.>O]"),
+    ("sheen", "C<RS6>[DSV]*[<L.>O]"),
+    ("volume", "CV[DSV]*[<L.>O]"),
 ];
 
 /// A definition with Lightpath's own standard names resolved: `lpe:normal` and
@@ -155,7 +157,7 @@ pub fn light_group_split(groups: &[String]) -> Vec<AovSpec> {
         .map(|g| {
             AovSpec::new(
                 split_name(BEAUTY, Some(g)),
-                format!("C[DS]*[<L.'{g}'><O'{g}'>]"),
+                format!("C[DSV]*[<L.'{g}'><O'{g}'>]"),
             )
         })
         .collect();
@@ -165,9 +167,9 @@ pub fn light_group_split(groups: &[String]) -> Vec<AovSpec> {
         .collect::<Vec<_>>()
         .join(" ");
     let default = if groups.is_empty() {
-        "C[DS]*[<L.>O]".to_string()
+        "C[DSV]*[<L.>O]".to_string()
     } else {
-        format!("C[DS]*[<L.[^{all}]><O[^{all}]>]")
+        format!("C[DSV]*[<L.[^{all}]><O[^{all}]>]")
     };
     out.push(AovSpec::new(split_name(BEAUTY, None), default));
     out
@@ -199,7 +201,7 @@ mod tests {
             resolve_definition("lpe:sheen"),
             resolve_definition("lpe:fuzz")
         );
-        assert_eq!(resolve_definition("lpe:coat"), "C<RS4>[DS]*[<L.>O]");
+        assert_eq!(resolve_definition("lpe:coat"), "C<RS4>[DSV]*[<L.>O]");
         let coat = AovSpec::parse("coat").unwrap();
         assert_eq!(
             (coat.name.as_str(), coat.definition.as_str()),

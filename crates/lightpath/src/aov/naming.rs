@@ -286,8 +286,8 @@ pub fn bounce_plus_name(k: u32) -> String {
 pub fn bounce_definition(i: u32, plus: bool) -> String {
     match (i, plus) {
         (0, false) => "C[<L.>O]".to_string(),
-        (i, false) => format!("C[DS]{{{i}}}[<L.>O]"),
-        (k, true) => format!("C[DS]{{{k},}}[<L.>O]"),
+        (i, false) => format!("C[DSV]{{{i}}}[<L.>O]"),
+        (k, true) => format!("C[DSV]{{{k},}}[<L.>O]"),
     }
 }
 

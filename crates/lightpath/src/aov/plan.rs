@@ -9,7 +9,7 @@ use std::fmt;
 /// Above this many AOVs a render warns: each AOV costs film memory and EXR size.
 pub const MANY_AOVS: usize = 64;
 
-/// The largest `--bounces`: `bounce<K>plus` is `C[DS]{K,}[<L.>O]`, and quantifier bounds
+/// The largest `--bounces`: `bounce<K>plus` is `C[DSV]{K,}[<L.>O]`, and quantifier bounds
 /// stop at 64.
 pub const MAX_BOUNCES: u32 = 63;
 

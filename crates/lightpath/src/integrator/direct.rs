@@ -111,7 +111,7 @@ impl Tracer<'_> {
     pub(super) fn direct_light<S: Sampler>(
         &self,
         out: &mut Sink,
-        path: &PathState,
+        path: &mut PathState,
         v: &Vertex,
         sampler: &mut S,
     ) {
@@ -142,6 +142,8 @@ impl Tracer<'_> {
         let light_pdf = select_pmf * ls.pdf;
         // The shadow ray is traced once, and only if some lobe's contribution counts.
         let mut visible: Option<bool> = None;
+        // With media, its transmittance instead (volume.rs).
+        let mut transmitted: Option<Vec3A> = None;
         for (k, tag) in lobes.iter().enumerate() {
             if tag.delta {
                 continue;
@@ -163,6 +165,24 @@ impl Tracer<'_> {
             } else {
                 power_heuristic(light_pdf, lobe_pdf)
             };
+            if scene.has_media {
+                let tr = *transmitted.get_or_insert_with(|| {
+                    let tmax = if ls.dist.is_finite() {
+                        ls.dist - 2.0 * scene.epsilon
+                    } else {
+                        f32::INFINITY
+                    };
+                    if tmax <= 0.0 {
+                        return Vec3A::ONE;
+                    }
+                    let stack = self.stack_after(&path.media, v.hit, v.dir, ls.wi);
+                    let ray = self.spawn(v.hit, ls.wi, tmax);
+                    self.transmittance(out, &ray, &stack, light.shadow_exempt(), &mut path.rng)
+                });
+                let value = f * ls.radiance / light_pdf;
+                self.split_by_transmittance(out, s_light, path, value, w, tr, glow, part);
+                continue;
+            }
             let vis = *visible.get_or_insert_with(|| {
                 out.rays += 1;
                 let tmax = if ls.dist.is_finite() {
@@ -302,11 +322,20 @@ impl Tracer<'_> {
                 if le == Vec3A::ZERO || !self.lit(path.prev_object, li as u32) {
                     return;
                 }
-                let reached =
-                    hit.is_some_and(|h| scene.objects[h.object as usize].light == Some(li as u32));
                 let w = self.bsdf_weight(path, li as u32, |light| {
                     light.pdf_hit(path.prev_p, ray.dir, t, n)
                 });
+                if scene.has_media {
+                    let seg = Ray {
+                        tmax: t - 2.0 * scene.epsilon,
+                        ..*ray
+                    };
+                    let tr = self.lights_only_transmittance(out, path, &seg, light.shadow_exempt());
+                    self.light_only_split(out, path, li as u32, le, w, tr);
+                    return;
+                }
+                let reached =
+                    hit.is_some_and(|h| scene.objects[h.object as usize].light == Some(li as u32));
                 self.light_only_seen(out, path, li as u32, le, w, !reached);
             }
             None => {
@@ -318,9 +347,47 @@ impl Tracer<'_> {
                     let w = self.bsdf_weight(path, li, |light| {
                         light.pdf_hit(path.prev_p, ray.dir, f32::INFINITY, Vec3A::ZERO)
                     });
+                    if scene.has_media {
+                        let tr = self.lights_only_transmittance(out, path, ray, u32::MAX);
+                        self.light_only_split(out, path, li, le, w, tr);
+                        continue;
+                    }
                     self.light_only_seen(out, path, li, le, w, hit.is_some());
                 }
             }
+        }
+    }
+
+    /// The transmittance of a BSDF-sampled ray (from the vertex `path` scattered at) to a
+    /// light, for the lights-only test with media: from the stack the ray started in.
+    fn lights_only_transmittance(
+        &self,
+        out: &mut Sink,
+        path: &PathState,
+        ray: &Ray,
+        ignore: u32,
+    ) -> Vec3A {
+        let mut rng = path.rng.clone();
+        self.transmittance(out, ray, &path.media, ignore, &mut rng)
+    }
+
+    /// A lights-only contribution reached with transmittance `tr`: the transmitted part
+    /// as unblocked, the rest as blocked (so `shadows` takes what media and occluders
+    /// remove, `unoccluded` the whole).
+    fn light_only_split(
+        &self,
+        out: &mut Sink,
+        path: &PathState,
+        li: u32,
+        le: Vec3A,
+        weight: f32,
+        tr: Vec3A,
+    ) {
+        if tr != Vec3A::ZERO {
+            self.light_only_seen(out, path, li, le * tr, weight, false);
+        }
+        if tr != Vec3A::ONE {
+            self.light_only_seen(out, path, li, le * (Vec3A::ONE - tr), weight, true);
         }
     }
 

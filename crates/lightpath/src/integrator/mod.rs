@@ -14,6 +14,7 @@ mod pixel;
 mod routing;
 mod shading;
 pub mod subsurface;
+mod volume;
 
 use crate::film::mattes::{MatteTable, PixelMatte};
 use crate::film::{Film, Mattes, PixelWindow, SampleAccumulator};
@@ -51,6 +52,9 @@ struct Tracer<'a> {
     routes: Vec<Route>,
     /// Split part of glowing objects and of lights without a group.
     default_part: u32,
+    /// Whether flights through media also sample distances towards point and spot
+    /// lights (volume.rs).
+    equiangular: bool,
 }
 
 /// Where a worker's paths put what they find: the sample's AOV values and counters.
@@ -87,6 +91,8 @@ impl<'a> Tracer<'a> {
                 .map(|a| Route::for_aov(a, scene))
                 .collect(),
             default_part: scene.light_groups.len() as u32,
+            equiangular: scene.has_media
+                && scene.lights.iter().any(|l| volume::point_of(l).is_some()),
         }
     }
 

@@ -3,10 +3,13 @@
 //! roulette. Each step reads the path state; only `scatter` and `roulette` change it.
 
 use super::routing::{Origin, Via};
+use super::volume::{media_seed, Flight, MAX_CROSSINGS};
 use super::{Sink, Tracer};
 use crate::geometry::{Hit, Ray, Visibility};
 use crate::material::{Bsdf, Shading};
+use crate::media::MediumStack;
 use crate::sampler::{dim, Sampler};
+use crate::sampling::Rng;
 use crate::scene::{DataLobe, Material, Object};
 use glam::Vec3A;
 use lpe::{ScatterClass, StateId};
@@ -36,6 +39,13 @@ pub(super) struct PathState {
     /// spread angle (shading.rs).
     pub cone_width: f32,
     pub cone_spread: f32,
+    /// The interiors the path is in (volume.rs).
+    pub media: MediumStack,
+    /// Distance from `prev_p` to the current ray's origin: the boundaries passed since
+    /// the last scatter (for the light pdf of what the ray finds).
+    pub travelled: f32,
+    /// Free-flight and channel choices, and shadow-ray transmittance estimates.
+    pub rng: Rng,
 }
 
 /// A scattering vertex: the hit and what is there.
@@ -47,14 +57,15 @@ pub(super) struct Vertex<'a> {
     /// or its regularised one after a diffuse bounce.
     pub bsdf: &'a Bsdf,
     pub sh: Shading,
+    /// The direction the path arrived along (world space).
+    pub dir: Vec3A,
 }
 
-impl Tracer<'_> {
-    /// Traces one camera path; returns its alpha.
-    pub(super) fn trace<S: Sampler>(&self, mut ray: Ray, sampler: &mut S, out: &mut Sink) -> f32 {
-        let scene = self.scene;
+impl PathState {
+    /// A path at the camera, about to trace `ray`.
+    fn start(scene: &crate::scene::Scene, ray: &Ray) -> PathState {
         let a = &scene.automaton;
-        let mut path = PathState {
+        PathState {
             state: a.step(a.start(), scene.camera_class),
             throughput: Vec3A::ONE,
             eta_scale: 1.0,
@@ -68,10 +79,25 @@ impl Tracer<'_> {
             depth: 0,
             cone_width: 0.0,
             cone_spread: scene.camera.pixel_spread(),
-        };
+            media: scene.camera_media,
+            travelled: 0.0,
+            rng: Rng::for_sample(media_seed(ray), 0, 0),
+        }
+    }
+}
+
+impl Tracer<'_> {
+    /// Traces one camera path; returns its alpha.
+    pub(super) fn trace<S: Sampler>(&self, mut ray: Ray, sampler: &mut S, out: &mut Sink) -> f32 {
+        let scene = self.scene;
+        let mut path = PathState::start(scene, &ray);
         let mut alpha = 0.0;
         out.holdout = false;
         out.first_object = None;
+        let mut crossings = 0;
+        // Past a boundary without an event the ray starts on it and skips this much of
+        // itself instead of being moved off it, so media see their whole thickness.
+        let mut tmin = 0.0;
         loop {
             out.rays += 1;
             let mask = if path.depth == 0 {
@@ -79,8 +105,11 @@ impl Tracer<'_> {
             } else {
                 Visibility::INDIRECT
             };
-            let found = scene.accel.intersect(&ray, 0.0, mask);
-            if let Some(hit) = &found {
+            let found = scene.accel.intersect(&ray, tmin, mask);
+            tmin = 0.0;
+            let passes =
+                scene.has_media && found.as_ref().is_some_and(|h| self.passes(&path.media, h));
+            if let Some(hit) = found.as_ref().filter(|_| !passes) {
                 let holdout = scene.objects[hit.object as usize].holdout;
                 if path.depth == 0 {
                     alpha = if holdout { 0.0 } else { 1.0 };
@@ -89,16 +118,45 @@ impl Tracer<'_> {
                 out.holdout |= holdout;
             }
             // Here, after the roulette and with the real ray's result, so that the
-            // lights-only estimate is the beauty's own, sample by sample.
-            if path.depth > 0 && scene.any_unoccluded {
+            // lights-only estimate is the beauty's own, sample by sample; once per
+            // scatter, not again past a null boundary.
+            if path.depth > 0 && scene.any_unoccluded && path.travelled == 0.0 {
                 self.lights_only(out, &path, &ray, found.as_ref());
+            }
+            if scene.has_media {
+                let camera_ray = path.depth == 0;
+                let flight = self.fly(out, &mut path, &ray, found.as_ref(), sampler);
+                if camera_ray && !matches!(flight, Flight::Reached) {
+                    alpha = 1.0;
+                }
+                match flight {
+                    Flight::Reached => {}
+                    Flight::Scattered(next) => (ray, crossings) = (next, 0),
+                    Flight::Ended => break,
+                }
+                if !matches!(flight, Flight::Reached) {
+                    continue;
+                }
             }
             let Some(hit) = found else {
                 self.escaped(out, &path, &ray);
                 break;
             };
-            let obj = &scene.objects[hit.object as usize];
             path.cone_width += path.cone_spread * hit.t;
+            if passes {
+                // A null surface or a false boundary: no event, the ray goes on.
+                crossings += 1;
+                if crossings > MAX_CROSSINGS {
+                    break;
+                }
+                self.cross(&mut path.media, &hit, ray.dir);
+                path.travelled += hit.t;
+                ray.origin = hit.p;
+                tmin = scene.epsilon;
+                continue;
+            }
+            crossings = 0;
+            let obj = &scene.objects[hit.object as usize];
             self.emission_at_hit(out, &path, &ray, &hit, obj);
 
             // Mitsuba's convention: `max_depth` counts segments; scattering here adds one.
@@ -127,12 +185,24 @@ impl Tracer<'_> {
                 material,
                 bsdf,
                 sh,
+                dir: ray.dir,
             };
             self.data_lobes(out, &path, &v);
-            self.direct_light(out, &path, &v, sampler);
-            let Some(next) = self.scatter(out, &mut path, &v, sampler) else {
+            self.direct_light(out, &mut path, &v, sampler);
+            let Some(mut next) = self.scatter(out, &mut path, &v, sampler) else {
                 break;
             };
+            // Through an interior's boundary (not a subsurface walk's exit, elsewhere):
+            // the medium changes, and its flight starts on the surface (see `tmin`).
+            let through = ray.dir.dot(hit.ng) * next.dir.dot(hit.ng) > 0.0;
+            if obj.interior.is_some()
+                && through
+                && next.origin.distance(hit.p) <= 2.0 * scene.epsilon
+            {
+                path.media = self.stack_after(&path.media, &hit, ray.dir, next.dir);
+                next.origin = hit.p;
+                tmin = scene.epsilon;
+            }
             ray = next;
             if !self.roulette(&mut path, sampler) {
                 break;
@@ -170,7 +240,7 @@ impl Tracer<'_> {
             let le = light.emitted_at(hit.ng, ray.dir);
             if le != Vec3A::ZERO && self.lit(path.prev_object, li) {
                 self.light_seen(out, path, li, le, |light| {
-                    light.pdf_hit(path.prev_p, ray.dir, hit.t, hit.ng)
+                    light.pdf_hit(path.prev_p, ray.dir, hit.t + path.travelled, hit.ng)
                 });
             }
         } else if let Some(glow) = obj.glow_class {
@@ -178,7 +248,7 @@ impl Tracer<'_> {
             let emission = obj.emission * self.glow_texture(obj, hit, ray.dir, path.cone_width);
             let weight = obj.glow_light.map_or(1.0, |li| {
                 self.bsdf_weight(path, li, |light| {
-                    light.pdf_hit(path.prev_p, ray.dir, hit.t, hit.ng)
+                    light.pdf_hit(path.prev_p, ray.dir, hit.t + path.travelled, hit.ng)
                 })
             });
             let origin = Origin {
@@ -275,6 +345,7 @@ impl Tracer<'_> {
         path.prev_pdf = bs.pdf;
         path.prev_delta = bs.delta;
         path.prev_object = v.hit.object;
+        path.travelled = 0.0;
         if !bs.delta {
             path.cone_spread = path.cone_spread.max(super::shading::SCATTERED_SPREAD);
         }
@@ -284,7 +355,7 @@ impl Tracer<'_> {
 
     /// Russian roulette as Mitsuba does it: from `rr_depth` on, continue with
     /// probability max(throughput)·η², at most 0.95. `false`: the path ends.
-    fn roulette<S: Sampler>(&self, path: &mut PathState, sampler: &mut S) -> bool {
+    pub(super) fn roulette<S: Sampler>(&self, path: &mut PathState, sampler: &mut S) -> bool {
         let t_max = path.throughput.max_element();
         if t_max <= 0.0 || !t_max.is_finite() {
             return false;

@@ -382,6 +382,7 @@ impl Tracer<'_> {
         path.prev_pdf = cosine_hemisphere_pdf(local.z);
         path.prev_delta = false;
         path.prev_object = v.hit.object;
+        path.travelled = 0.0;
         path.cone_spread = path.cone_spread.max(super::shading::SCATTERED_SPREAD);
         path.depth += 1;
         Some(self.spawn(&exit.hit, dir, f32::INFINITY))

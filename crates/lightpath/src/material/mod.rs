@@ -41,7 +41,7 @@ pub mod thin_film;
 mod translucent;
 
 #[cfg(test)]
-mod tests;
+pub(crate) mod tests;
 #[cfg(test)]
 mod tests_fuzz;
 #[cfg(test)]

@@ -427,7 +427,7 @@ pub(super) fn chi2_p_value(observed: &[u64], expected: &[f64]) -> Result<f64, St
 }
 
 /// Runs the χ² test of `sample` against `pdf`; returns a failure message.
-pub(super) fn chi2_case(
+pub(crate) fn chi2_case(
     what: &str,
     sample: &mut dyn FnMut() -> Option<Vec3A>,
     pdf: &dyn Fn(Vec3A) -> f32,
@@ -448,7 +448,7 @@ pub(super) fn chi2_case(
 }
 
 /// Šidák-corrected significance for `n` tests at overall level 0.01.
-pub(super) fn sidak(n: usize) -> f64 {
+pub(crate) fn sidak(n: usize) -> f64 {
     1.0 - 0.99f64.powf(1.0 / n as f64)
 }
 

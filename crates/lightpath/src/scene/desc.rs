@@ -69,6 +69,38 @@ pub struct SceneDesc {
     pub warnings: Vec<String>,
     /// Write these AOVs' per-pixel variance too (`<aov>_var`).
     pub variance: Vec<String>,
+    /// Participating media and the objects that bound them.
+    pub media: MediaDesc,
+}
+
+/// Participating media (`[media.NAME]`), which objects bound them, and the atmosphere.
+#[derive(Clone, Debug, Default)]
+pub struct MediaDesc {
+    pub media: BTreeMap<String, MediumDesc>,
+    /// The objects with an `interior`.
+    pub interiors: Vec<InteriorDesc>,
+    /// `[render] atmosphere`: the medium outside every interior.
+    pub atmosphere: Option<NameRef>,
+}
+
+/// A homogeneous medium: coefficients per scene unit, Henyey–Greenstein `g`, emitted
+/// radiance per unit length.
+#[derive(Clone, Debug)]
+pub struct MediumDesc {
+    pub sigma_a: [f32; 3],
+    pub sigma_s: [f32; 3],
+    pub g: f32,
+    pub emission: Option<[f32; 3]>,
+    pub origin: Origin,
+}
+
+/// Object `object` (an index of `SceneDesc::objects`) bounds medium `medium`; overlaps
+/// go to the higher `priority`.
+#[derive(Clone, Debug)]
+pub struct InteriorDesc {
+    pub object: usize,
+    pub medium: NameRef,
+    pub priority: i32,
 }
 
 impl SceneDesc {

@@ -51,6 +51,22 @@ pub struct Object {
     pub glow_class: Option<ClassId>,
     /// The light that samples this glowing object (`build/glows.rs`), if any.
     pub glow_light: Option<u32>,
+    /// The medium inside, if the object bounds one (`interior`).
+    pub interior: Option<MediumUse>,
+    /// Overlapping interiors go to the higher priority (`media::MediumStack`).
+    pub priority: i32,
+    /// `material = "null"`: an index-matched boundary, no surface event at all.
+    pub null_surface: bool,
+}
+
+/// A medium where the path meets it: the volume (an index of `Scene::volumes`) and the
+/// classes of its events, `V` at a scattering vertex and `O` for its emission (both with
+/// the bounding object's groups, none for the atmosphere).
+#[derive(Clone, Copy, Debug)]
+pub struct MediumUse {
+    pub volume: u32,
+    pub scatter_class: ClassId,
+    pub glow_class: ClassId,
 }
 
 /// One output AOV: its name, definition and rule flags (its rule id is its index).
@@ -105,4 +121,13 @@ pub struct Scene {
     pub data_live: Vec<bool>,
     /// AOVs whose per-pixel variance is written too (`<aov>_var`); set by the render job.
     pub variance_aovs: Vec<u32>,
+    /// The scene's media (`[media.NAME]` that something uses).
+    pub volumes: Vec<crate::media::Volume>,
+    /// The medium outside every interior (`[render] atmosphere`).
+    pub atmosphere: Option<MediumUse>,
+    /// The interiors the camera is inside.
+    pub camera_media: crate::media::MediumStack,
+    /// Whether any object bounds a medium, has a null surface, or there is an
+    /// atmosphere: paths then track media and shadow rays pass null boundaries.
+    pub has_media: bool,
 }

@@ -119,7 +119,7 @@ fn check_exits_nonzero_and_points_at_the_error() {
     assert!(err.contains("unocluded;C<RD>L\n  | ^^^^^^^^^\n"), "{err}");
     assert!(err.contains("did you mean 'unoccluded'?"), "{err}");
     let warn = lightpath()
-        .args(["lpe", "check", "C<V>L"])
+        .args(["lpe", "check", "C<B>L"])
         .output()
         .unwrap();
     assert!(warn.status.success());

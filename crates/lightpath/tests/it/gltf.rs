@@ -1116,3 +1116,89 @@ fn khr_material_extensions_map_to_openpbr_as_blender_does() {
     );
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+#[test]
+fn khr_materials_volume_with_a_thickness_is_an_absorbing_interior() {
+    // A closed cube of glass with a volume (thickness 1), and the same material with
+    // thickness 0 (thin-walled) on a second cube.
+    let dir = temp_dir("volume");
+    let mut doc = Doc::new().with_cameras();
+    let volume = |thickness: f32| {
+        json!({"KHR_materials_transmission": {"transmissionFactor": 1.0},
+               "KHR_materials_volume": {"thicknessFactor": thickness,
+                   "attenuationDistance": 2.0, "attenuationColor": [0.5, 0.25, 1.0]}})
+    };
+    doc.json["materials"] = json!([
+        {"name": "thick", "pbrMetallicRoughness": {"baseColorFactor": [0.9, 1.0, 0.9, 1.0],
+            "metallicFactor": 0.0, "roughnessFactor": 0.0}, "extensions": volume(1.0)},
+        {"name": "thin", "pbrMetallicRoughness": {"metallicFactor": 0.0, "roughnessFactor": 0.0},
+            "extensions": volume(0.0)},
+    ]);
+    doc.json["extensionsUsed"] = json!(["KHR_materials_transmission", "KHR_materials_volume"]);
+    let mut pos = Vec::new();
+    for k in 0..8 {
+        pos.extend([k & 1, (k >> 1) & 1, (k >> 2) & 1].map(|b| b as f32 * 2.0 - 1.0));
+    }
+    // Outward-facing, counter-clockwise seen from outside.
+    let faces: [u32; 36] = [
+        0, 2, 1, 1, 2, 3, 4, 5, 6, 5, 7, 6, 0, 1, 4, 1, 5, 4, 2, 6, 3, 3, 6, 7, 0, 4, 2, 2, 4, 6,
+        1, 3, 5, 3, 7, 5,
+    ];
+    let thick = doc.mesh(&pos, &faces, None, Some(0));
+    let thin = doc.mesh(&pos, &faces, None, Some(1));
+    let a = doc.node(json!({"name": "thick", "mesh": thick}));
+    let b = doc.node(json!({"name": "thin", "mesh": thin, "translation": [4.0, 0.0, 0.0]}));
+    let cam = camera_node(&mut doc, "cam", 8.0, 0.5);
+    for n in [a, b, cam] {
+        doc.root(n);
+    }
+    let path = dir.join("volume.glb");
+    doc.write_glb(&path);
+    let desc = load(&path);
+    assert!(
+        !desc
+            .warnings
+            .iter()
+            .any(|w| w.contains("KHR_materials_volume")),
+        "{:?}",
+        desc.warnings
+    );
+    // σa = −ln(colour) / distance, the extension's Beer–Lambert law.
+    let medium = &desc.media.media["thick (volume)"];
+    let want = [0.5f32, 0.25, 1.0].map(|c| -c.ln() / 2.0);
+    for (got, want) in medium.sigma_a.iter().zip(want) {
+        assert!((got - want).abs() < 1e-6, "{:?}", medium.sigma_a);
+    }
+    assert_eq!(medium.sigma_s, [0.0; 3]);
+    assert_eq!(desc.media.interiors.len(), 1);
+    assert_eq!(
+        desc.objects[desc.media.interiors[0].object].name.as_deref(),
+        Some("thick")
+    );
+    // The thick glass keeps its base colour on the interface; the thin one is tinted by
+    // the attenuation colour instead of holding a medium.
+    let openpbr = |name: &str| match &desc.materials[name].kind {
+        MaterialKind::OpenPbr(p) => **p,
+        other => panic!("{name}: {other:?}"),
+    };
+    assert_eq!(openpbr("thick").transmission_depth, 0.0);
+    assert_eq!(
+        openpbr("thick").transmission_color,
+        Vec3A::new(0.9, 1.0, 0.9)
+    );
+    assert_eq!(
+        openpbr("thin").transmission_color,
+        Vec3A::new(0.5, 0.25, 1.0)
+    );
+    let scene = Scene::build(&desc, &aov::assemble(aov::standard())).unwrap();
+    assert_eq!(scene.volumes.len(), 1);
+    assert!(
+        scene
+            .objects
+            .iter()
+            .filter(|o| o.interior.is_some())
+            .count()
+            == 1
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}

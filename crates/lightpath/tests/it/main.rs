@@ -12,6 +12,7 @@ mod farm;
 mod gltf;
 mod hostile;
 mod identity;
+mod media;
 mod meshes;
 mod mutation;
 mod newcomer;

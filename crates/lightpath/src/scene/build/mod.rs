@@ -6,6 +6,7 @@ pub mod geometry;
 pub mod glows;
 pub mod lights;
 pub mod materials;
+pub mod media;
 
 use crate::aov::AovSpec;
 use crate::events::Vocabulary;
@@ -50,11 +51,23 @@ impl Scene {
             scene_radius,
         );
 
-        let vocabulary = Vocabulary::of_scene(&objects, &materials, &lights);
+        let (volumes, atmosphere) = media::build(desc, &mut objects)?;
+
+        let vocabulary = Vocabulary::of_scene(&objects, &materials, &lights, atmosphere.is_some());
         let automaton = compile_aovs(desc, aovs, &vocabulary)?;
         let classes = vocabulary.classify(&automaton, &mut objects, &mut lights);
+        let atmosphere = atmosphere.map(|volume| crate::scene::MediumUse {
+            volume,
+            scatter_class: classes.atmosphere_scatter,
+            glow_class: classes.atmosphere_glow,
+        });
 
         let camera = camera::camera(desc)?;
+        let camera_media = media::media_at(camera.position, &accel, &objects, epsilon);
+        let has_media = atmosphere.is_some()
+            || objects
+                .iter()
+                .any(|o| o.interior.is_some() || o.null_surface);
         let light_groups = lights::groups(&mut lights);
         let aovs = output_aovs(&automaton, aovs, &light_groups);
         let data_live = data_live(&automaton, &objects, classes.data_light);
@@ -84,6 +97,10 @@ impl Scene {
             any_unoccluded,
             data_live,
             variance_aovs: Vec::new(),
+            volumes,
+            atmosphere,
+            camera_media,
+            has_media,
         })
     }
 }
@@ -101,6 +118,9 @@ fn new_object(name: String, groups: Vec<String>) -> Object {
         data_lobes: Vec::new(),
         glow_class: None,
         glow_light: None,
+        interior: None,
+        priority: 0,
+        null_surface: false,
     }
 }
 
@@ -163,10 +183,22 @@ fn add_objects(
             let m = desc.materials.get(&o.material.as_ref()?.name)?;
             materials::emission(m)
         });
+        // `material = "null"` (unless the scene defines a material of that name): an
+        // index-matched boundary of a medium, with no surface event.
+        let null_surface = o
+            .material
+            .as_ref()
+            .is_some_and(|m| m.name == "null" && !material_ids.contains_key("null"));
+        let material = if null_surface {
+            None
+        } else {
+            materials::find(desc, material_ids, &o.material)?
+        };
         objects.push(Object {
-            material: materials::find(desc, material_ids, &o.material)?,
+            material,
             emission: emission.unwrap_or(Vec3A::ZERO),
             holdout: o.holdout,
+            null_surface,
             ..new_object(name, groups)
         });
     }

@@ -24,8 +24,9 @@ use crate::material::openpbr::{self, InputMut, OpenPbr};
 use crate::material::texture::{UvTransform, Wrap};
 use crate::scene::desc::InputTexture;
 use crate::scene::desc::{
-    CameraDesc, ImageSource, LightDesc, LightKind, MaterialDesc, MaterialKind, MeshData, NameRef,
-    NamedCamera, ObjectDesc, Origin, SceneDesc, ShapeDesc, TextureDesc, TexturesDesc,
+    CameraDesc, ImageSource, InteriorDesc, LightDesc, LightKind, MaterialDesc, MaterialKind,
+    MediumDesc, MeshData, NameRef, NamedCamera, ObjectDesc, Origin, SceneDesc, ShapeDesc,
+    TextureDesc, TexturesDesc,
 };
 use crate::scene::SceneError;
 use glam::{Affine3A, Mat4, Vec3, Vec3A};
@@ -249,6 +250,9 @@ struct Loader {
     /// primitive, and whether the placement mirrors): nodes sharing a mesh become
     /// instances of it.
     meshes: HashMap<(usize, usize, bool), std::sync::Arc<Vec<MeshData>>>,
+    /// Material name → the medium of its interior (KHR_materials_volume), in
+    /// `desc.media`.
+    interiors: HashMap<String, String>,
 }
 
 /// Every accessor's data within its buffer view and every view within its buffer, in
@@ -459,6 +463,7 @@ impl Loader {
             materials: HashMap::new(),
             images: HashMap::new(),
             meshes: HashMap::new(),
+            interiors: HashMap::new(),
         })
     }
 
@@ -585,6 +590,17 @@ impl Loader {
                 asset: Some(ancestors.first().unwrap_or(&node_name).clone()),
                 origin: Origin::file(&self.file),
             });
+            if let Some(medium) = self.interiors.get(&material) {
+                let origin = Origin::file(&self.file);
+                self.desc.media.interiors.push(InteriorDesc {
+                    object: self.desc.objects.len() - 1,
+                    medium: NameRef {
+                        name: medium.clone(),
+                        origin,
+                    },
+                    priority: 0,
+                });
+            }
         }
         Ok(())
     }
@@ -738,6 +754,19 @@ impl Loader {
                 Some(self.texture(&info.texture(), info.texture_transform(), &pointer)?);
         }
         self.extensions(&m, &pointer, &mut p, &mut textures)?;
+        if let Some(sigma_a) = self.volume(&m, &mut p) {
+            let medium = format!("{name} (volume)");
+            let origin = Origin::file(&self.file);
+            let desc = MediumDesc {
+                sigma_a,
+                sigma_s: [0.0; 3],
+                g: 0.0,
+                emission: None,
+                origin,
+            };
+            self.desc.media.media.insert(medium.clone(), desc);
+            self.interiors.insert(name.clone(), medium);
+        }
         self.desc.materials.insert(
             name.clone(),
             MaterialDesc {
@@ -825,7 +854,6 @@ impl Loader {
             // Without KHR_materials_volume the surface is a thin sheet: translucency.
             p.geometry_thin_walled = m.extension_value("KHR_materials_volume").is_none();
         }
-        self.volume(m, pointer, p);
         if let Some(rotation) =
             value("KHR_materials_anisotropy", "anisotropyRotation").and_then(|v| v.as_f64())
         {
@@ -846,39 +874,52 @@ impl Loader {
         Ok(())
     }
 
-    /// KHR_materials_volume: the interior's absorption, kept for the participating media
-    /// that render it (and the subsurface radius of a volumetric diffuse transmission).
-    fn volume(&mut self, m: &gltf::Material, pointer: &str, p: &mut OpenPbr) {
-        let Some(v) = m.extension_value("KHR_materials_volume") else {
-            return;
-        };
-        {
-            let distance = v.get("attenuationDistance").and_then(|d| d.as_f64());
-            if let Some(d) = distance.filter(|d| d.is_finite() && *d > 0.0) {
-                let color = v
-                    .get("attenuationColor")
-                    .and_then(|c| c.as_array())
-                    .filter(|a| a.len() == 3)
-                    .and_then(|a| {
-                        Some([
-                            a[0].as_f64()? as f32,
-                            a[1].as_f64()? as f32,
-                            a[2].as_f64()? as f32,
-                        ])
-                    })
-                    .unwrap_or([1.0; 3]);
-                // The interior's absorption, which participating media render.
-                p.transmission_depth = d as f32;
-                self.warn(
-                    &format!("{pointer}/extensions/KHR_materials_volume"),
-                    "the interior's absorption (attenuationColor) is not rendered yet: the glass is clear",
-                );
-                p.transmission_color *= Vec3A::from(color).clamp(Vec3A::ZERO, Vec3A::ONE);
-                if p.subsurface_weight > 0.0 {
-                    p.subsurface_radius = d as f32;
+    /// KHR_materials_volume: with a thickness (a closed mesh around a volume) and a
+    /// transmissive material, the absorption coefficient of its interior, σa =
+    /// −ln(attenuationColor) / attenuationDistance (the extension's Beer–Lambert law,
+    /// distances in world units); the base colour stays the interface's tint. With
+    /// thickness 0 (thin-walled) the attenuation colour tints the interface. With a
+    /// diffuse transmission the distance is the subsurface radius.
+    fn volume(&mut self, m: &gltf::Material, p: &mut OpenPbr) -> Option<[f32; 3]> {
+        let v = m.extension_value("KHR_materials_volume")?;
+        let distance = v.get("attenuationDistance").and_then(|d| d.as_f64());
+        let d = distance.filter(|d| d.is_finite() && *d > 0.0)? as f32;
+        let color = v
+            .get("attenuationColor")
+            .and_then(|c| c.as_array())
+            .filter(|a| a.len() == 3)
+            .and_then(|a| {
+                Some([
+                    a[0].as_f64()? as f32,
+                    a[1].as_f64()? as f32,
+                    a[2].as_f64()? as f32,
+                ])
+            })
+            .unwrap_or([1.0; 3])
+            .map(|c| {
+                if c.is_finite() {
+                    c.clamp(0.0, 1.0)
+                } else {
+                    1.0
                 }
-            }
+            });
+        let thickness = v
+            .get("thicknessFactor")
+            .and_then(|t| t.as_f64())
+            .unwrap_or(0.0);
+        if p.subsurface_weight > 0.0 {
+            p.transmission_depth = d;
+            p.transmission_color *= Vec3A::from(color);
+            p.subsurface_radius = d;
+            return None;
         }
+        if thickness > 0.0 && p.transmission_weight > 0.0 {
+            // A colour of 0 absorbs everything: a large finite coefficient, so that a
+            // ray's transmittance is 0 without infinities in the arithmetic.
+            return Some(color.map(|c| (-c.max(1e-30).ln() / d).min(1e30)));
+        }
+        p.transmission_color *= Vec3A::from(color);
+        None
     }
 
     /// A texture a material extension names by its JSON `textureInfo`.

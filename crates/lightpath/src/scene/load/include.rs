@@ -66,6 +66,15 @@ pub fn merge(
         place_object(&mut o, &placement);
         into.objects.push(o);
     }
+    // Media keep their names unless this file already has one (its own wins), and
+    // interiors follow their objects.
+    for (name, m) in std::mem::take(&mut from.media.media) {
+        into.media.media.entry(name).or_insert(m);
+    }
+    for mut i in std::mem::take(&mut from.media.interiors) {
+        i.object += base;
+        into.media.interiors.push(i);
+    }
     let first_light = into.lights.len();
     for mut l in from.lights {
         rename(&mut l.material);

@@ -45,6 +45,26 @@ struct SceneFile {
     /// name.
     #[serde(default)]
     include: Vec<Spanned<IncludeDesc>>,
+    /// `[media.NAME]`: participating media that objects' `interior` and `[render]
+    /// atmosphere` name.
+    #[serde(default)]
+    media: BTreeMap<String, Spanned<MediumToml>>,
+}
+
+/// A `[media.NAME]` table: a homogeneous medium.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct MediumToml {
+    /// Absorption and scattering coefficients (RGB, per scene unit).
+    #[serde(default)]
+    sigma_a: [f32; 3],
+    #[serde(default)]
+    sigma_s: [f32; 3],
+    /// Henyey–Greenstein asymmetry.
+    #[serde(default)]
+    g: f32,
+    /// Radiance emitted per unit length.
+    emission: Option<[f32; 3]>,
 }
 
 /// `[[include]]`: a scene file, placed, with overrides of its objects by name.
@@ -125,6 +145,10 @@ fn settings(src: &Source, file: &SceneFile) -> Result<d::RenderDesc, SceneError>
     let mut render = d::RenderDesc::default();
     for (section, values) in [(Section::Film, &file.film), (Section::Render, &file.render)] {
         for (key, value) in values {
+            // The atmosphere names a medium; the scene's media read it (`media`).
+            if section == Section::Render && key == "atmosphere" {
+                continue;
+            }
             let setting = settings::find(section, key).ok_or_else(|| {
                 src.error(Some(value.span()), settings::unknown_key(section, key))
             })?;
@@ -270,6 +294,10 @@ struct ObjectDesc {
     segments: Option<u32>,
     /// Radiance of a glowing (non-light) surface: seen as an `O` event.
     emission: Option<[f32; 3]>,
+    /// The medium inside this (closed) object, a `[media.NAME]`.
+    interior: Option<Spanned<String>>,
+    /// Overlapping interiors go to the higher priority.
+    priority: Option<i32>,
     #[serde(default)]
     holdout: bool,
     /// Trace sets: which rays see this object.
@@ -358,9 +386,38 @@ pub fn load(src: &Source) -> Result<d::SceneDesc, SceneError> {
     }
     // OBJ files by path: objects naming the same file share its triangles.
     let mut files = HashMap::new();
+    for (name, m) in &file.media {
+        let medium = medium(src, name, m)?;
+        scene.media.media.insert(name.clone(), medium);
+    }
     for o in &file.objects {
+        if let Some(interior) = &o.get_ref().interior {
+            scene.media.interiors.push(d::InteriorDesc {
+                object: scene.objects.len(),
+                medium: NameRef {
+                    name: interior.get_ref().clone(),
+                    origin: at(interior.span()),
+                },
+                priority: o.get_ref().priority.unwrap_or(0),
+            });
+        }
         scene.objects.push(object(src, o, &mut files)?);
     }
+    scene.media.atmosphere = match file.render.get("atmosphere") {
+        None => None,
+        Some(v) => match v.get_ref() {
+            toml::Value::String(name) => Some(NameRef {
+                name: name.clone(),
+                origin: at(v.span()),
+            }),
+            _ => {
+                return Err(src.error(
+                    Some(v.span()),
+                    "atmosphere: expected the name of a [media.NAME] table, in quotes",
+                ))
+            }
+        },
+    };
     for l in &file.lights {
         if l.get_ref().kind.get_ref() == "mesh" {
             let lights = mesh_lights(src, l, &scene.objects)?;
@@ -375,6 +432,7 @@ pub fn load(src: &Source) -> Result<d::SceneDesc, SceneError> {
         lights,
         warnings,
         camera: included_camera,
+        media,
         ..
     } = scene;
     let camera = match file.camera.as_ref() {
@@ -404,6 +462,45 @@ pub fn load(src: &Source) -> Result<d::SceneDesc, SceneError> {
         light_group_aovs: file.light_group_aovs,
         warnings,
         variance: file.variance,
+        media,
+    })
+}
+
+/// A `[media.NAME]` table, its numbers checked: coefficients finite and not negative,
+/// |g| < 1.
+fn medium(src: &Source, name: &str, m: &Spanned<MediumToml>) -> Result<d::MediumDesc, SceneError> {
+    let span = m.span();
+    let m = m.get_ref();
+    let fail = |key: &str, msg: String| {
+        Err(src.error(key_span(src, &span, key), format!("medium '{name}': {msg}")))
+    };
+    for (key, v) in [
+        ("sigma_a", Some(m.sigma_a)),
+        ("sigma_s", Some(m.sigma_s)),
+        ("emission", m.emission),
+    ] {
+        if let Some(v) = v.filter(|v| v.iter().any(|c| !c.is_finite() || *c < 0.0)) {
+            return fail(
+                key,
+                format!("{key} is {v:?}: expected finite numbers ≥ 0 (per scene unit)"),
+            );
+        }
+    }
+    if m.g.is_nan() || m.g.abs() >= 1.0 {
+        return fail(
+            "g",
+            format!(
+                "g is {}: expected a number between -1 and 1 (exclusive)",
+                m.g
+            ),
+        );
+    }
+    Ok(d::MediumDesc {
+        sigma_a: m.sigma_a,
+        sigma_s: m.sigma_s,
+        g: m.g,
+        emission: m.emission,
+        origin: src.origin(Some(span)),
     })
 }
 

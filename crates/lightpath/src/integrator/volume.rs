@@ -1,0 +1,494 @@
+//! Paths through participating media (media/): the medium a path is in, free flights
+//! that end at a scattering vertex (a `V` event, light sampled there with MIS against
+//! the phase function, the next direction from the phase function), single scattering
+//! towards point and spot lights at equiangularly sampled distances (MIS against the
+//! free-flight vertices), and the transmittance of shadow rays, which pass null
+//! boundaries and media and stop at any other surface.
+//!
+//! A `V` vertex is a bounce like a surface's: it takes the same sampler dimensions of
+//! its depth (light choice and point, direction, roulette), counts toward `max_depth`
+//! and `rr_depth`, and not toward the diffuse or specular limits (docs/lpe.md#volumes).
+//! Free-flight distances and colour-channel choices come from a generator per camera
+//! sample (`PathState::rng`), seeded from the camera ray, so the sampler's layout is the
+//! same with and without media.
+
+use super::direct::power_heuristic;
+use super::path::PathState;
+use super::routing::{Origin, Via};
+use super::{Sink, Tracer};
+use crate::geometry::{Hit, Ray, Visibility};
+use crate::light::{Light, LightShape};
+use crate::media::equiangular::Equiangular;
+use crate::media::{Collision, MediumStack};
+use crate::sampler::{dim, Sampler};
+use crate::sampling::{splitmix64, Rng};
+use crate::scene::MediumUse;
+use glam::{Vec2, Vec3A};
+use lpe::StateId;
+
+/// Boundaries a ray may pass without an event before it counts as lost: a cap on the
+/// work of one segment among many nested or overlapping null surfaces.
+pub(super) const MAX_CROSSINGS: u32 = 256;
+
+/// A seed for the media decisions of the camera sample whose first ray is `ray` (its
+/// origin and direction come from that sample's pixel-filter and lens numbers).
+pub(super) fn media_seed(ray: &Ray) -> u64 {
+    let bits = |v: Vec3A| {
+        u64::from(v.x.to_bits())
+            ^ (u64::from(v.y.to_bits()) << 21)
+            ^ (u64::from(v.z.to_bits()) << 42)
+    };
+    splitmix64(bits(ray.dir) ^ splitmix64(bits(ray.origin)))
+}
+
+/// A medium scattering vertex: where, the direction the path travelled, the medium,
+/// and the object that bounds it (`u32::MAX`: the atmosphere).
+pub(super) struct MediumVertex {
+    pub p: Vec3A,
+    pub dir: Vec3A,
+    pub medium: MediumUse,
+    pub object: u32,
+    /// The flight's segment and the density of its distance (0: unknown, no MIS with
+    /// equiangular sampling).
+    pub seg: Ray,
+    pub pdf: f32,
+}
+
+/// Where a point or spot light is: equiangular sampling aims at it.
+pub(super) fn point_of(light: &Light) -> Option<Vec3A> {
+    match &light.shape {
+        LightShape::Point(p) => Some(p.position),
+        LightShape::Spot(s) => Some(s.position),
+        _ => None,
+    }
+}
+
+/// How a ray's flight through the medium it is in ended.
+pub(super) enum Flight {
+    /// At the surface it found (or out of the scene), the throughput attenuated.
+    Reached,
+    /// At a scattering vertex, which sent the path on along this ray.
+    Scattered(Ray),
+    /// The path ended in the medium (depth limit, dead state, roulette, no throughput).
+    Ended,
+}
+
+impl Tracer<'_> {
+    /// The flight of `ray` up to what it `found`, in the medium the path is in (none:
+    /// it reaches it): the medium's emission along it, then a free-flight distance; a
+    /// real collision before the surface is a scattering vertex.
+    pub(super) fn fly<S: Sampler>(
+        &self,
+        out: &mut Sink,
+        path: &mut PathState,
+        ray: &Ray,
+        found: Option<&Hit>,
+        sampler: &mut S,
+    ) -> Flight {
+        let scene = self.scene;
+        let Some((m, object)) = self.medium_of(&path.media) else {
+            return Flight::Reached;
+        };
+        let seg = Ray {
+            tmax: found.map_or(f32::INFINITY, |h| h.t),
+            ..*ray
+        };
+        self.medium_emission(out, path, m, &seg);
+        if self.equiangular {
+            self.equiangular_light(out, path, m, object, &seg);
+        }
+        let volume = &scene.volumes[m.volume as usize];
+        let throughput = path.throughput;
+        match volume.medium.sample(&seg, throughput, &mut path.rng) {
+            Collision::Pass { weight } => {
+                path.throughput *= weight;
+                if path.throughput == Vec3A::ZERO {
+                    Flight::Ended
+                } else {
+                    Flight::Reached
+                }
+            }
+            Collision::Scatter { t, weight } => {
+                path.throughput *= weight;
+                path.cone_width += path.cone_spread * t;
+                // `max_depth` counts segments, as at a surface (path.rs).
+                if path.depth + 1 >= scene.settings.max_depth {
+                    return Flight::Ended;
+                }
+                let v = MediumVertex {
+                    p: ray.origin + ray.dir * t,
+                    dir: ray.dir,
+                    medium: m,
+                    object,
+                    seg,
+                    pdf: match self.equiangular {
+                        true => volume
+                            .medium
+                            .collision_terms(t, throughput)
+                            .map_or(0.0, |c| c.2),
+                        false => 0.0,
+                    },
+                };
+                match self.medium_scatter(out, path, &v, sampler) {
+                    Some(next) if self.roulette(path, sampler) => Flight::Scattered(next),
+                    _ => Flight::Ended,
+                }
+            }
+        }
+    }
+
+    /// The medium of `stack` and the object that bounds it (`u32::MAX` for the
+    /// atmosphere), if any.
+    #[inline]
+    pub(super) fn medium_of(&self, stack: &MediumStack) -> Option<(MediumUse, u32)> {
+        let scene = self.scene;
+        match stack.current() {
+            Some(o) => scene.objects[o as usize].interior.map(|m| (m, o)),
+            None => scene.atmosphere.map(|m| (m, u32::MAX)),
+        }
+    }
+
+    /// Whether a boundary of `object` is no interface here: a medium of higher
+    /// priority is around it (Schmidt & Budge's false hit), so the ray passes it.
+    #[inline]
+    pub(super) fn false_boundary(&self, stack: &MediumStack, object: u32) -> bool {
+        let o = &self.scene.objects[object as usize];
+        o.interior.is_some()
+            && stack
+                .top_priority_without(object)
+                .is_some_and(|p| p > o.priority)
+    }
+
+    /// Whether a ray passes `hit` without an event: a null surface or a false boundary.
+    #[inline]
+    pub(super) fn passes(&self, stack: &MediumStack, hit: &Hit) -> bool {
+        self.scene.objects[hit.object as usize].null_surface
+            || self.false_boundary(stack, hit.object)
+    }
+
+    /// `stack` after a ray travelling along `dir` crosses `hit`'s surface.
+    #[inline]
+    pub(super) fn cross(&self, stack: &mut MediumStack, hit: &Hit, dir: Vec3A) {
+        let o = &self.scene.objects[hit.object as usize];
+        if o.interior.is_some() {
+            stack.cross(hit.object, o.priority, dir.dot(hit.ng) < 0.0);
+        }
+    }
+
+    /// The stack of a ray that leaves a surface vertex at `hit` (reached along `dir_in`)
+    /// along `dir_out`: crossed when it goes through the surface.
+    #[inline]
+    pub(super) fn stack_after(
+        &self,
+        stack: &MediumStack,
+        hit: &Hit,
+        dir_in: Vec3A,
+        dir_out: Vec3A,
+    ) -> MediumStack {
+        let mut s = *stack;
+        if dir_in.dot(hit.ng) * dir_out.dot(hit.ng) > 0.0 {
+            self.cross(&mut s, hit, dir_out);
+        }
+        s
+    }
+
+    /// The transmittance of the shadow ray `ray` (up to `ray.tmax`) starting in
+    /// `stack`'s medium: through null boundaries and media, zero at any other surface
+    /// (`ignore`: a light's own object, which it passes).
+    pub(super) fn transmittance(
+        &self,
+        out: &mut Sink,
+        ray: &Ray,
+        stack: &MediumStack,
+        ignore: u32,
+        rng: &mut Rng,
+    ) -> Vec3A {
+        let scene = self.scene;
+        let mut tr = Vec3A::ONE;
+        let mut stack = *stack;
+        let mut ray = *ray;
+        // Past a boundary the ray starts on it and skips `tmin` (path.rs does the same).
+        let mut tmin = 0.0;
+        for _ in 0..MAX_CROSSINGS {
+            out.rays += 1;
+            let hit = scene.accel.intersect(&ray, tmin, Visibility::SHADOW);
+            tmin = scene.epsilon;
+            if let Some((m, _)) = self.medium_of(&stack) {
+                let seg = Ray {
+                    tmax: hit.as_ref().map_or(ray.tmax, |h| h.t),
+                    ..ray
+                };
+                tr *= scene.volumes[m.volume as usize]
+                    .medium
+                    .transmittance(&seg, rng);
+                if tr == Vec3A::ZERO {
+                    return tr;
+                }
+            }
+            let Some(hit) = hit else {
+                return tr;
+            };
+            if hit.object != ignore {
+                if !self.passes(&stack, &hit) {
+                    return Vec3A::ZERO;
+                }
+                self.cross(&mut stack, &hit, ray.dir);
+            }
+            ray.origin = hit.p;
+            ray.tmax -= hit.t;
+            if ray.tmax <= tmin {
+                return tr;
+            }
+        }
+        Vec3A::ZERO
+    }
+
+    /// A scattering vertex in a medium: the `V` event, light sampling, and the next
+    /// direction from the phase function. `None`: the path ends (dead state).
+    pub(super) fn medium_scatter<S: Sampler>(
+        &self,
+        out: &mut Sink,
+        path: &mut PathState,
+        v: &MediumVertex,
+        sampler: &mut S,
+    ) -> Option<Ray> {
+        let scene = self.scene;
+        let a = &scene.automaton;
+        let s_v = a.step(path.state, v.medium.scatter_class);
+        if a.is_dead(s_v) {
+            return None;
+        }
+        self.medium_light(out, path, s_v, v, sampler);
+        let bounce = dim::bounce(path.depth);
+        let volume = &scene.volumes[v.medium.volume as usize];
+        let (wi, pdf) = volume
+            .phase
+            .sample(v.dir, sampler.get_2d(bounce + dim::DIRECTION));
+        // The phase function is sampled exactly: its weight is one.
+        path.state = s_v;
+        path.prev_p = v.p;
+        path.prev_n = Vec3A::ZERO;
+        path.prev_pdf = pdf;
+        path.prev_delta = false;
+        path.prev_object = v.object;
+        path.travelled = 0.0;
+        path.cone_spread = path.cone_spread.max(super::shading::SCATTERED_SPREAD);
+        path.depth += 1;
+        Some(Ray {
+            origin: v.p,
+            dir: wi,
+            tmax: f32::INFINITY,
+        })
+    }
+
+    /// Light sampling at a medium vertex, the path's state `s_v` past its `V`: one
+    /// light, one point, the phase function's value, weighted against phase sampling;
+    /// the shadow ray's transmittance splits it between plain and `shadows` AOVs.
+    fn medium_light<S: Sampler>(
+        &self,
+        out: &mut Sink,
+        path: &mut PathState,
+        s_v: StateId,
+        v: &MediumVertex,
+        sampler: &mut S,
+    ) {
+        let scene = self.scene;
+        let a = &scene.automaton;
+        let bounce = dim::bounce(path.depth);
+        let u_light = sampler.get_1d(bounce + dim::LIGHT_CHOICE);
+        let u_point = sampler.get_2d(bounce + dim::LIGHT_POINT);
+        if scene.lights.is_empty() {
+            return;
+        }
+        let Some((li, select_pmf)) = scene.light_select.sample(u_light, v.p, Vec3A::ZERO) else {
+            return;
+        };
+        let light = &scene.lights[li];
+        if !self.lit(v.object, li as u32) {
+            return;
+        }
+        let s_light = a.step(s_v, light.classes.light);
+        if a.accepting(s_light).is_empty() {
+            return;
+        }
+        let Some(ls) = light.sample(v.p, u_point, scene.accel.prims()) else {
+            return;
+        };
+        let volume = &scene.volumes[v.medium.volume as usize];
+        let f = volume.phase.eval(v.dir, ls.wi);
+        if f <= 0.0 {
+            return;
+        }
+        let light_pdf = select_pmf * ls.pdf;
+        let w = match self.equiangular_pdf(&v.seg, li, light, v.p) {
+            // A point or spot light: weighed against equiangular sampling of the flight.
+            Some(pdf_e) if v.pdf > 0.0 => power_heuristic(v.pdf * light_pdf, pdf_e),
+            _ if ls.delta => 1.0,
+            _ => power_heuristic(light_pdf, f),
+        };
+        let tmax = if ls.dist.is_finite() {
+            ls.dist - 2.0 * scene.epsilon
+        } else {
+            f32::INFINITY
+        };
+        let shadow = Ray {
+            origin: v.p,
+            dir: ls.wi,
+            tmax,
+        };
+        let tr = if tmax <= 0.0 {
+            Vec3A::ONE
+        } else {
+            self.transmittance(
+                out,
+                &shadow,
+                &path.media,
+                light.shadow_exempt(),
+                &mut path.rng,
+            )
+        };
+        let value = ls.radiance * (f / light_pdf);
+        self.split_by_transmittance(out, s_light, path, value, w, tr, light.glow, light.part);
+    }
+
+    /// The density with which [`equiangular_light`](Self::equiangular_light) picks light
+    /// `li` and the distance of `p` along `seg` (`None`: it never aims at that light).
+    fn equiangular_pdf(&self, seg: &Ray, li: usize, light: &Light, p: Vec3A) -> Option<f32> {
+        if !self.equiangular {
+            return None;
+        }
+        let c = point_of(light)?;
+        let e = Equiangular::new(seg, c)?;
+        let pmf = self.scene.light_select.pmf(li, seg.origin, Vec3A::ZERO);
+        Some(pmf * e.pdf((p - seg.origin).dot(seg.dir)))
+    }
+
+    /// Single scattering towards a point or spot light along a flight's segment `seg`,
+    /// the distance sampled equiangularly (media/equiangular.rs) and weighed against the
+    /// free-flight distance and light sampling at its vertex (power heuristic): the
+    /// same `V` then `L` events as a medium vertex's light sample. The light is chosen
+    /// from the segment's origin; other lights are left to the vertices.
+    fn equiangular_light(
+        &self,
+        out: &mut Sink,
+        path: &mut PathState,
+        m: MediumUse,
+        object: u32,
+        seg: &Ray,
+    ) {
+        let scene = self.scene;
+        let a = &scene.automaton;
+        let (u_light, u_t) = (path.rng.next_f32(), path.rng.next_f32());
+        if path.depth + 1 >= scene.settings.max_depth {
+            return;
+        }
+        let s_v = a.step(path.state, m.scatter_class);
+        let Some((li, pmf)) = scene.light_select.sample(u_light, seg.origin, Vec3A::ZERO) else {
+            return;
+        };
+        let light = &scene.lights[li];
+        let s_light = a.step(s_v, light.classes.light);
+        let (Some(c), false) = (point_of(light), a.accepting(s_light).is_empty()) else {
+            return;
+        };
+        let volume = &scene.volumes[m.volume as usize];
+        let Some(e) = Equiangular::new(seg, c).filter(|_| self.lit(object, li as u32)) else {
+            return;
+        };
+        let (t, pdf_t) = e.sample(u_t);
+        let Some((sigma_s, tr, pdf_d)) = volume.medium.collision_terms(t, path.throughput) else {
+            return;
+        };
+        let p = seg.origin + seg.dir * t;
+        let Some(ls) = light.sample(p, Vec2::ZERO, scene.accel.prims()) else {
+            return;
+        };
+        let f = volume.phase.eval(seg.dir, ls.wi);
+        let pdf_e = pmf * pdf_t;
+        if f <= 0.0 || pdf_e.is_nan() || pdf_e <= 0.0 {
+            return;
+        }
+        let light_pdf = scene.light_select.pmf(li, p, Vec3A::ZERO) * ls.pdf;
+        let w = power_heuristic(pdf_e, pdf_d * light_pdf);
+        let shadow = Ray {
+            origin: p,
+            dir: ls.wi,
+            tmax: ls.dist - 2.0 * scene.epsilon,
+        };
+        let t_shadow = if shadow.tmax <= 0.0 {
+            Vec3A::ONE
+        } else {
+            self.transmittance(
+                out,
+                &shadow,
+                &path.media,
+                light.shadow_exempt(),
+                &mut path.rng,
+            )
+        };
+        let value = sigma_s * tr * ls.radiance * (f / (pdf_e * ls.pdf));
+        self.split_by_transmittance(
+            out, s_light, path, value, w, t_shadow, light.glow, light.part,
+        );
+    }
+
+    /// Adds a light sample `value` (weight `w`) reached with transmittance `tr`: the
+    /// transmitted part as visible, the rest as blocked (what `shadows` takes, so plain
+    /// + shadows = unoccluded); a glow only its transmitted part.
+    #[allow(clippy::too_many_arguments)]
+    pub(super) fn split_by_transmittance(
+        &self,
+        out: &mut Sink,
+        state: StateId,
+        path: &PathState,
+        value: Vec3A,
+        w: f32,
+        tr: Vec3A,
+        glow: bool,
+        part: u32,
+    ) {
+        let origin = |via| Origin {
+            via,
+            scatters: path.depth + 1,
+            part,
+        };
+        if tr != Vec3A::ZERO {
+            let via = if glow {
+                Via::Glow
+            } else {
+                Via::LightSample { visible: true }
+            };
+            self.contribute(out, state, path.throughput, value * tr, w, origin(via));
+        }
+        let blocked = Vec3A::ONE - tr;
+        if !glow && blocked != Vec3A::ZERO {
+            let via = Via::LightSample { visible: false };
+            self.contribute(out, state, path.throughput, value * blocked, w, origin(via));
+        }
+    }
+
+    /// The emission a medium adds along the segment `seg` (an `O` with its groups).
+    pub(super) fn medium_emission(
+        &self,
+        out: &mut Sink,
+        path: &PathState,
+        m: MediumUse,
+        seg: &Ray,
+    ) {
+        let scene = self.scene;
+        let volume = &scene.volumes[m.volume as usize];
+        if volume.emission == Vec3A::ZERO {
+            return;
+        }
+        let s = scene.automaton.step(path.state, m.glow_class);
+        if scene.automaton.accepting(s).is_empty() {
+            return;
+        }
+        let origin = Origin {
+            via: Via::Glow,
+            scatters: path.depth,
+            part: self.default_part,
+        };
+        self.contribute(out, s, path.throughput, volume.emitted(seg), 1.0, origin);
+    }
+}
