@@ -1245,9 +1245,9 @@ mod tests {
     fn partitions_sum_after_filtering_and_data_is_kept() {
         let exr = file();
         let (out, s, f) = run_box(&exr, false);
-        // beauty, directDiffuse, directSpecular and the two light-group parts; four zero
-        // members of the standard set are left alone, and emission is kept as it is.
-        assert_eq!((s.filtered, s.zero, s.partitions), (5, 4, 2));
+        // beauty, directDiffuse, directSpecular and the two light-group parts; six zero
+        // members of the standard set (including the two volume ones) are left alone, and emission is kept as it is.
+        assert_eq!((s.filtered, s.zero, s.partitions), (5, 6, 2));
         assert_eq!((s.converged, s.remainders), (0, 0));
         assert_eq!(f.divided_calls, 1);
         // Beauty first, at high; the other AOVs at the job's quality.
