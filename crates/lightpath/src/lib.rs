@@ -20,6 +20,7 @@ pub mod light;
 pub mod limits;
 pub mod lpe_tools;
 pub mod material;
+pub mod media;
 pub mod output;
 pub mod post;
 pub mod progress;
