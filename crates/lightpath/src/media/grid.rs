@@ -685,3 +685,360 @@ impl GridDensity {
         (w2i.transform_point3(origin), w2i.transform_vector3(dir))
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::scene::load::vdb::{self, tests::ramp};
+    use glam::Quat;
+
+    /// SplitMix64 as uniform f32s in [0, 1).
+    struct Rng(u64);
+    impl Rng {
+        fn u(&mut self) -> f32 {
+            self.0 = self.0.wrapping_add(0x9e37_79b9_7f4a_7c15);
+            let mut z = self.0;
+            z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
+            z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
+            ((z ^ (z >> 31)) >> 40) as f32 / (1u64 << 24) as f32
+        }
+    }
+
+    fn file_grid(name: &str, scale: f32) -> DensityGrid {
+        let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("tests/data/vdb")
+            .join(name);
+        let g = vdb::parse(&std::fs::read(path).unwrap(), "density").unwrap();
+        DensityGrid::from_vdb(&g, scale).unwrap()
+    }
+
+    /// A lumpy 24×20×16 grid (zeros, smooth bumps, spikes; `floor` added everywhere)
+    /// under a rotation and scale.
+    fn lumpy(floor: f32) -> DensityGrid {
+        let size = IVec3::new(24, 20, 16);
+        let mut rng = Rng(3);
+        let mut values = Vec::new();
+        for k in 0..size.z {
+            for j in 0..size.y {
+                for i in 0..size.x {
+                    let p = Vec3::new(i as f32, j as f32, k as f32);
+                    let bump = (-(p - Vec3::new(12.0, 9.0, 8.0)).length_squared() / 30.0).exp();
+                    let spike = if rng.u() < 0.05 { 3.0 } else { 0.0 };
+                    let hole = if i < 5 { 0.0 } else { 1.0 };
+                    values.push(floor + hole * (2.0 * bump + 0.3 * rng.u() + spike));
+                }
+            }
+        }
+        let to_world = Affine3A::from_scale_rotation_translation(
+            Vec3::splat(0.1),
+            Quat::from_euler(glam::EulerRot::XYZ, 0.3, -0.5, 0.9),
+            Vec3::new(0.5, -1.0, 2.0),
+        );
+        DensityGrid::from_dense(size, &values, to_world, 1.0).unwrap()
+    }
+
+    /// A ray from outside the grid's world box through a random point of it.
+    fn random_ray(g: &DensityGrid, rng: &mut Rng) -> (Vec3, Vec3, f32) {
+        let (lo, hi) = g.world_bounds();
+        // Through a point of the voxels' box (the world box of a rotated grid is larger).
+        let (qlo, qhi) = g.index_bounds();
+        let q = qlo + (qhi - qlo) * Vec3::new(rng.u(), rng.u(), rng.u());
+        let target = g.index_to_world().transform_point3(q);
+        let z = 2.0 * rng.u() - 1.0;
+        let phi = std::f32::consts::TAU * rng.u();
+        let r = (1.0 - z * z).max(0.0).sqrt();
+        let dir = Vec3::new(r * phi.cos(), r * phi.sin(), z);
+        let reach = (hi - lo).length();
+        (target - dir * reach, dir, 2.0 * reach)
+    }
+
+    /// ∫ density over [0, t] on `n` midpoint steps.
+    fn march(g: &DensityGrid, o: Vec3, d: Vec3, t: f32, n: usize) -> f64 {
+        let h = t as f64 / n as f64;
+        (0..n)
+            .map(|i| g.density(o + d * ((i as f64 + 0.5) * h) as f32) as f64 * h)
+            .sum()
+    }
+
+    #[test]
+    fn the_ramp_file_gives_its_voxels_and_trilinear_lookups_reproduce_it() {
+        for (file, scale) in [
+            ("ramp.vdb", 1.0),
+            ("ramp_zip.vdb", 0.5),
+            ("ramp_half.vdb", 2.0),
+        ] {
+            let g = file_grid(file, scale);
+            for x in -6..14 {
+                for y in -2..12 {
+                    for z in 0..12 {
+                        let p = IVec3::new(x, y, z);
+                        let want = if vdb::tests::in_ramp_box(p) {
+                            ramp(p) * scale
+                        } else {
+                            0.0
+                        };
+                        assert_eq!(g.voxel(p), want, "{file} voxel {p}");
+                        // At the voxel's centre in world space.
+                        let w = g.index_to_world().transform_point3(p.as_vec3());
+                        assert!((g.density(w) - want).abs() < 1e-4, "{file} at {p}");
+                    }
+                }
+            }
+            // Trilinear interpolation reproduces a linear function inside the box.
+            let mut rng = Rng(11);
+            for _ in 0..2000 {
+                let q = Vec3::new(-4.0, 0.0, 2.0)
+                    + Vec3::new(15.0, 9.0, 7.0) * Vec3::new(rng.u(), rng.u(), rng.u());
+                let want = scale * (2.0 + q.x / 4.0 + q.y / 8.0 + q.z / 16.0);
+                assert!(
+                    (g.density_index(q) - want).abs() < 1e-4 * want,
+                    "{file} at {q}"
+                );
+            }
+        }
+    }
+
+    #[test]
+    fn trilinear_weights_match_the_formula_on_a_cube() {
+        let c = [1.0, 2.0, 4.0, 8.0, 16.0, 32.0, 64.0, 128.0]; // (i, j, k) at c[i + 2j + 4k]
+        let g = DensityGrid::from_dense(IVec3::splat(2), &c, Affine3A::IDENTITY, 1.0).unwrap();
+        let (tx, ty, tz) = (0.25f32, 0.5f32, 0.875f32);
+        let mut want = 0.0;
+        for n in 0..8 {
+            let w = |bit: usize, t: f32| if n & bit != 0 { t } else { 1.0 - t };
+            want += w(1, tx) * w(2, ty) * w(4, tz) * c[n];
+        }
+        assert!((g.density_index(Vec3::new(tx, ty, tz)) - want).abs() < 1e-5);
+        // Half a voxel outside, half the corner's value (the rest is outside, 0).
+        assert!((g.density_index(Vec3::new(-0.5, 0.0, 0.0)) - 0.5).abs() < 1e-6);
+        assert_eq!(g.density_index(Vec3::new(-1.0, 0.0, 0.0)), 0.0);
+    }
+
+    #[test]
+    fn tiles_share_one_brick_and_read_their_value() {
+        let g = file_grid("tiles.vdb", 1.0);
+        assert_eq!(g.density_index(Vec3::new(60.3, 17.5, 99.0)), 1.5);
+        assert_eq!(g.density_index(Vec3::new(130.0, 3.5, 4.0)), 3.0);
+        assert_eq!(g.voxel(IVec3::new(137, 1, 2)), 4.0);
+        // The zero brick, one per tile value and one leaf.
+        assert_eq!(g.voxels.len(), 4 * LEAF_VOXELS);
+    }
+
+    #[test]
+    fn majorant_cells_bound_the_density_along_random_rays() {
+        let g = lumpy(0.0);
+        for cell in [1, 4, 16] {
+            let m = MajorantGrid::new(&g, cell).unwrap();
+            let mut rng = Rng(cell as u64);
+            for _ in 0..500 {
+                let (o, d, t_max) = random_ray(&g, &mut rng);
+                let segs: Vec<Segment> = m.segments(o, d, 0.0, t_max).collect();
+                for w in segs.windows(2) {
+                    assert_eq!(w[0].t1, w[1].t0, "cell {cell}: a gap between segments");
+                }
+                // Every point of the ray: inside a segment whose bounds hold, or of zero density.
+                for i in 0..400 {
+                    let t = t_max * (i as f32 + rng.u()) / 400.0;
+                    let rho = g.density(o + d * t);
+                    match segs.iter().find(|s| s.t0 <= t && t < s.t1) {
+                        Some(s) => assert!(
+                            s.min * (1.0 - 1e-5) - 1e-6 <= rho
+                                && rho <= s.max * (1.0 + 1e-5) + 1e-6,
+                            "cell {cell}: density {rho} outside [{}, {}]",
+                            s.min,
+                            s.max
+                        ),
+                        None => assert!(
+                            rho == 0.0,
+                            "cell {cell}: density {rho} outside every segment"
+                        ),
+                    }
+                }
+            }
+        }
+    }
+
+    /// Per channel, the sum over rays of (mean − reference) in units of its standard error.
+    fn ratio_tracking_z(
+        g: &GridDensity,
+        plain: bool,
+        rays: usize,
+        per_ray: usize,
+        seed: u64,
+    ) -> [f64; 3] {
+        let sigma = [0.8f32, 2.0, 5.0];
+        let mut rng = Rng(seed);
+        let (mut diff, mut var) = ([0.0f64; 3], [0.0f64; 3]);
+        for _ in 0..rays {
+            let (o, d, t_max) = random_ray(&g.grid, &mut rng);
+            let tau = march(&g.grid, o, d, t_max, 20_000);
+            // The march has converged far below the noise: halving its step changes little.
+            let tau2 = march(&g.grid, o, d, t_max, 40_000);
+            assert!((tau - tau2).abs() < 1e-4 * tau.max(1.0), "{tau} vs {tau2}");
+            let (qo, qd) = g.index_ray(o, d);
+            let (mut s, mut s2) = ([0.0f64; 3], [0.0f64; 3]);
+            let mut u = || rng.u();
+            for _ in 0..per_ray {
+                let segs = g.majorants.segments(o, d, 0.0, t_max).map(|s| Segment {
+                    min: if plain { 0.0 } else { s.min },
+                    ..s
+                });
+                let tr = ratio_tracking(segs, sigma, |t| g.grid.density_index(qo + qd * t), &mut u);
+                for c in 0..3 {
+                    s[c] += tr[c] as f64;
+                    s2[c] += (tr[c] as f64).powi(2);
+                }
+            }
+            for c in 0..3 {
+                let n = per_ray as f64;
+                let mean = s[c] / n;
+                let reference = (-(sigma[c] as f64) * tau).exp();
+                diff[c] += mean - reference;
+                var[c] += (s2[c] / n - mean * mean).max(0.0) / (n - 1.0);
+            }
+        }
+        std::array::from_fn(|c| {
+            if var[c] > 0.0 {
+                diff[c] / var[c].sqrt()
+            } else {
+                diff[c] * 1e9
+            }
+        })
+    }
+
+    #[test]
+    fn ratio_tracking_is_unbiased_against_ray_marching() {
+        // 64 rays × 2000 estimates; |z| < 5 has probability ≈ 6e-7 of failing by chance.
+        for floor in [0.0, 0.5] {
+            let g = GridDensity::new(lumpy(floor), 4).unwrap();
+            for plain in [false, true] {
+                let z = ratio_tracking_z(&g, plain, 64, 2000, 41 + plain as u64);
+                assert!(
+                    z.iter().all(|z| z.abs() < 5.0),
+                    "floor {floor}, residual control {}: z = {z:?}",
+                    !plain
+                );
+            }
+        }
+        let file = GridDensity::new(file_grid("ramp_half.vdb", 1.0), 16).unwrap();
+        let z = ratio_tracking_z(&file, false, 32, 2000, 7);
+        assert!(z.iter().all(|z| z.abs() < 5.0), "ramp_half.vdb: z = {z:?}");
+    }
+
+    /// Kolmogorov–Smirnov distance of sampled distances (None: escaped) from `cdf`.
+    fn ks(mut samples: Vec<Option<f32>>, cdf: impl Fn(f32) -> f64, escape_cdf: f64) -> f64 {
+        let n = samples.len() as f64;
+        samples.sort_by(|a, b| {
+            a.unwrap_or(f32::INFINITY)
+                .total_cmp(&b.unwrap_or(f32::INFINITY))
+        });
+        let mut d = 0.0f64;
+        let mut hits = 0;
+        for (i, s) in samples.iter().enumerate() {
+            let Some(t) = s else { break };
+            let f = cdf(*t);
+            d = d
+                .max((f - i as f64 / n).abs())
+                .max((f - (i + 1) as f64 / n).abs());
+            hits += 1;
+        }
+        d.max((escape_cdf - hits as f64 / n).abs())
+    }
+
+    /// The KS critical distance at level `alpha` for `n` samples (asymptotic).
+    fn ks_critical(n: usize, alpha: f64) -> f64 {
+        (-(alpha / 2.0).ln() / 2.0).sqrt() / (n as f64).sqrt()
+    }
+
+    #[test]
+    fn delta_tracking_distances_follow_one_minus_transmittance() {
+        // With a floor, the decomposition's control carries most collisions.
+        let grids = [
+            GridDensity::new(lumpy(0.0), 4).unwrap(),
+            GridDensity::new(lumpy(0.5), 4).unwrap(),
+        ];
+        let sigma = 1.5f32;
+        let n = 20_000;
+        let mut rng = Rng(99);
+        let rays = 8;
+        for r in 0..rays {
+            let g = &grids[r % 2];
+            let (o, d, t_max) = random_ray(&g.grid, &mut rng);
+            // Optical depth table on fine steps, for the analytic CDF 1 − T(t).
+            let steps = 8192;
+            let h = t_max as f64 / steps as f64;
+            let mut tau = vec![0.0f64; steps + 1];
+            for i in 0..steps {
+                let rho = g.grid.density(o + d * ((i as f64 + 0.5) * h) as f32) as f64;
+                tau[i + 1] = tau[i] + sigma as f64 * rho * h;
+            }
+            let cdf = |t: f32| {
+                let x = (t as f64 / h).clamp(0.0, steps as f64);
+                let i = (x as usize).min(steps - 1);
+                let tt = tau[i] + (tau[i + 1] - tau[i]) * (x - i as f64);
+                1.0 - (-tt).exp()
+            };
+            let mut u = || rng.u();
+            let samples: Vec<Option<f32>> = (0..n)
+                .map(|_| g.sample_distance(o, d, t_max, sigma, &mut u))
+                .collect();
+            let dist = ks(samples, cdf, 1.0 - (-tau[steps]).exp());
+            let crit = ks_critical(n, 0.001 / rays as f64);
+            assert!(dist < crit, "ray {r}: KS distance {dist} ≥ {crit}");
+        }
+    }
+
+    #[test]
+    fn in_a_constant_grid_delta_tracking_is_beer_lambert() {
+        let size = IVec3::new(40, 40, 40);
+        let g = DensityGrid::from_dense(
+            size,
+            &vec![1.0; 64_000],
+            Affine3A::from_scale(Vec3::splat(0.05)),
+            2.0,
+        )
+        .unwrap();
+        let g = GridDensity::new(g, 8).unwrap();
+        let sigma = 1.5f32; // σt = 2 · 1.5 = 3 per unit
+        let (o, d, t_max) = (
+            Vec3::new(0.1, 0.3, 0.2),
+            Vec3::new(1.0, 1.0, 1.0).normalize(),
+            2.0f32,
+        );
+        // The ray stays a voxel inside the block: density exactly 2 along it.
+        assert!((o + d * t_max).max_element() < 39.0 * 0.05);
+        let n = 20_000;
+        let mut rng = Rng(5);
+        let mut u = || rng.u();
+        let samples: Vec<Option<f32>> = (0..n)
+            .map(|_| g.sample_distance(o, d, t_max, sigma, &mut u))
+            .collect();
+        let dist = ks(
+            samples,
+            |t| 1.0 - (-3.0 * t as f64).exp(),
+            1.0 - (-3.0 * t_max as f64).exp(),
+        );
+        assert!(dist < ks_critical(n, 0.001), "KS distance {dist}");
+        // Ratio tracking there: Beer–Lambert per channel within 5 standard errors (cells
+        // of one value attenuate in closed form; the first ones reach outside the block).
+        let sig = [sigma, 0.5, 0.0];
+        let (mut s, mut s2) = ([0.0f64; 3], [0.0f64; 3]);
+        let m = 4000;
+        for _ in 0..m {
+            let tr = g.transmittance(o, d, t_max, sig, &mut u);
+            for c in 0..3 {
+                s[c] += tr[c] as f64;
+                s2[c] += (tr[c] as f64).powi(2);
+            }
+        }
+        for c in 0..3 {
+            let mean = s[c] / m as f64;
+            let se = ((s2[c] / m as f64 - mean * mean).max(0.0) / (m - 1) as f64).sqrt();
+            let want = (-2.0 * sig[c] as f64 * t_max as f64).exp();
+            assert!(
+                (mean - want).abs() <= 5.0 * se + 1e-6,
+                "channel {c}: {mean} ± {se} vs {want}"
+            );
+        }
+    }
+}

@@ -858,7 +858,7 @@ pub fn blosc_decode(src: &[u8], out: &mut [u8]) -> Result<(), String> {
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
 
     fn data(name: &str) -> std::path::PathBuf {
