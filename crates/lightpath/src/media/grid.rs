@@ -430,7 +430,7 @@ impl MajorantGrid {
             t: t0,
             t_end: t1,
         };
-        if !(t0 < t1) || self.bounds.is_empty() {
+        if t0.partial_cmp(&t1) != Some(std::cmp::Ordering::Less) || self.bounds.is_empty() {
             s.t_end = f32::NEG_INFINITY;
             return s;
         }
@@ -498,7 +498,7 @@ impl Iterator for Segments<'_> {
 
     #[inline]
     fn next(&mut self) -> Option<Segment> {
-        if !(self.t < self.t_end) {
+        if self.t.partial_cmp(&self.t_end) != Some(std::cmp::Ordering::Less) {
             return None;
         }
         let res = self.grid.res;
@@ -546,7 +546,8 @@ pub fn delta_tracking(
     mut density: impl FnMut(f32) -> f32,
     rng: &mut impl FnMut() -> f32,
 ) -> Option<f32> {
-    if !(sigma_t > 0.0) {
+    // Also refuses NaN.
+    if sigma_t.is_nan() || sigma_t <= 0.0 {
         return None;
     }
     for seg in segments {
@@ -598,7 +599,7 @@ pub fn ratio_tracking(
 ) -> [f32; 3] {
     let s_max = sigma_t[0].max(sigma_t[1]).max(sigma_t[2]);
     let mut tr = [1.0f32; 3];
-    if !(s_max > 0.0) {
+    if s_max.is_nan() || s_max <= 0.0 {
         return tr;
     }
     for seg in segments {
@@ -609,7 +610,7 @@ pub fn ratio_tracking(
             }
         }
         let mu_r = (seg.max - seg.min) * s_max;
-        if !(mu_r > 0.0) {
+        if mu_r.is_nan() || mu_r <= 0.0 {
             continue;
         }
         let mut t = seg.t0;
@@ -804,9 +805,9 @@ mod tests {
         let g = DensityGrid::from_dense(IVec3::splat(2), &c, Affine3A::IDENTITY, 1.0).unwrap();
         let (tx, ty, tz) = (0.25f32, 0.5f32, 0.875f32);
         let mut want = 0.0;
-        for n in 0..8 {
+        for (n, cn) in c.iter().enumerate() {
             let w = |bit: usize, t: f32| if n & bit != 0 { t } else { 1.0 - t };
-            want += w(1, tx) * w(2, ty) * w(4, tz) * c[n];
+            want += w(1, tx) * w(2, ty) * w(4, tz) * cn;
         }
         assert!((g.density_index(Vec3::new(tx, ty, tz)) - want).abs() < 1e-5);
         // Half a voxel outside, half the corner's value (the rest is outside, 0).

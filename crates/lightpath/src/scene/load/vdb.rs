@@ -544,9 +544,9 @@ impl TreeReader<'_, '_> {
                     * (1 << child_shift)
         };
         let on = |mask: &[u64], i: usize| mask[i / 64] >> (i % 64) & 1 == 1;
-        for i in 0..n {
+        for (i, &value) in values.iter().enumerate() {
             if !on(&child_mask, i) {
-                self.tile(at(i), 1 << child_shift, values[i], on(&value_mask, i))?;
+                self.tile(at(i), 1 << child_shift, value, on(&value_mask, i))?;
             }
         }
         self.scratch = values;
