@@ -191,6 +191,13 @@ impl DensityGrid {
             let end = hi.as_i64vec3();
             let dims = (end - origin.as_i64vec3() + (BRICK as i64 - 1)) / BRICK as i64;
             let bricks = dims.x.saturating_mul(dims.y).saturating_mul(dims.z);
+            // Lookups index bricks with i32 arithmetic.
+            if bricks > i32::MAX as i64 {
+                return Err(format!(
+                    "a density grid spanning {} voxels: more than 2^31 bricks of 8³",
+                    (end - origin.as_i64vec3())
+                ));
+            }
             Limits::current().check_memory(
                 (bricks as u64).saturating_mul(4),
                 "the brick index of a density grid",
