@@ -10,6 +10,7 @@
 //! Images", as Cycles and OSL's testrender resolve overlaps).
 
 pub mod equiangular;
+pub mod grid;
 pub mod homogeneous;
 pub mod phase;
 

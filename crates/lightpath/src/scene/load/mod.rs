@@ -9,6 +9,7 @@ pub mod obj;
 pub mod ply;
 mod text;
 pub mod toml;
+pub mod vdb;
 
 use super::desc::{Origin, SceneDesc};
 use super::SceneError;
