@@ -203,6 +203,24 @@ settings! {
                this rough (e.g. 0.3; 0: off). Tames caustic fireflies at the cost of sharp \
                caustics.",
     }
+    frame: Option<f32> = None, {
+        section: Render,
+        flag: "frame",
+        range: Range::Any,
+        role: Identity,
+        header: Header::Setting,
+        help: "The time code a USD stage's time samples are read at (default: the stage's \
+               start time code).",
+    }
+    render_settings: Option<String> = None, {
+        section: Render,
+        flag: "render-settings",
+        range: Range::Any,
+        role: Identity,
+        header: Header::Setting,
+        help: "The RenderSettings prim of a USD stage to render with, by path (default: the \
+               stage's renderSettingsPrimPath, else its first RenderSettings).",
+    }
     resolution: [u32; 2] = [256, 256], {
         section: Film,
         flag: "resolution",
@@ -576,6 +594,42 @@ impl Value for f32 {
     }
     fn numbers(&self) -> Vec<f64> {
         vec![*self as f64]
+    }
+}
+
+/// A number that may be unset (`none` in the header).
+impl Value for Option<f32> {
+    const EXPECTED: &'static str = "a number";
+    const VALUE_NAME: &'static str = "NUMBER";
+    fn from_text(text: &str) -> Option<Self> {
+        text.parse().ok().map(Some)
+    }
+    fn from_toml(value: &toml::Value) -> Option<Self> {
+        <f32 as Value>::from_toml(value).map(Some)
+    }
+    fn show(&self) -> String {
+        self.map_or("none".to_string(), |v| v.to_string())
+    }
+    fn numbers(&self) -> Vec<f64> {
+        self.iter().map(|&v| v as f64).collect()
+    }
+}
+
+/// A name or path that may be unset (`none` in the header).
+impl Value for Option<String> {
+    const EXPECTED: &'static str = "a string";
+    const VALUE_NAME: &'static str = "PATH";
+    fn from_text(text: &str) -> Option<Self> {
+        Some(Some(text.to_string()))
+    }
+    fn from_toml(value: &toml::Value) -> Option<Self> {
+        value.as_str().map(|s| Some(s.to_string()))
+    }
+    fn show(&self) -> String {
+        self.clone().unwrap_or_else(|| "none".to_string())
+    }
+    fn numbers(&self) -> Vec<f64> {
+        Vec::new()
     }
 }
 

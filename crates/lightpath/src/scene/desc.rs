@@ -69,6 +69,11 @@ pub struct SceneDesc {
     pub warnings: Vec<String>,
     /// Write these AOVs' per-pixel variance too (`<aov>_var`).
     pub variance: Vec<String>,
+    /// The output the scene names (a USD render product's `productName`); `-o` wins.
+    pub output: Option<PathBuf>,
+    /// Whether the standard AOVs are added unless the command line says (None: yes;
+    /// a USD stage with render settings: no, its RenderVars are the AOVs).
+    pub standard_aovs: Option<bool>,
 }
 
 impl SceneDesc {

@@ -404,6 +404,8 @@ pub fn load(src: &Source) -> Result<d::SceneDesc, SceneError> {
         light_group_aovs: file.light_group_aovs,
         warnings,
         variance: file.variance,
+        output: None,
+        standard_aovs: None,
     })
 }
 
