@@ -22,5 +22,6 @@ mod sampling;
 mod settings;
 mod style;
 mod subsurface;
+mod usd;
 mod view;
 mod workflow;

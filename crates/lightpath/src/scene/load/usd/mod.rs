@@ -201,7 +201,9 @@ impl Loader {
     ) -> Result<(), SceneError> {
         if !prim.is_active().unwrap_or(true)
             || prim.is_abstract().unwrap_or(false)
-            || !prim.is_defined().unwrap_or(true)
+            // openusd 0.6 reports a prototype's children as undefined (its specifier is
+            // the source's `over`): inside prototypes only `active` counts.
+            || (!ctx.prototype && !prim.is_defined().unwrap_or(true))
         {
             return Ok(());
         }
