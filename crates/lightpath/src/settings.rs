@@ -206,7 +206,8 @@ settings! {
     frame: Option<f32> = None, {
         section: Render,
         flag: "frame",
-        range: Range::Any,
+        // Time codes may be negative; a million frames bounds a typo.
+        range: Range::Between(-1e6, 1e6),
         role: Identity,
         header: Header::Setting,
         help: "The time code a USD stage's time samples are read at (default: the stage's \
@@ -615,15 +616,15 @@ impl Value for Option<f32> {
     }
 }
 
-/// A name or path that may be unset (`none` in the header).
+/// A USD prim path that may be unset (`none` in the header).
 impl Value for Option<String> {
-    const EXPECTED: &'static str = "a string";
+    const EXPECTED: &'static str = "an absolute prim path (e.g. /Render/Settings)";
     const VALUE_NAME: &'static str = "PATH";
     fn from_text(text: &str) -> Option<Self> {
-        Some(Some(text.to_string()))
+        text.starts_with('/').then(|| Some(text.to_string()))
     }
     fn from_toml(value: &toml::Value) -> Option<Self> {
-        value.as_str().map(|s| Some(s.to_string()))
+        Self::from_text(value.as_str()?)
     }
     fn show(&self) -> String {
         self.clone().unwrap_or_else(|| "none".to_string())

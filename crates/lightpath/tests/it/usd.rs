@@ -5,9 +5,9 @@
 
 use crate::common::Scratch;
 use lightpath::aov;
+use lightpath::scene::desc::Origin;
 use lightpath::scene::desc::{LightKind, MaterialKind, SceneDesc, ShapeDesc};
 use lightpath::scene::load::usd::{load_scene, UsdOptions};
-use lightpath::scene::desc::Origin;
 use lightpath::{render, RenderOptions, Scene};
 use std::f32::consts::PI;
 use std::path::Path;
@@ -196,7 +196,12 @@ fn render_vars_are_the_aovs_of_the_render() {
     job.output = Some(out.clone());
     job.overrides.spp = Some(1);
     let prepared = job.clone().prepare().unwrap();
-    let names: Vec<&str> = prepared.scene.aovs.iter().map(|a| a.name.as_str()).collect();
+    let names: Vec<&str> = prepared
+        .scene
+        .aovs
+        .iter()
+        .map(|a| a.name.as_str())
+        .collect();
     assert_eq!(names, ["beauty", "N", "diffuseKey", "specular"]);
     // --aovs standard adds the standard set.
     job.aovs.standard_asked = true;
@@ -291,7 +296,11 @@ def Xform "C" (
     };
     assert_eq!(radius("A"), (2.0, 1.0));
     assert_eq!(radius("B"), (0.5, 0.0));
-    let cube = desc.objects.iter().find(|o| o.shape_name == "Cube").unwrap();
+    let cube = desc
+        .objects
+        .iter()
+        .find(|o| o.shape_name == "Cube")
+        .unwrap();
     assert!((cube.transform.matrix3.x_axis.x - 2.0).abs() < 1e-6);
     assert_eq!(desc.lights.len(), 1);
     assert!(matches!(desc.lights[0].kind, LightKind::Distant { .. }));
@@ -346,7 +355,12 @@ def Scope "Looks"
     );
     let desc = load(&p);
     // The hole is skipped; the quad and the subset's triangle are two parts.
-    assert_eq!(desc.objects.len(), 2, "{:?}", desc.objects.iter().map(|o| &o.name).collect::<Vec<_>>());
+    assert_eq!(
+        desc.objects.len(),
+        2,
+        "{:?}",
+        desc.objects.iter().map(|o| &o.name).collect::<Vec<_>>()
+    );
     let parts: Vec<&lightpath::scene::desc::MeshData> = desc
         .objects
         .iter()
@@ -354,7 +368,10 @@ def Scope "Looks"
         .collect();
     assert_eq!(parts[0].indices.len(), 2);
     assert_eq!(parts[1].indices.len(), 1);
-    assert_eq!(desc.objects[1].material.as_ref().unwrap().name, "/Looks/Blue");
+    assert_eq!(
+        desc.objects[1].material.as_ref().unwrap().name,
+        "/Looks/Blue"
+    );
     // faceVarying st: a vertex per corner, t flipped to Lightpath's top-left origin.
     assert_eq!(parts[0].positions.len(), 4);
     assert_eq!(parts[0].uvs.as_ref().unwrap()[0], [0.0, 1.0]);
@@ -428,7 +445,10 @@ def PointInstancer "PI"
         _ => panic!(),
     };
     assert!(std::sync::Arc::ptr_eq(&shared(tris[1]), &shared(tris[2])));
-    let xs: Vec<f32> = tris[1..].iter().map(|o| o.transform.translation.x).collect();
+    let xs: Vec<f32> = tris[1..]
+        .iter()
+        .map(|o| o.transform.translation.x)
+        .collect();
     assert_eq!(xs, [5.0, -5.0]);
     let balls: Vec<f32> = desc
         .objects
@@ -436,7 +456,11 @@ def PointInstancer "PI"
         .filter(|o| o.shape_name == "Sphere")
         .map(|o| o.transform.translation.z)
         .collect();
-    assert_eq!(balls, [10.0, 30.0], "id 1 is invisible, prototypes are not drawn themselves");
+    assert_eq!(
+        balls,
+        [10.0, 30.0],
+        "id 1 is invisible, prototypes are not drawn themselves"
+    );
 }
 
 #[test]
@@ -466,7 +490,12 @@ def DomeLight "Sky" { float inputs:intensity = 0.5 }
 "#,
     );
     let desc = load(&p);
-    let by = |n: &str| desc.lights.iter().find(|l| l.name.as_deref() == Some(n)).unwrap();
+    let by = |n: &str| {
+        desc.lights
+            .iter()
+            .find(|l| l.name.as_deref() == Some(n))
+            .unwrap()
+    };
     let close = |a: f32, b: f32| (a - b).abs() <= 1e-4 * b.abs().max(1.0);
     // A point of the sphere's power: L·π·r²; normalized, L/4.
     assert!(matches!(by("Bulb").kind, LightKind::Point { .. }));
@@ -475,7 +504,10 @@ def DomeLight "Sky" { float inputs:intensity = 0.5 }
     // exposure 1 doubles; normalize divides by the sphere's area.
     assert!(close(by("Ball").strength, 20.0 / (4.0 * PI * 0.25)));
     // An unnormalized sun: radiance over a disk of diameter 1°.
-    assert!(close(by("Sun").strength, 1000.0 * PI * (0.5f32.to_radians()).sin().powi(2)));
+    assert!(close(
+        by("Sun").strength,
+        1000.0 * PI * (0.5f32.to_radians()).sin().powi(2)
+    ));
     assert!(close(by("Disk").strength, 2.0 / (PI * 4.0)));
     // 6500 K is white; 3000 K is warm, of luminance 1.
     for c in by("Disk").color {
@@ -487,7 +519,12 @@ def DomeLight "Sky" { float inputs:intensity = 0.5 }
     assert!((y - 1.0).abs() < 1e-4);
     assert!(close(by("Tube").strength, 3.0 / (2.0 * PI * 0.1 * 2.0)));
     match by("Spot").kind {
-        LightKind::Spot { cone_angle, cone_softness, direction, .. } => {
+        LightKind::Spot {
+            cone_angle,
+            cone_softness,
+            direction,
+            ..
+        } => {
             assert!(close(cone_angle, 60.0));
             assert!(cone_softness.abs() < 1e-3);
             assert_eq!(direction, [0.0, 0.0, -1.0]);
@@ -536,7 +573,13 @@ def DistantLight "Sun"
     desc.render.spp = 4;
     desc.render.max_depth = 2;
     let scene = Scene::build(&desc, &aov::assemble(Vec::new())).unwrap();
-    let (film, _) = render(&scene, &RenderOptions { spp: 4, first_sample: 0 });
+    let (film, _) = render(
+        &scene,
+        &RenderOptions {
+            spp: 4,
+            first_sample: 0,
+        },
+    );
     // A delta light on a Lambertian surface: every sample is the same, up to float
     // rounding.
     for y in 0..film.height {
@@ -567,7 +610,13 @@ def Sphere "Ball"
 "#,
     );
     let x = |frame| {
-        let d = load_with(&p, &UsdOptions { frame, ..UsdOptions::default() });
+        let d = load_with(
+            &p,
+            &UsdOptions {
+                frame,
+                ..UsdOptions::default()
+            },
+        );
         d.objects[0].transform.translation.x
     };
     assert_eq!(x(None), 0.0, "the start time code");
@@ -619,7 +668,11 @@ def Material "M"
     w.finish().unwrap();
     let desc = load(&path);
     let m = &desc.materials[&desc.objects[0].material.as_ref().unwrap().name];
-    let t = m.textures.base_color.as_ref().expect("the base colour texture");
+    let t = m
+        .textures
+        .base_color
+        .as_ref()
+        .expect("the base colour texture");
     assert!(
         matches!(&t.image, lightpath::scene::desc::ImageSource::Bytes { bytes, .. } if bytes[..] == png[..]),
         "{}",
@@ -633,7 +686,11 @@ def Material "M"
 #[test]
 fn errors_name_the_layer_and_the_prim_and_never_panic() {
     let dir = Scratch::new("usd-errors");
-    let bad = write(&dir, "bad.usda", "#usda 1.0\ndef Xform \"A\" {\n  double3 xformOp:translate = (1, 2\n}\n");
+    let bad = write(
+        &dir,
+        "bad.usda",
+        "#usda 1.0\ndef Xform \"A\" {\n  double3 xformOp:translate = (1, 2\n}\n",
+    );
     let e = load_err(&bad);
     assert!(e.contains("bad.usda"), "{e}");
     let range = write(
@@ -651,7 +708,10 @@ def Xform "W" {
 "#,
     );
     let e = load_err(&range);
-    assert!(e.contains("range.usda") && e.contains("/W/M") && e.contains('7'), "{e}");
+    assert!(
+        e.contains("range.usda") && e.contains("/W/M") && e.contains('7'),
+        "{e}"
+    );
     let tex = write(
         &dir,
         "tex.usda",
@@ -707,9 +767,16 @@ def Material "Mat"
 "#,
     );
     let desc = load(&mtlx);
-    assert_eq!(desc.warnings.iter().filter(|w| w.contains("/Mat")).count(), 1, "{:?}", desc.warnings);
+    assert_eq!(
+        desc.warnings.iter().filter(|w| w.contains("/Mat")).count(),
+        1,
+        "{:?}",
+        desc.warnings
+    );
     let m = &desc.materials[&desc.objects[0].material.as_ref().unwrap().name];
-    let MaterialKind::OpenPbr(p) = &m.kind else { panic!() };
+    let MaterialKind::OpenPbr(p) = &m.kind else {
+        panic!()
+    };
     assert_eq!(p.base_color.to_array(), [0.1, 0.2, 0.3]);
     let e = load_err(&dir.join("nothing.usda"));
     assert!(e.contains("nothing.usda"), "{e}");

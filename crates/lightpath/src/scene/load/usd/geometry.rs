@@ -77,8 +77,8 @@ impl Loader {
         convert: fn(Value) -> Option<Vec<T>>,
     ) -> Option<Primvar<T>> {
         let values = convert(stage::value(prim, name, self.time)?)?;
-        let indices = stage::value(prim, &format!("{name}:indices"), self.time)
-            .and_then(stage::int_array);
+        let indices =
+            stage::value(prim, &format!("{name}:indices"), self.time).and_then(stage::int_array);
         Some(Primvar {
             values,
             indices,
@@ -159,7 +159,11 @@ impl Loader {
             )],
             "Cube" => {
                 let h = f("size", 2.0) * 0.5;
-                vec![(ShapeDesc::Cube, world * Affine3A::from_scale(Vec3::splat(h)), None)]
+                vec![(
+                    ShapeDesc::Cube,
+                    world * Affine3A::from_scale(Vec3::splat(h)),
+                    None,
+                )]
             }
             "Cylinder" | "Cone" | "Capsule" => {
                 if ty == "Capsule" {
@@ -208,7 +212,8 @@ impl Loader {
     fn display_color(&self, prim: &Prim) -> Option<[f32; 3]> {
         let v = stage::value(prim, "primvars:displayColor", self.time)?;
         let colors = stage::vec3_array(v)?;
-        (colors.len() == 1 || stage::interpolation(prim, "primvars:displayColor", "constant") == "constant")
+        (colors.len() == 1
+            || stage::interpolation(prim, "primvars:displayColor", "constant") == "constant")
             .then(|| colors.first().copied())
             .flatten()
     }
@@ -248,10 +253,16 @@ impl Loader {
                 ),
             ));
         }
-        if let Some(bad) = indices.iter().find(|&&i| i < 0 || i as usize >= points.len()) {
+        if let Some(bad) = indices
+            .iter()
+            .find(|&&i| i < 0 || i as usize >= points.len())
+        {
             return Err(self.error(
                 prim,
-                format!("faceVertexIndices holds {bad}, out of range: there are {} points", points.len()),
+                format!(
+                    "faceVertexIndices holds {bad}, out of range: there are {} points",
+                    points.len()
+                ),
             ));
         }
         let left = stage::value(prim, "orientation", t)
@@ -266,9 +277,14 @@ impl Loader {
         let normals = self
             .primvar(prim, "primvars:normals", "vertex", stage::vec3_array)
             .or_else(|| self.primvar(prim, "normals", "vertex", stage::vec3_array));
-        let st = ["primvars:st", "primvars:st0", "primvars:UVMap", "primvars:uv"]
-            .iter()
-            .find_map(|n| self.primvar(prim, n, "vertex", stage::vec2_array));
+        let st = [
+            "primvars:st",
+            "primvars:st0",
+            "primvars:UVMap",
+            "primvars:uv",
+        ]
+        .iter()
+        .find_map(|n| self.primvar(prim, n, "vertex", stage::vec2_array));
         let colors = self
             .primvar(prim, "primvars:displayColor", "constant", stage::vec3_array)
             .filter(|c| c.interpolation != "constant" && c.values.len() > 1);
@@ -307,14 +323,20 @@ impl Loader {
                     (
                         points[p],
                         normals.as_ref().and_then(|n| n.at(f, c, p)),
-                        st.as_ref().and_then(|u| u.at(f, c, p)).map(|[s, t]| [s, 1.0 - t]),
+                        st.as_ref()
+                            .and_then(|u| u.at(f, c, p))
+                            .map(|[s, t]| [s, 1.0 - t]),
                         colors.as_ref().and_then(|k| k.at(f, c, p)),
                     )
                 }));
             }
             for i in 2..poly.len() {
                 let (v0, prev, next) = (poly[0], poly[i - 1], poly[i]);
-                b.indices.push(if flip { [v0, next, prev] } else { [v0, prev, next] });
+                b.indices.push(if flip {
+                    [v0, next, prev]
+                } else {
+                    [v0, prev, next]
+                });
             }
         }
         let own = self.surface_material(prim, display)?;
@@ -345,7 +367,9 @@ impl Loader {
         faces: usize,
     ) -> Result<Vec<(Option<String>, Vec<usize>)>, SceneError> {
         let mut out = Vec::new();
-        let children = prim.children().map_err(|e| self.error(prim, format!("{e:#}")))?;
+        let children = prim
+            .children()
+            .map_err(|e| self.error(prim, format!("{e:#}")))?;
         for child in children {
             if stage::type_of(&child) != "GeomSubset" {
                 continue;
@@ -370,7 +394,9 @@ impl Loader {
                     None => {
                         return Err(self.error(
                             &child,
-                            format!("indices holds face {i}, out of range: the mesh has {faces} faces"),
+                            format!(
+                                "indices holds face {i}, out of range: the mesh has {faces} faces"
+                            ),
                         ))
                     }
                 }
@@ -417,7 +443,8 @@ impl Loader {
         for p in &protos {
             let proto = self.stage.prim(p.clone());
             // The prototype root's own transform applies under the instance's.
-            let (local, _) = stage::local_transform(&proto, t).map_err(|e| self.error(&proto, e))?;
+            let (local, _) =
+                stage::local_transform(&proto, t).map_err(|e| self.error(&proto, e))?;
             let mut objects = Vec::new();
             let mut inner = ctx.clone();
             inner.prototype = true;
@@ -425,14 +452,20 @@ impl Loader {
             templates.push(objects);
         }
         for (i, &k) in ids.iter().enumerate() {
-            let id = inst_ids.as_ref().and_then(|v| v.get(i).copied()).unwrap_or(i as i64);
+            let id = inst_ids
+                .as_ref()
+                .and_then(|v| v.get(i).copied())
+                .unwrap_or(i as i64);
             if invisible.contains(&id) {
                 continue;
             }
             let Some(objects) = usize::try_from(k).ok().and_then(|k| templates.get(k)) else {
                 return Err(self.error(
                     prim,
-                    format!("protoIndices[{i}] is {k}; there are {} prototypes", templates.len()),
+                    format!(
+                        "protoIndices[{i}] is {k}; there are {} prototypes",
+                        templates.len()
+                    ),
                 ));
             };
             let pos = positions.get(i).copied().unwrap_or([0.0; 3]);
@@ -469,13 +502,22 @@ struct PartBuilder {
     indices: Vec<[u32; 3]>,
 }
 
-type Corner = ([f32; 3], Option<[f32; 3]>, Option<[f32; 2]>, Option<[f32; 3]>);
+type Corner = (
+    [f32; 3],
+    Option<[f32; 3]>,
+    Option<[f32; 2]>,
+    Option<[f32; 3]>,
+);
 
 impl PartBuilder {
     fn new(points: usize, per_corner: bool) -> PartBuilder {
         PartBuilder {
             per_corner,
-            remap: if per_corner { Vec::new() } else { vec![u32::MAX; points] },
+            remap: if per_corner {
+                Vec::new()
+            } else {
+                vec![u32::MAX; points]
+            },
             positions: Vec::new(),
             normals: Vec::new(),
             uvs: Vec::new(),

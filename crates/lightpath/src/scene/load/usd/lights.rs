@@ -117,7 +117,12 @@ impl Loader {
         (include, excludes)
     }
 
-    pub(super) fn light(&mut self, prim: &Prim, ty: &str, world: Affine3A) -> Result<(), SceneError> {
+    pub(super) fn light(
+        &mut self,
+        prim: &Prim,
+        ty: &str,
+        world: Affine3A,
+    ) -> Result<(), SceneError> {
         let default_intensity = if ty == "DistantLight" { 50000.0 } else { 1.0 };
         let (l, color) = self.emission(prim, default_intensity);
         let normalize = self.light_bool(prim, "normalize");
@@ -128,7 +133,11 @@ impl Loader {
         let mut shaping = None;
         let cone = self.light_number(prim, "shaping:cone:angle", 90.0);
         if cone < 90.0 {
-            shaping = Some((cone, self.light_number(prim, "shaping:cone:softness", 0.0).clamp(0.0, 1.0)));
+            shaping = Some((
+                cone,
+                self.light_number(prim, "shaping:cone:softness", 0.0)
+                    .clamp(0.0, 1.0),
+            ));
         }
         let (kind, transform, strength) = match ty {
             "RectLight" => {
@@ -151,14 +160,19 @@ impl Loader {
                 )
             }
             "SphereLight" => {
-                let scale = (axes.x_axis.length() + axes.y_axis.length() + axes.z_axis.length()) / 3.0;
+                let scale =
+                    (axes.x_axis.length() + axes.y_axis.length() + axes.z_axis.length()) / 3.0;
                 let r = self.light_number(prim, "radius", 0.5) * scale;
                 let point = self.light_bool(prim, "treatAsPoint") || shaping.is_some() || r <= 0.0;
                 let area = 4.0 * PI * r * r;
                 let radiance = if normalize { l / area } else { l };
                 if point {
                     // The power of the sphere, from a point.
-                    let intensity = if normalize { l / 4.0 } else { radiance * PI * r * r };
+                    let intensity = if normalize {
+                        l / 4.0
+                    } else {
+                        radiance * PI * r * r
+                    };
                     match shaping.take() {
                         Some((angle, softness)) => {
                             let (cone_angle, cone_softness) = super::super::gltf::spot_cone(
@@ -176,11 +190,18 @@ impl Loader {
                                 intensity,
                             )
                         }
-                        None => (LightKind::Point { position: origin }, Affine3A::IDENTITY, intensity),
+                        None => (
+                            LightKind::Point { position: origin },
+                            Affine3A::IDENTITY,
+                            intensity,
+                        ),
                     }
                 } else {
                     (
-                        LightKind::Sphere { center: origin, radius: r },
+                        LightKind::Sphere {
+                            center: origin,
+                            radius: r,
+                        },
                         Affine3A::IDENTITY,
                         radiance,
                     )
@@ -193,7 +214,10 @@ impl Loader {
                 let syz = (axes.y_axis.length() + axes.z_axis.length()) * 0.5;
                 let area = 2.0 * PI * r * syz * len * sx;
                 (
-                    LightKind::Cylinder { radius: r, length: len },
+                    LightKind::Cylinder {
+                        radius: r,
+                        length: len,
+                    },
                     world,
                     if normalize { l / area } else { l },
                 )
@@ -205,7 +229,11 @@ impl Loader {
                 } else {
                     l * PI * (angle.to_radians() * 0.5).sin().powi(2)
                 };
-                (LightKind::Distant { direction: down }, Affine3A::IDENTITY, e)
+                (
+                    LightKind::Distant { direction: down },
+                    Affine3A::IDENTITY,
+                    e,
+                )
             }
             _ => {
                 // Dome lights.
@@ -217,11 +245,16 @@ impl Loader {
             self.warn_once(
                 &format!("shaping {}", prim.path()),
                 prim,
-                format!("ShapingAPI's cone on a {ty} is not rendered (only sphere lights become spots)"),
+                format!(
+                    "ShapingAPI's cone on a {ty} is not rendered (only sphere lights become spots)"
+                ),
             );
         }
         if !(strength.is_finite() && strength >= 0.0) {
-            return Err(self.error(prim, format!("the light's emission is {strength}: its size or intensity is not usable")));
+            return Err(self.error(
+                prim,
+                format!("the light's emission is {strength}: its size or intensity is not usable"),
+            ));
         }
         let (include, exclude) = self.linking(prim);
         let camera_visible = self.light_bool_default(prim, "karma:light:renderlightgeo", true)
@@ -249,7 +282,10 @@ impl Loader {
             .unwrap_or(default)
     }
 
-    fn dome_map(&mut self, prim: &Prim) -> Result<Option<(std::path::PathBuf, crate::scene::desc::Origin)>, SceneError> {
+    fn dome_map(
+        &mut self,
+        prim: &Prim,
+    ) -> Result<Option<(std::path::PathBuf, crate::scene::desc::Origin)>, SceneError> {
         let Some(openusd::sdf::Value::AssetPath(a)) =
             stage::value_of(prim, &["inputs:texture:file", "texture:file"], self.time)
         else {
@@ -258,22 +294,42 @@ impl Loader {
         if a.asset_path().is_empty() {
             return Ok(None);
         }
-        let format = stage::value_of(prim, &["inputs:texture:format", "texture:format"], self.time)
-            .and_then(|v| stage::string_of(&v))
-            .unwrap_or_else(|| "automatic".into());
+        let format = stage::value_of(
+            prim,
+            &["inputs:texture:format", "texture:format"],
+            self.time,
+        )
+        .and_then(|v| stage::string_of(&v))
+        .unwrap_or_else(|| "automatic".into());
         if !matches!(format.as_str(), "automatic" | "latlong") {
-            self.warn(prim, format!("texture:format '{format}' is not read (only latlong): the dome is its colour"));
+            self.warn(
+                prim,
+                format!(
+                    "texture:format '{format}' is not read (only latlong): the dome is its colour"
+                ),
+            );
             return Ok(None);
         }
         let path = a
             .resolved_path()
             .filter(|p| !p.is_empty())
             .map(std::path::PathBuf::from)
-            .ok_or_else(|| self.error(prim, format!("inputs:texture:file: '{}' cannot be found", a.asset_path())))?;
-        if !path.extension().is_some_and(|e| e.eq_ignore_ascii_case("exr")) {
+            .ok_or_else(|| {
+                self.error(
+                    prim,
+                    format!("inputs:texture:file: '{}' cannot be found", a.asset_path()),
+                )
+            })?;
+        if !path
+            .extension()
+            .is_some_and(|e| e.eq_ignore_ascii_case("exr"))
+        {
             self.warn(
                 prim,
-                format!("inputs:texture:file: {}: only EXR dome maps are read; the dome is its colour", path.display()),
+                format!(
+                    "inputs:texture:file: {}: only EXR dome maps are read; the dome is its colour",
+                    path.display()
+                ),
             );
             return Ok(None);
         }
@@ -288,7 +344,10 @@ impl Loader {
         out: &mut [ObjectDesc],
     ) -> Result<(), SceneError> {
         let apis = prim.api_schemas().unwrap_or_default();
-        if !apis.iter().any(|a| a.as_str() == "MeshLightAPI" || a.as_str() == "LightAPI") {
+        if !apis
+            .iter()
+            .any(|a| a.as_str() == "MeshLightAPI" || a.as_str() == "LightAPI")
+        {
             return Ok(());
         }
         let (l, color) = self.emission(prim, 1.0);
@@ -301,7 +360,10 @@ impl Loader {
                     .iter()
                     .flat_map(|p| {
                         p.indices.iter().map(|t| {
-                            let [a, b, c] = t.map(|i| o.transform.transform_point3a(Vec3A::from(p.positions[i as usize])));
+                            let [a, b, c] = t.map(|i| {
+                                o.transform
+                                    .transform_point3a(Vec3A::from(p.positions[i as usize]))
+                            });
                             (b - a).cross(c - a).length() * 0.5
                         })
                     })

@@ -65,10 +65,7 @@ impl Loader {
 
     /// A diffuse material of a displayColor (vertex colours multiply it).
     fn display_material(&mut self, color: [f32; 3], prim: &Prim) -> String {
-        let name = format!(
-            "displayColor({}, {}, {})",
-            color[0], color[1], color[2]
-        );
+        let name = format!("displayColor({}, {}, {})", color[0], color[1], color[2]);
         if !self.desc.materials.contains_key(&name) {
             let p = OpenPbr {
                 base_color: Vec3A::from(color).max(Vec3A::ZERO),
@@ -128,7 +125,11 @@ impl Loader {
                 let what = match other {
                     Some(s) => format!("its surface shader {} is {}", s.path(), {
                         let id = shader_id(&s);
-                        if id.is_empty() { "of no known id".to_string() } else { format!("'{id}'") }
+                        if id.is_empty() {
+                            "of no known id".to_string()
+                        } else {
+                            format!("'{id}'")
+                        }
                     }),
                     None => "it has no surface output connected to a shader".to_string(),
                 };
@@ -188,7 +189,12 @@ impl Loader {
         let mut prim = prim.clone();
         let mut attr = attr.to_string();
         for _ in 0..16 {
-            let target = prim.attribute(attr.as_str()).connections().ok()?.into_iter().next()?;
+            let target = prim
+                .attribute(attr.as_str())
+                .connections()
+                .ok()?
+                .into_iter()
+                .next()?;
             let owner = self.stage.prim(target.prim_path());
             let out = target.name().unwrap_or_default().to_string();
             let ty = stage::type_of(&owner);
@@ -202,7 +208,11 @@ impl Loader {
         None
     }
 
-    fn preview_surface(&mut self, material: &Prim, shader: &Prim) -> Result<MaterialDesc, SceneError> {
+    fn preview_surface(
+        &mut self,
+        material: &Prim,
+        shader: &Prim,
+    ) -> Result<MaterialDesc, SceneError> {
         let t = self.time;
         let num = |n: &str, d: f32| {
             stage::value(shader, &format!("inputs:{n}"), t)
@@ -222,7 +232,11 @@ impl Loader {
         let roughness = num("roughness", 0.5).clamp(0.0, 1.0);
         let mut p = OpenPbr {
             base_color: Vec3A::from(color("diffuseColor", [0.18; 3])),
-            base_metalness: if specular_workflow { 0.0 } else { num("metallic", 0.0).clamp(0.0, 1.0) },
+            base_metalness: if specular_workflow {
+                0.0
+            } else {
+                num("metallic", 0.0).clamp(0.0, 1.0)
+            },
             specular_roughness: roughness,
             specular_ior: num("ior", 1.5).max(1.0),
             coat_weight: num("clearcoat", 0.0).clamp(0.0, 1.0),
@@ -239,7 +253,20 @@ impl Loader {
         let mut textures = TexturesDesc::default();
         let mut emissive = None;
         let mut inputs = Vec::new();
-        for input in ["diffuseColor", "metallic", "roughness", "normal", "emissiveColor", "clearcoat", "clearcoatRoughness", "opacity", "specularColor", "occlusion", "displacement", "ior"] {
+        for input in [
+            "diffuseColor",
+            "metallic",
+            "roughness",
+            "normal",
+            "emissiveColor",
+            "clearcoat",
+            "clearcoatRoughness",
+            "opacity",
+            "specularColor",
+            "occlusion",
+            "displacement",
+            "ior",
+        ] {
             let Some((node, output)) = self.source_of(shader, &format!("inputs:{input}")) else {
                 continue;
             };
@@ -267,28 +294,52 @@ impl Loader {
                     if tex.srgb {
                         textures.base_color = Some(tex.desc);
                     } else {
-                        textures.inputs.push(input_texture("base_color", tex.desc, 0, false));
+                        textures
+                            .inputs
+                            .push(input_texture("base_color", tex.desc, 0, false));
                     }
                 }
                 "metallic" if !specular_workflow => {
                     p.base_metalness = s[tex.channel as usize].clamp(0.0, 1.0);
-                    textures.inputs.push(input_texture("base_metalness", tex.desc, tex.channel, false));
+                    textures.inputs.push(input_texture(
+                        "base_metalness",
+                        tex.desc,
+                        tex.channel,
+                        false,
+                    ));
                 }
                 "roughness" => {
                     p.specular_roughness = s[tex.channel as usize].clamp(0.0, 1.0);
-                    textures.inputs.push(input_texture("specular_roughness", tex.desc, tex.channel, false));
+                    textures.inputs.push(input_texture(
+                        "specular_roughness",
+                        tex.desc,
+                        tex.channel,
+                        false,
+                    ));
                 }
                 "clearcoat" => {
                     p.coat_weight = s[tex.channel as usize].clamp(0.0, 1.0);
-                    textures.inputs.push(input_texture("coat_weight", tex.desc, tex.channel, false));
+                    textures.inputs.push(input_texture(
+                        "coat_weight",
+                        tex.desc,
+                        tex.channel,
+                        false,
+                    ));
                 }
                 "clearcoatRoughness" => {
                     p.coat_roughness = s[tex.channel as usize].clamp(0.0, 1.0);
-                    textures.inputs.push(input_texture("coat_roughness", tex.desc, tex.channel, false));
+                    textures.inputs.push(input_texture(
+                        "coat_roughness",
+                        tex.desc,
+                        tex.channel,
+                        false,
+                    ));
                 }
                 "specularColor" if specular_workflow => {
                     p.specular_color = Vec3A::new(s[0], s[1], s[2]).max(Vec3A::ZERO);
-                    textures.inputs.push(input_texture("specular_color", tex.desc, 0, tex.srgb));
+                    textures
+                        .inputs
+                        .push(input_texture("specular_color", tex.desc, 0, tex.srgb));
                 }
                 "emissiveColor" => {
                     emissive = Some([s[0], s[1], s[2]]);
@@ -296,7 +347,8 @@ impl Loader {
                 }
                 "normal" => {
                     // The usual encoding: scale 2, bias −1 (a strength other than 1 scales xy).
-                    let strength = if (s[0] - 2.0).abs() < 1e-3 && (tex.bias[0] + 1.0).abs() < 1e-3 {
+                    let strength = if (s[0] - 2.0).abs() < 1e-3 && (tex.bias[0] + 1.0).abs() < 1e-3
+                    {
                         1.0
                     } else {
                         self.warn_once(
@@ -314,7 +366,10 @@ impl Loader {
                 other => self.warn_once(
                     &format!("input {} {other}", material.path()),
                     material,
-                    format!("material {}: a texture on {other} is not read", material.path()),
+                    format!(
+                        "material {}: a texture on {other} is not read",
+                        material.path()
+                    ),
                 ),
             }
         }
@@ -334,16 +389,21 @@ impl Loader {
             _ => return Err(self.error(node, "a UsdUVTexture without inputs:file")),
         };
         let image = self.image(node, &asset)?;
-        let wrap = |n: &str, me: &mut Loader| {
-            match stage::value(node, n, t).and_then(|v| stage::string_of(&v)).as_deref() {
-                Some("clamp") => Wrap::Clamp,
-                Some("mirror") => Wrap::Mirror,
-                Some("black") => {
-                    me.warn_once(&format!("black {}", node.path()), node, "wrap 'black' is read as 'clamp'");
-                    Wrap::Clamp
-                }
-                _ => Wrap::Repeat,
+        let wrap = |n: &str, me: &mut Loader| match stage::value(node, n, t)
+            .and_then(|v| stage::string_of(&v))
+            .as_deref()
+        {
+            Some("clamp") => Wrap::Clamp,
+            Some("mirror") => Wrap::Mirror,
+            Some("black") => {
+                me.warn_once(
+                    &format!("black {}", node.path()),
+                    node,
+                    "wrap 'black' is read as 'clamp'",
+                );
+                Wrap::Clamp
             }
+            _ => Wrap::Repeat,
         };
         let wrap = [wrap("inputs:wrapS", self), wrap("inputs:wrapT", self)];
         let four = |n: &str, d: [f32; 4]| {
@@ -417,16 +477,24 @@ impl Loader {
     }
 
     /// The image an asset path names: a file, or the bytes of a file inside a .usdz.
-    fn image(&mut self, node: &Prim, asset: &openusd::sdf::AssetPath) -> Result<ImageSource, SceneError> {
+    fn image(
+        &mut self,
+        node: &Prim,
+        asset: &openusd::sdf::AssetPath,
+    ) -> Result<ImageSource, SceneError> {
         let resolved = asset.resolved_path().map(str::to_string).or_else(|| {
             use openusd::ar::Resolver;
             let r = openusd::ar::DefaultResolver::new();
-            r.resolve(asset.asset_path()).map(|p| p.to_string_lossy().into_owned())
+            r.resolve(asset.asset_path())
+                .map(|p| p.to_string_lossy().into_owned())
         });
         let Some(resolved) = resolved.filter(|r| !r.is_empty()) else {
             return Err(self.error(
                 node,
-                format!("inputs:file: the texture '{}' cannot be found", asset.asset_path()),
+                format!(
+                    "inputs:file: the texture '{}' cannot be found",
+                    asset.asset_path()
+                ),
             ));
         };
         if openusd::ar::is_package_relative_path(&resolved) {
@@ -435,7 +503,9 @@ impl Loader {
             let bytes = r
                 .open_asset(&openusd::ar::ResolvedPath::new(&resolved))
                 .and_then(|mut a| a.read_all())
-                .map_err(|e| self.error(node, format!("inputs:file: cannot read '{resolved}': {e}")))?;
+                .map_err(|e| {
+                    self.error(node, format!("inputs:file: cannot read '{resolved}': {e}"))
+                })?;
             return Ok(ImageSource::Bytes {
                 name: resolved,
                 bytes: bytes.into(),
@@ -445,7 +515,10 @@ impl Loader {
         if !path.is_file() {
             return Err(self.error(
                 node,
-                format!("inputs:file: the texture '{}' does not exist", path.display()),
+                format!(
+                    "inputs:file: the texture '{}' does not exist",
+                    path.display()
+                ),
             ));
         }
         Ok(ImageSource::File(path))

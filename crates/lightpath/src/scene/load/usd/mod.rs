@@ -49,9 +49,8 @@ pub fn load_scene(path: &Path, at: &Origin, options: &UsdOptions) -> Result<Scen
         return Err(at.error(format!("{file}: not a regular file")));
     }
     let load = std::panic::catch_unwind(|| -> Result<SceneDesc, SceneError> {
-        let stage = stage::open(&file).map_err(|e| {
-            Origin::file(&file).error(format!("cannot open the USD stage: {e}"))
-        })?;
+        let stage = stage::open(&file)
+            .map_err(|e| Origin::file(&file).error(format!("cannot open the USD stage: {e}")))?;
         Loader::new(stage, &file, options)?.scene()
     });
     load.unwrap_or_else(|panic| {
@@ -116,12 +115,13 @@ impl Loader {
             Some("Z") => Mat3A::from_rotation_x(-std::f32::consts::FRAC_PI_2),
             _ => Mat3A::IDENTITY,
         };
-        let root = Affine3A { matrix3: rotate * Mat3A::from_diagonal(glam::Vec3::splat(mpu)), translation: Vec3A::ZERO };
+        let root = Affine3A {
+            matrix3: rotate * Mat3A::from_diagonal(glam::Vec3::splat(mpu)),
+            translation: Vec3A::ZERO,
+        };
         let time = match options.frame {
             Some(t) => TimeCode::new(t),
-            None if stage.has_authored_time_code_range() => {
-                TimeCode::new(stage.start_time_code())
-            }
+            None if stage.has_authored_time_code_range() => TimeCode::new(stage.start_time_code()),
             None => TimeCode::new(stage.start_time_code()),
         };
         let desc = SceneDesc {
@@ -168,7 +168,11 @@ impl Loader {
     }
 
     fn origin(&self, prim: &Prim) -> Origin {
-        Origin::file(format!("{} {}", stage::layer_of(prim, &self.file), prim.path()))
+        Origin::file(format!(
+            "{} {}",
+            stage::layer_of(prim, &self.file),
+            prim.path()
+        ))
     }
 
     fn scene(mut self) -> Result<SceneDesc, SceneError> {
@@ -208,13 +212,15 @@ impl Loader {
             return Ok(());
         }
         let ty = stage::type_of(prim);
-        if let Some(v) = stage::value(prim, "visibility", self.time).and_then(|v| stage::string_of(&v))
+        if let Some(v) =
+            stage::value(prim, "visibility", self.time).and_then(|v| stage::string_of(&v))
         {
             if v == "invisible" {
                 return Ok(());
             }
         }
-        if let Some(p) = stage::value(prim, "purpose", self.time).and_then(|v| stage::string_of(&v)) {
+        if let Some(p) = stage::value(prim, "purpose", self.time).and_then(|v| stage::string_of(&v))
+        {
             if !self.purposes.contains(&p) {
                 return Ok(());
             }
@@ -233,7 +239,8 @@ impl Loader {
         ) {
             return Ok(());
         }
-        let (local, resets) = stage::local_transform(prim, self.time).map_err(|e| self.error(prim, e))?;
+        let (local, resets) =
+            stage::local_transform(prim, self.time).map_err(|e| self.error(prim, e))?;
         let base = if resets {
             if ctx.prototype {
                 Affine3A::IDENTITY
@@ -284,11 +291,17 @@ impl Loader {
             "" | "Xform" | "Scope" | "SkelRoot" => {}
             other => {
                 let key = format!("type {other}");
-                self.warn_once(&key, prim, format!("prims of type {other} are not rendered (this one and any others)"));
+                self.warn_once(
+                    &key,
+                    prim,
+                    format!("prims of type {other} are not rendered (this one and any others)"),
+                );
             }
         }
         below.ancestors.push(name);
-        let children = prim.children().map_err(|e| self.error(prim, format!("{e:#}")))?;
+        let children = prim
+            .children()
+            .map_err(|e| self.error(prim, format!("{e:#}")))?;
         for child in children {
             self.walk(&child, world, &below, out)?;
         }
@@ -311,7 +324,9 @@ impl Loader {
         inner.prototype = true;
         inner.ancestors.push(name.to_string());
         let mut out = Vec::new();
-        let children = prim.children().map_err(|e| self.error(&prim, format!("{e:#}")))?;
+        let children = prim
+            .children()
+            .map_err(|e| self.error(&prim, format!("{e:#}")))?;
         for child in children {
             self.walk(&child, Affine3A::IDENTITY, &inner, &mut out)?;
         }

@@ -21,7 +21,7 @@ use crate::scene::desc::{AovDesc, CameraDesc, NamedCamera, Origin};
 use crate::scene::SceneError;
 use glam::{Affine3A, Vec3A};
 use openusd::schemas::render::{compute_render_spec, SourceType};
-use openusd::usd::{PrimPredicate, Prim};
+use openusd::usd::{Prim, PrimPredicate};
 
 /// Longer side of the film when only the camera's apertures give its shape.
 const FILM_SIZE: f32 = 512.0;
@@ -88,7 +88,10 @@ impl Loader {
             if (product.pixel_aspect_ratio - 1.0).abs() > 1e-4 && product.pixel_aspect_ratio > 0.0 {
                 self.warn(
                     &settings,
-                    format!("pixelAspectRatio {} is read as 1 (square pixels)", product.pixel_aspect_ratio),
+                    format!(
+                        "pixelAspectRatio {} is read as 1 (square pixels)",
+                        product.pixel_aspect_ratio
+                    ),
                 );
             }
             self.settings_camera = product.camera_path.clone();
@@ -161,7 +164,10 @@ impl Loader {
             .and_then(|v| stage::string_of(&v))
             .unwrap_or_default();
         if projection == "orthographic" {
-            self.warn(prim, "orthographic cameras are not supported; it is skipped");
+            self.warn(
+                prim,
+                "orthographic cameras are not supported; it is skipped",
+            );
             return;
         }
         let focal = f("focalLength", 50.0);
@@ -173,20 +179,31 @@ impl Loader {
         // Focal length and apertures are in tenths of a scene unit; the lens's
         // diameter is the focal length over the f-number.
         let tenth = 0.1 * self.meters_per_unit;
-        let f_stop = stage::value(prim, "fStop", self.time).and_then(|v| stage::f32_of(&v)).unwrap_or(0.0);
+        let f_stop = stage::value(prim, "fStop", self.time)
+            .and_then(|v| stage::f32_of(&v))
+            .unwrap_or(0.0);
         let focus = stage::value(prim, "focusDistance", self.time)
             .and_then(|v| stage::f32_of(&v))
             .unwrap_or(0.0);
         let (aperture_radius, focus_distance) = if f_stop > 0.0 && focus > 0.0 {
-            (focal * tenth / (2.0 * f_stop), Some(focus * self.meters_per_unit))
+            (
+                focal * tenth / (2.0 * f_stop),
+                Some(focus * self.meters_per_unit),
+            )
         } else {
             (0.0, None)
         };
         let aspect = ha / va;
         let resolution = if aspect >= 1.0 {
-            [FILM_SIZE as u32, (FILM_SIZE / aspect).round().max(1.0) as u32]
+            [
+                FILM_SIZE as u32,
+                (FILM_SIZE / aspect).round().max(1.0) as u32,
+            ]
         } else {
-            [(FILM_SIZE * aspect).round().max(1.0) as u32, FILM_SIZE as u32]
+            [
+                (FILM_SIZE * aspect).round().max(1.0) as u32,
+                FILM_SIZE as u32,
+            ]
         };
         let camera = CameraDesc {
             position: position.into(),
@@ -220,11 +237,16 @@ impl Loader {
             return Ok(());
         }
         let k = match &self.settings_camera {
-            Some(p) => self.desc.cameras.iter().position(|c| &c.name == p).ok_or_else(|| {
-                Origin::file(&self.file).error(format!(
-                    "the render settings' camera {p} is not a camera of the stage"
-                ))
-            })?,
+            Some(p) => self
+                .desc
+                .cameras
+                .iter()
+                .position(|c| &c.name == p)
+                .ok_or_else(|| {
+                    Origin::file(&self.file).error(format!(
+                        "the render settings' camera {p} is not a camera of the stage"
+                    ))
+                })?,
             None => 0,
         };
         let has_settings = self.desc.standard_aovs.is_some();
