@@ -103,7 +103,17 @@ struct Loader {
 
 impl Loader {
     fn new(stage: usd::Stage, file: &str, options: &UsdOptions) -> Result<Loader, SceneError> {
-        let meta = |key: &str| stage.stage_metadata(key).ok().flatten();
+        // The root layer's, else (a TD's layer over a DCC export that does not repeat
+        // them) the strongest layer of its stack that authors it.
+        let meta = |key: &str| {
+            stage.stage_metadata(key).ok().flatten().or_else(|| {
+                stage.layer_stack().iter().find_map(|id| {
+                    let layer = stage.layer(id)?;
+                    let root = layer.pseudo_root()?;
+                    root.field(key).ok().flatten()
+                })
+            })
+        };
         let up = meta("upAxis").and_then(|v| stage::string_of(&v));
         let mpu = meta("metersPerUnit")
             .and_then(|v| stage::f32_of(&v))

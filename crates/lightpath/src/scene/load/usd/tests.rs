@@ -33,3 +33,4 @@ fn values_of_any_precision_read_as_f32() {
         Some(vec![-1, 7])
     );
 }
+
