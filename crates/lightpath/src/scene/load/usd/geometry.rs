@@ -39,6 +39,9 @@ pub fn object_tags(prim: &Prim, time: TimeCode) -> Vec<String> {
     out
 }
 
+/// A GeomSubset's material (its name in the scene) and faces.
+type Subset = (Option<String>, Vec<usize>);
+
 /// A primvar as read: values, optional indices, interpolation.
 struct Primvar<T> {
     values: Vec<T>,
@@ -317,8 +320,8 @@ impl Loader {
             let b = &mut builders[part_of[f]];
             let s = starts[f];
             poly.clear();
-            for c in s..s + count as usize {
-                let p = indices[c] as usize;
+            for (c, &p) in indices.iter().enumerate().skip(s).take(count as usize) {
+                let p = p as usize;
                 poly.push(b.vertex(p, || {
                     (
                         points[p],
@@ -361,11 +364,7 @@ impl Loader {
     }
 
     /// The mesh's face subsets that bind a material: (material, faces).
-    fn subsets(
-        &mut self,
-        prim: &Prim,
-        faces: usize,
-    ) -> Result<Vec<(Option<String>, Vec<usize>)>, SceneError> {
+    fn subsets(&mut self, prim: &Prim, faces: usize) -> Result<Vec<Subset>, SceneError> {
         let mut out = Vec::new();
         let children = prim
             .children()

@@ -33,4 +33,3 @@ fn values_of_any_precision_read_as_f32() {
         Some(vec![-1, 7])
     );
 }
-
