@@ -3,8 +3,8 @@
 //! with its interpolation and indices), the `Sphere`/`Cube`/`Cylinder`/`Cone`/`Plane`
 //! gprims, and `PointInstancer`s whose prototypes are read once and shared.
 //!
-//! A mesh whose primvars are all `constant`, `vertex` or `varying` keeps USD's shared
-//! vertices; one with a `uniform` or `faceVarying` primvar gets a vertex per face corner.
+//! A mesh keeps USD's shared points as its vertices; with a `uniform` or `faceVarying`
+//! primvar, a point is split into one vertex per distinct set of corner values.
 //! Subdivision surfaces are rendered as their control cage.
 
 use super::{stage, Context, Loader};
@@ -489,11 +489,15 @@ impl Loader {
     }
 }
 
-/// Vertices of one material part: shared (USD's points) or one per face corner.
+/// Vertices of one material part: USD's points, split where a point's corners differ
+/// (a UV seam, a hard edge): a point's vertices are chained and a corner reuses one whose
+/// attributes are bit for bit its own.
 struct PartBuilder {
     per_corner: bool,
-    /// Point → vertex (u32::MAX: none yet), when shared.
-    remap: Vec<u32>,
+    /// Point → its latest vertex (u32::MAX: none yet).
+    head: Vec<u32>,
+    /// Vertex → the point's previous vertex (u32::MAX: none).
+    next: Vec<u32>,
     positions: Vec<[f32; 3]>,
     normals: Vec<[f32; 3]>,
     uvs: Vec<[f32; 2]>,
@@ -512,11 +516,8 @@ impl PartBuilder {
     fn new(points: usize, per_corner: bool) -> PartBuilder {
         PartBuilder {
             per_corner,
-            remap: if per_corner {
-                Vec::new()
-            } else {
-                vec![u32::MAX; points]
-            },
+            head: vec![u32::MAX; points],
+            next: Vec::new(),
             positions: Vec::new(),
             normals: Vec::new(),
             uvs: Vec::new(),
@@ -526,18 +527,34 @@ impl PartBuilder {
     }
 
     fn vertex(&mut self, point: usize, data: impl FnOnce() -> Corner) -> u32 {
-        if !self.per_corner && self.remap[point] != u32::MAX {
-            return self.remap[point];
+        if !self.per_corner && self.head[point] != u32::MAX {
+            return self.head[point];
         }
         let (p, n, uv, c) = data();
+        let (n, uv, c) = (
+            n.unwrap_or([0.0, 0.0, 1.0]),
+            uv.unwrap_or([0.0; 2]),
+            c.unwrap_or([1.0; 3]),
+        );
+        let bits3 = |v: [f32; 3]| v.map(f32::to_bits);
+        let mut k = self.head[point];
+        while k != u32::MAX {
+            let i = k as usize;
+            if bits3(self.normals[i]) == bits3(n)
+                && self.uvs[i].map(f32::to_bits) == uv.map(f32::to_bits)
+                && bits3(self.colors[i]) == bits3(c)
+            {
+                return k;
+            }
+            k = self.next[i];
+        }
         let k = self.positions.len() as u32;
         self.positions.push(p);
-        self.normals.push(n.unwrap_or([0.0, 0.0, 1.0]));
-        self.uvs.push(uv.unwrap_or([0.0; 2]));
-        self.colors.push(c.unwrap_or([1.0; 3]));
-        if !self.per_corner {
-            self.remap[point] = k;
-        }
+        self.normals.push(n);
+        self.uvs.push(uv);
+        self.colors.push(c);
+        self.next.push(self.head[point]);
+        self.head[point] = k;
         k
     }
 
