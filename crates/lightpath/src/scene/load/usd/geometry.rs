@@ -39,6 +39,9 @@ pub fn object_tags(prim: &Prim, time: TimeCode) -> Vec<String> {
     out
 }
 
+/// A mesh's points, face vertex counts and face vertex indices.
+type Topology = (Vec<[f32; 3]>, Vec<i64>, Vec<i64>);
+
 /// A GeomSubset's material (its name in the scene) and faces.
 type Subset = (Option<String>, Vec<usize>);
 
@@ -231,43 +234,9 @@ impl Loader {
         object: &dyn Fn(ShapeDesc, Affine3A, String) -> ObjectDesc,
     ) -> Result<(), SceneError> {
         let t = self.time;
-        let points = stage::value(prim, "points", t)
-            .and_then(stage::vec3_array)
-            .unwrap_or_default();
-        if points.is_empty() {
+        let Some((points, counts, indices)) = self.topology(prim)? else {
             return Ok(());
-        }
-        if let Some(i) = points.iter().position(|p| !p.iter().all(|c| c.is_finite())) {
-            return Err(self.error(prim, format!("points[{i}] is not finite: {:?}", points[i])));
-        }
-        let counts = stage::value(prim, "faceVertexCounts", t)
-            .and_then(stage::int_array)
-            .unwrap_or_default();
-        let indices = stage::value(prim, "faceVertexIndices", t)
-            .and_then(stage::int_array)
-            .unwrap_or_default();
-        let total: i64 = counts.iter().map(|&c| c.max(0)).sum();
-        if total != indices.len() as i64 {
-            return Err(self.error(
-                prim,
-                format!(
-                    "faceVertexCounts add up to {total} but faceVertexIndices has {} entries",
-                    indices.len()
-                ),
-            ));
-        }
-        if let Some(bad) = indices
-            .iter()
-            .find(|&&i| i < 0 || i as usize >= points.len())
-        {
-            return Err(self.error(
-                prim,
-                format!(
-                    "faceVertexIndices holds {bad}, out of range: there are {} points",
-                    points.len()
-                ),
-            ));
-        }
+        };
         let left = stage::value(prim, "orientation", t)
             .and_then(|v| stage::string_of(&v))
             .is_some_and(|o| o == "leftHanded");
@@ -361,6 +330,49 @@ impl Loader {
             out.push(object(shape, world, material));
         }
         Ok(())
+    }
+
+    /// A mesh's points, face vertex counts and indices, checked (None: no points).
+    fn topology(&self, prim: &Prim) -> Result<Option<Topology>, SceneError> {
+        let t = self.time;
+        let points = stage::value(prim, "points", t)
+            .and_then(stage::vec3_array)
+            .unwrap_or_default();
+        if points.is_empty() {
+            return Ok(None);
+        }
+        if let Some(i) = points.iter().position(|p| !p.iter().all(|c| c.is_finite())) {
+            return Err(self.error(prim, format!("points[{i}] is not finite: {:?}", points[i])));
+        }
+        let counts = stage::value(prim, "faceVertexCounts", t)
+            .and_then(stage::int_array)
+            .unwrap_or_default();
+        let indices = stage::value(prim, "faceVertexIndices", t)
+            .and_then(stage::int_array)
+            .unwrap_or_default();
+        let total: i64 = counts.iter().map(|&c| c.max(0)).sum();
+        if total != indices.len() as i64 {
+            return Err(self.error(
+                prim,
+                format!(
+                    "faceVertexCounts add up to {total} but faceVertexIndices has {} entries",
+                    indices.len()
+                ),
+            ));
+        }
+        if let Some(bad) = indices
+            .iter()
+            .find(|&&i| i < 0 || i as usize >= points.len())
+        {
+            return Err(self.error(
+                prim,
+                format!(
+                    "faceVertexIndices holds {bad}, out of range: there are {} points",
+                    points.len()
+                ),
+            ));
+        }
+        Ok(Some((points, counts, indices)))
     }
 
     /// The mesh's face subsets that bind a material: (material, faces).

@@ -126,10 +126,6 @@ impl Loader {
         let default_intensity = if ty == "DistantLight" { 50000.0 } else { 1.0 };
         let (l, color) = self.emission(prim, default_intensity);
         let normalize = self.light_bool(prim, "normalize");
-        let flip = Affine3A::from_rotation_x(PI);
-        let axes = world.matrix3;
-        let origin: [f32; 3] = world.translation.into();
-        let down = Loader::direction(&world, -Vec3A::Z);
         let mut shaping = None;
         let cone = self.light_number(prim, "shaping:cone:angle", 90.0);
         if cone < 90.0 {
@@ -139,7 +135,58 @@ impl Loader {
                     .clamp(0.0, 1.0),
             ));
         }
-        let (kind, transform, strength) = match ty {
+        let (kind, transform, strength) =
+            self.light_shape(prim, ty, world, (l, normalize), &mut shaping)?;
+        if shaping.is_some() {
+            self.warn_once(
+                &format!("shaping {}", prim.path()),
+                prim,
+                format!(
+                    "ShapingAPI's cone on a {ty} is not rendered (only sphere lights become spots)"
+                ),
+            );
+        }
+        if !(strength.is_finite() && strength >= 0.0) {
+            return Err(self.error(
+                prim,
+                format!("the light's emission is {strength}: its size or intensity is not usable"),
+            ));
+        }
+        let (include, exclude) = self.linking(prim);
+        let camera_visible = self.light_bool_default(prim, "karma:light:renderlightgeo", true)
+            && !matches!(kind, LightKind::Distant { .. });
+        self.desc.lights.push(LightDesc {
+            kind,
+            name: Some(stage::name_of(prim.path())),
+            groups: self.light_groups(prim),
+            color,
+            strength,
+            camera_visible,
+            two_sided: false,
+            material: None,
+            transform,
+            include,
+            exclude,
+            origin: self.origin(prim),
+        });
+        Ok(())
+    }
+
+    /// A light's kind, placement and strength (radiance, intensity or irradiance) from
+    /// its scalar emission `l`; a sphere light with a cone takes `shaping` and is a spot.
+    fn light_shape(
+        &mut self,
+        prim: &Prim,
+        ty: &str,
+        world: Affine3A,
+        (l, normalize): (f32, bool),
+        shaping: &mut Option<(f32, f32)>,
+    ) -> Result<(LightKind, Affine3A, f32), SceneError> {
+        let flip = Affine3A::from_rotation_x(PI);
+        let axes = world.matrix3;
+        let origin: [f32; 3] = world.translation.into();
+        let down = Loader::direction(&world, -Vec3A::Z);
+        Ok(match ty {
             "RectLight" => {
                 let w = self.light_number(prim, "width", 1.0);
                 let h = self.light_number(prim, "height", 1.0);
@@ -240,40 +287,7 @@ impl Loader {
                 let map = self.dome_map(prim)?;
                 (LightKind::Dome { map }, world, l)
             }
-        };
-        if shaping.is_some() {
-            self.warn_once(
-                &format!("shaping {}", prim.path()),
-                prim,
-                format!(
-                    "ShapingAPI's cone on a {ty} is not rendered (only sphere lights become spots)"
-                ),
-            );
-        }
-        if !(strength.is_finite() && strength >= 0.0) {
-            return Err(self.error(
-                prim,
-                format!("the light's emission is {strength}: its size or intensity is not usable"),
-            ));
-        }
-        let (include, exclude) = self.linking(prim);
-        let camera_visible = self.light_bool_default(prim, "karma:light:renderlightgeo", true)
-            && !matches!(kind, LightKind::Distant { .. });
-        self.desc.lights.push(LightDesc {
-            kind,
-            name: Some(stage::name_of(prim.path())),
-            groups: self.light_groups(prim),
-            color,
-            strength,
-            camera_visible,
-            two_sided: false,
-            material: None,
-            transform,
-            include,
-            exclude,
-            origin: self.origin(prim),
-        });
-        Ok(())
+        })
     }
 
     fn light_bool_default(&self, prim: &Prim, name: &str, default: bool) -> bool {

@@ -251,7 +251,6 @@ impl Loader {
             p.specular_color = Vec3A::from(color("specularColor", [0.0; 3]));
         }
         let mut textures = TexturesDesc::default();
-        let mut emissive = None;
         let mut inputs = Vec::new();
         for input in [
             "diffuseColor",
@@ -286,6 +285,26 @@ impl Loader {
             let tex = self.uv_texture(&node, &output)?;
             inputs.push((input, tex));
         }
+        let emissive =
+            self.textured_inputs(material, inputs, specular_workflow, &mut p, &mut textures);
+        let emissive = emissive.unwrap_or_else(|| color("emissiveColor", [0.0; 3]));
+        if emissive != [0.0; 3] {
+            self.emissive.insert(material.path().to_string(), emissive);
+        }
+        Ok(material_desc(p, roughness, textures, self.origin(material)))
+    }
+
+    /// Each texture on its OpenPBR input (its `scale` the input's factor); returns the
+    /// emission factor when `emissiveColor` is textured.
+    fn textured_inputs(
+        &mut self,
+        material: &Prim,
+        inputs: Vec<(&str, Texture)>,
+        specular_workflow: bool,
+        p: &mut OpenPbr,
+        textures: &mut TexturesDesc,
+    ) -> Option<[f32; 3]> {
+        let mut emissive = None;
         for (input, tex) in inputs {
             let s = tex.scale;
             match input {
@@ -373,11 +392,7 @@ impl Loader {
                 ),
             }
         }
-        let emissive = emissive.unwrap_or_else(|| color("emissiveColor", [0.0; 3]));
-        if emissive != [0.0; 3] {
-            self.emissive.insert(material.path().to_string(), emissive);
-        }
-        Ok(material_desc(p, roughness, textures, self.origin(material)))
+        emissive
     }
 
     /// A `UsdUVTexture` node read through one of its outputs.
