@@ -79,6 +79,9 @@ pub use crate::settings::SettingOverrides;
 pub struct AovRequest {
     /// Add the standard set (docs/lpe.md#standard-aovs).
     pub standard: bool,
+    /// The command line asked for the standard set (`--aovs standard`): added even to a
+    /// USD stage whose render settings list its AOVs.
+    pub standard_asked: bool,
     /// `NAME=DEFINITION` arguments.
     pub extra: Vec<String>,
     /// Bounce AOVs `bounce0 … bounce<K>plus`.
@@ -241,12 +244,19 @@ impl RenderJob {
         // Every file read from here to the built scene is an input of its identity.
         let recording = Recording::start();
         let source = crate::load_source(&self.scene)?;
-        let mut desc = source.parse()?;
+        let usd_options = crate::scene::load::usd::UsdOptions {
+            frame: self.overrides.frame.flatten().map(f64::from),
+            render_settings: self.overrides.render_settings.clone().flatten(),
+        };
+        let mut desc = source.parse_with(&usd_options)?;
         if let Some(name) = &self.camera {
             desc.use_camera(name)?;
         }
         self.overrides.apply(&mut desc.render);
-        let paths = output::naming::output_paths(&self.scene, self.output.as_deref());
+        let paths = output::naming::output_paths(
+            &self.scene,
+            self.output.as_deref().or(desc.output.as_deref()),
+        );
         checks::settings(&desc, self.first_sample)
             .map_err(|e| Error::Setting(format!("{}: {e}", desc.source)))?;
         let mut warnings = desc.warnings.clone();
@@ -395,7 +405,8 @@ impl RenderJob {
     /// The AOV plan from the request and the scene description.
     fn plan(&self, desc: &SceneDesc, warnings: &mut Vec<String>) -> Result<Vec<AovSpec>, Error> {
         let request = aov::plan::PlanRequest {
-            standard: self.aovs.standard,
+            standard: self.aovs.standard
+                && (self.aovs.standard_asked || desc.standard_aovs != Some(false)),
             scene_aovs: desc
                 .aovs
                 .iter()

@@ -204,6 +204,25 @@ settings! {
                this rough (e.g. 0.3; 0: off). Tames caustic fireflies at the cost of sharp \
                caustics.",
     }
+    frame: Option<f32> = None, {
+        section: Render,
+        flag: "frame",
+        // Time codes may be negative; a million frames bounds a typo.
+        range: Range::Between(-1e6, 1e6),
+        role: Identity,
+        header: Header::Setting,
+        help: "The time code a USD stage's time samples are read at (default: the stage's \
+               start time code).",
+    }
+    render_settings: Option<String> = None, {
+        section: Render,
+        flag: "render-settings",
+        range: Range::Any,
+        role: Identity,
+        header: Header::Setting,
+        help: "The RenderSettings prim of a USD stage to render with, by path (default: the \
+               stage's renderSettingsPrimPath, else its first RenderSettings).",
+    }
     resolution: [u32; 2] = [256, 256], {
         section: Film,
         flag: "resolution",
@@ -596,6 +615,42 @@ impl Value for f32 {
     }
     fn numbers(&self) -> Vec<f64> {
         vec![*self as f64]
+    }
+}
+
+/// A number that may be unset (`none` in the header).
+impl Value for Option<f32> {
+    const EXPECTED: &'static str = "a number";
+    const VALUE_NAME: &'static str = "NUMBER";
+    fn from_text(text: &str) -> Option<Self> {
+        text.parse().ok().map(Some)
+    }
+    fn from_toml(value: &toml::Value) -> Option<Self> {
+        <f32 as Value>::from_toml(value).map(Some)
+    }
+    fn show(&self) -> String {
+        self.map_or("none".to_string(), |v| v.to_string())
+    }
+    fn numbers(&self) -> Vec<f64> {
+        self.iter().map(|&v| v as f64).collect()
+    }
+}
+
+/// A USD prim path that may be unset (`none` in the header).
+impl Value for Option<String> {
+    const EXPECTED: &'static str = "an absolute prim path (e.g. /Render/Settings)";
+    const VALUE_NAME: &'static str = "PATH";
+    fn from_text(text: &str) -> Option<Self> {
+        text.starts_with('/').then(|| Some(text.to_string()))
+    }
+    fn from_toml(value: &toml::Value) -> Option<Self> {
+        Self::from_text(value.as_str()?)
+    }
+    fn show(&self) -> String {
+        self.clone().unwrap_or_else(|| "none".to_string())
+    }
+    fn numbers(&self) -> Vec<f64> {
+        Vec::new()
     }
 }
 

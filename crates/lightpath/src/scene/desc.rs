@@ -71,6 +71,11 @@ pub struct SceneDesc {
     pub variance: Vec<String>,
     /// Participating media and the objects that bound them.
     pub media: MediaDesc,
+    /// The output the scene names (a USD render product's `productName`); `-o` wins.
+    pub output: Option<PathBuf>,
+    /// Whether the standard AOVs are added unless the command line says (None: yes;
+    /// a USD stage with render settings: no, its RenderVars are the AOVs).
+    pub standard_aovs: Option<bool>,
 }
 
 /// Participating media (`[media.NAME]`), which objects bound them, and the atmosphere.

@@ -23,5 +23,6 @@ mod sampling;
 mod settings;
 mod style;
 mod subsurface;
+mod usd;
 mod view;
 mod workflow;

@@ -175,9 +175,11 @@ pub(crate) struct RenderArgs {
     /// An extra AOV, NAME=DEFINITION (repeatable).
     #[arg(long = "aov")]
     pub(crate) aovs: Vec<String>,
-    /// Which standard AOVs to add: standard (the table of docs/lpe.md#standard-aovs) or none.
-    #[arg(long = "aovs", default_value = "standard", value_parser = ["standard", "none"])]
-    pub(crate) aov_set: String,
+    /// Which standard AOVs to add: standard (the table of docs/lpe.md#standard-aovs) or none
+    /// [default: standard, except for a USD stage with render settings, whose RenderVars
+    /// are the AOVs].
+    #[arg(long = "aovs", value_parser = ["standard", "none"])]
+    pub(crate) aov_set: Option<String>,
     /// Split beauty per light group: beauty_<group>, and beauty__default for lights
     /// without a group.
     #[arg(long)]

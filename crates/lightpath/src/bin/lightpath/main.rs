@@ -210,7 +210,8 @@ fn render(args: RenderArgs) -> ExitCode {
         output: args.output,
         overrides: args.settings.0.clone(),
         aovs: AovRequest {
-            standard: args.aov_set == "standard",
+            standard: args.aov_set.as_deref() != Some("none"),
+            standard_asked: args.aov_set.as_deref() == Some("standard"),
             extra: args.aovs,
             bounces: args.bounces,
             light_groups: args.light_groups,

@@ -9,6 +9,7 @@ pub mod obj;
 pub mod ply;
 mod text;
 pub mod toml;
+pub mod usd;
 pub mod vdb;
 
 use super::desc::{Origin, SceneDesc};
@@ -31,6 +32,7 @@ pub enum Format {
     Obj,
     Ply,
     Gltf,
+    Usd,
 }
 
 impl Format {
@@ -40,6 +42,7 @@ impl Format {
             Some("obj") => Format::Obj,
             Some("ply") => Format::Ply,
             Some("gltf" | "glb") => Format::Gltf,
+            Some("usd" | "usda" | "usdc" | "usdz") => Format::Usd,
             _ => Format::Toml,
         }
     }
@@ -49,12 +52,23 @@ impl Format {
 /// `[[include]]` merges and what `lightpath render model.obj` completes. `at` is where
 /// the file was named (an error opening it points there).
 pub fn load_file(path: &Path, at: &Origin) -> Result<SceneDesc, SceneError> {
+    load_file_with(path, at, &usd::UsdOptions::default())
+}
+
+/// [`load_file`], with what the command line tells the USD loader.
+pub fn load_file_with(
+    path: &Path,
+    at: &Origin,
+    usd_options: &usd::UsdOptions,
+) -> Result<SceneDesc, SceneError> {
     match Format::of(path) {
+        Format::Usd => usd::load_scene(path, at, usd_options),
         Format::Obj => obj::load_scene(path, at),
         Format::Ply => ply::load_scene(path, at),
         Format::Gltf => gltf::load_scene(path, at),
         Format::Toml => Err(at.error(format!(
-            "{}: only OBJ, PLY and glTF files can be included (.obj, .ply, .gltf, .glb)",
+            "{}: only OBJ, PLY, glTF and USD files can be included (.obj, .ply, .gltf, .glb, \
+             .usd, .usda, .usdc, .usdz)",
             path.display()
         ))),
     }
@@ -122,11 +136,17 @@ impl Source {
     /// The scene description: TOML, or a model file completed with a default camera
     /// and light where it has none (with warnings in `SceneDesc::warnings`).
     pub fn parse(&self) -> Result<SceneDesc, SceneError> {
+        self.parse_with(&usd::UsdOptions::default())
+    }
+
+    /// [`Source::parse`], with what the command line tells the USD loader (`--frame`,
+    /// `--render-settings`).
+    pub fn parse_with(&self, usd_options: &usd::UsdOptions) -> Result<SceneDesc, SceneError> {
         let path = Path::new(&self.name);
         match Format::of(path) {
             Format::Toml => toml::load(self),
             _ => {
-                let mut desc = load_file(path, &Origin::file(&self.name))?;
+                let mut desc = load_file_with(path, &Origin::file(&self.name), usd_options)?;
                 defaults::complete(&mut desc);
                 Ok(desc)
             }

@@ -463,6 +463,8 @@ pub fn load(src: &Source) -> Result<d::SceneDesc, SceneError> {
         warnings,
         variance: file.variance,
         media,
+        output: None,
+        standard_aovs: None,
     })
 }
 

@@ -1,0 +1,783 @@
+//! USD stages written by the tests themselves (usda text, and a .usdz packed with the
+//! `openusd` crate's writer): composition as the crate does it, meshes, instances,
+//! UsdPreviewSurface materials, UsdLux lights in the specification's units, render
+//! settings and their vars as the AOVs, and errors that name the layer and the prim.
+
+use crate::common::Scratch;
+use lightpath::aov;
+use lightpath::scene::desc::Origin;
+use lightpath::scene::desc::{LightKind, MaterialKind, SceneDesc, ShapeDesc};
+use lightpath::scene::load::usd::{load_scene, UsdOptions};
+use lightpath::{render, RenderOptions, Scene};
+use std::f32::consts::PI;
+use std::path::Path;
+
+fn write(dir: &Scratch, name: &str, text: &str) -> std::path::PathBuf {
+    let p = dir.join(name);
+    std::fs::write(&p, text).unwrap();
+    p
+}
+
+fn load(path: &Path) -> SceneDesc {
+    load_with(path, &UsdOptions::default())
+}
+
+fn load_with(path: &Path, options: &UsdOptions) -> SceneDesc {
+    load_scene(path, &Origin::file("test"), options).unwrap_or_else(|e| panic!("{e}"))
+}
+
+fn load_err(path: &Path) -> String {
+    match load_scene(path, &Origin::file("test"), &UsdOptions::default()) {
+        Ok(_) => panic!("{} loaded", path.display()),
+        Err(e) => e.to_string(),
+    }
+}
+
+const SHOT: &str = r#"#usda 1.0
+(
+    upAxis = "Y"
+    metersPerUnit = 1
+    renderSettingsPrimPath = "/Render/Settings"
+)
+
+def Xform "World"
+{
+    def Camera "Cam"
+    {
+        float focalLength = 35
+        float horizontalAperture = 36
+        float verticalAperture = 24
+        double3 xformOp:translate = (0, 1, 6)
+        uniform token[] xformOpOrder = ["xformOp:translate"]
+    }
+    def Mesh "Floor" (
+        prepend apiSchemas = ["MaterialBindingAPI"]
+    )
+    {
+        int[] faceVertexCounts = [4]
+        int[] faceVertexIndices = [0, 1, 2, 3]
+        point3f[] points = [(-5, 0, 5), (5, 0, 5), (5, 0, -5), (-5, 0, -5)]
+        rel material:binding = </World/Looks/Red>
+        string primvars:karma:object:lpetag = "floor"
+    }
+    def Scope "Looks"
+    {
+        def Material "Red"
+        {
+            token outputs:surface.connect = </World/Looks/Red/PBR.outputs:surface>
+            def Shader "PBR"
+            {
+                uniform token info:id = "UsdPreviewSurface"
+                color3f inputs:diffuseColor = (0.8, 0.1, 0.1)
+                float inputs:roughness = 0.4
+                float inputs:metallic = 0.25
+                token outputs:surface
+            }
+        }
+    }
+    def RectLight "Key"
+    {
+        float inputs:intensity = 20
+        float inputs:width = 2
+        float inputs:height = 0.5
+        bool inputs:normalize = true
+        string karma:light:lpetag = "key"
+        double3 xformOp:translate = (0, 4, 0)
+        float3 xformOp:rotateXYZ = (-90, 0, 0)
+        uniform token[] xformOpOrder = ["xformOp:translate", "xformOp:rotateXYZ"]
+    }
+    def SphereLight "Fill"
+    {
+        float inputs:intensity = 8
+        float inputs:radius = 0.25
+        string ri:light:lightGroup = "fill"
+    }
+}
+
+def Scope "Render"
+{
+    def RenderSettings "Settings"
+    {
+        rel products = </Render/Product>
+        uniform int2 resolution = (160, 120)
+        rel camera = </World/Cam>
+    }
+    def RenderProduct "Product"
+    {
+        rel orderedVars = [</Render/Vars/diffuseKey>, </Render/Vars/N>, </Render/Vars/Ci>, </Render/Vars/spec>]
+        token productName = "shot_out.exr"
+        uniform int2 resolution = (160, 120)
+        rel camera = </World/Cam>
+    }
+    def Scope "Vars"
+    {
+        def RenderVar "diffuseKey"
+        {
+            uniform string sourceName = "C<RD>[<L.'key'>O]"
+            uniform token sourceType = "lpe"
+        }
+        def RenderVar "N"
+        {
+            uniform string sourceName = "normal"
+            uniform token sourceType = "raw"
+        }
+        def RenderVar "Ci"
+        {
+            uniform string sourceName = "Ci"
+            uniform token sourceType = "raw"
+        }
+        def RenderVar "spec"
+        {
+            uniform string sourceName = "lpe:C<RS>.*L"
+            uniform token sourceType = "lpe"
+            string driver:parameters:aov:name = "specular"
+        }
+    }
+}
+"#;
+
+#[test]
+fn render_settings_give_film_camera_output_and_exactly_the_vars() {
+    let dir = Scratch::new("usd-settings");
+    let desc = load(&write(&dir, "shot.usda", SHOT));
+    assert_eq!(desc.render.resolution, [160, 120]);
+    assert_eq!(desc.standard_aovs, Some(false));
+    assert_eq!(desc.output.as_deref(), Some(Path::new("shot_out.exr")));
+    let aovs: Vec<(&str, &str)> = desc
+        .aovs
+        .iter()
+        .map(|(n, a)| (n.as_str(), a.definition.as_str()))
+        .collect();
+    // Ci is the beauty; the named var keeps its name, `lpe:` before an expression goes.
+    let normal = aov::AovSpec::parse("normal").unwrap().definition;
+    assert_eq!(
+        aovs,
+        vec![
+            ("N", normal.as_str()),
+            ("diffuseKey", "C<RD>[<L.'key'>O]"),
+            ("specular", "C<RS>.*L"),
+        ]
+    );
+    // The settings' camera; 3:2 apertures on a 4:3 film keep the horizontal aperture.
+    let cam = desc.camera.as_ref().unwrap();
+    assert_eq!(cam.position, [0.0, 1.0, 6.0]);
+    let fov = 2.0 * (18.0f32 / 35.0).atan().to_degrees();
+    assert!((cam.fov - fov).abs() < 1e-3, "{} vs {fov}", cam.fov);
+    // Tags: Karma's on the object and the light, RenderMan's on a light.
+    let floor = &desc.objects[0];
+    assert_eq!(
+        floor.lpegroups.as_deref().unwrap(),
+        ["floor", "Floor", "World"]
+    );
+    let groups: Vec<&str> = desc.lights.iter().map(|l| l.groups[0].as_str()).collect();
+    assert_eq!(groups, ["key", "fill"]);
+    // The bound UsdPreviewSurface, on OpenPBR.
+    let m = &desc.materials[&floor.material.as_ref().unwrap().name];
+    let MaterialKind::OpenPbr(p) = &m.kind else {
+        panic!("{:?}", m.kind)
+    };
+    assert_eq!(p.base_color.to_array(), [0.8, 0.1, 0.1]);
+    assert_eq!((p.specular_roughness, p.base_metalness), (0.4, 0.25));
+    // A normalized rect light: radiance is intensity over its area.
+    let key = &desc.lights[0];
+    assert!(matches!(key.kind, LightKind::Rectangle));
+    assert!((key.strength - 20.0 / (2.0 * 0.5)).abs() < 1e-4);
+    // It faces down: its +z (the side Lightpath's rectangle emits on) is world −Y.
+    let n = key.transform.transform_vector3a(glam::Vec3A::Z).normalize();
+    assert!((n - glam::Vec3A::NEG_Y).length() < 1e-5, "{n}");
+}
+
+#[test]
+fn render_vars_are_the_aovs_of_the_render() {
+    let dir = Scratch::new("usd-job");
+    let scene = write(&dir, "shot.usda", SHOT);
+    let out = dir.join("out.exr");
+    let mut job = lightpath::job::RenderJob::new(scene.to_string_lossy());
+    job.output = Some(out.clone());
+    job.overrides.spp = Some(1);
+    let prepared = job.clone().prepare().unwrap();
+    let names: Vec<&str> = prepared
+        .scene
+        .aovs
+        .iter()
+        .map(|a| a.name.as_str())
+        .collect();
+    assert_eq!(names, ["beauty", "N", "diffuseKey", "specular"]);
+    // --aovs standard adds the standard set.
+    job.aovs.standard_asked = true;
+    let prepared = job.prepare().unwrap();
+    assert!(prepared.scene.aovs.iter().any(|a| a.name == "diffuse"));
+}
+
+#[test]
+fn composition_sublayers_references_payloads_and_variants() {
+    let dir = Scratch::new("usd-compose");
+    write(
+        &dir,
+        "asset.usda",
+        r#"#usda 1.0
+(
+    defaultPrim = "Asset"
+)
+def Xform "Asset" (
+    variants = { string size = "big" }
+    prepend variantSets = "size"
+)
+{
+    variantSet "size" = {
+        "big" {
+            def Sphere "Ball" { double radius = 2 }
+        }
+        "small" {
+            def Sphere "Ball" { double radius = 0.5 }
+        }
+    }
+}
+"#,
+    );
+    write(
+        &dir,
+        "payload.usda",
+        r#"#usda 1.0
+(
+    defaultPrim = "P"
+)
+def Xform "P"
+{
+    def Cube "Box" { double size = 4 }
+}
+"#,
+    );
+    write(
+        &dir,
+        "lights.usda",
+        r#"#usda 1.0
+def DistantLight "Sun" { float inputs:intensity = 3 bool inputs:normalize = true }
+"#,
+    );
+    let root = write(
+        &dir,
+        "root.usda",
+        r#"#usda 1.0
+(
+    subLayers = [@lights.usda@]
+    metersPerUnit = 1
+)
+def Xform "A" (
+    prepend references = @asset.usda@
+)
+{
+    double3 xformOp:translate = (1, 0, 0)
+    uniform token[] xformOpOrder = ["xformOp:translate"]
+}
+def Xform "B" (
+    prepend references = @asset.usda@
+    variants = { string size = "small" }
+)
+{
+}
+def Xform "C" (
+    prepend payload = @payload.usda@
+)
+{
+}
+"#,
+    );
+    let desc = load(&root);
+    let radius = |name: &str| {
+        desc.objects
+            .iter()
+            .find(|o| o.lpegroups.as_ref().unwrap().contains(&name.to_string()))
+            .map(|o| match o.shape {
+                ShapeDesc::Sphere { radius, .. } => (radius, o.transform.translation.x),
+                _ => panic!(),
+            })
+            .unwrap()
+    };
+    assert_eq!(radius("A"), (2.0, 1.0));
+    assert_eq!(radius("B"), (0.5, 0.0));
+    let cube = desc
+        .objects
+        .iter()
+        .find(|o| o.shape_name == "Cube")
+        .unwrap();
+    assert!((cube.transform.matrix3.x_axis.x - 2.0).abs() < 1e-6);
+    assert_eq!(desc.lights.len(), 1);
+    assert!(matches!(desc.lights[0].kind, LightKind::Distant { .. }));
+    assert_eq!(desc.lights[0].strength, 3.0);
+}
+
+#[test]
+fn meshes_polygons_subsets_primvars_purpose_visibility_and_up_axis() {
+    let dir = Scratch::new("usd-mesh");
+    let p = write(
+        &dir,
+        "mesh.usda",
+        r#"#usda 1.0
+(
+    upAxis = "Z"
+    metersPerUnit = 0.01
+)
+def Mesh "M"
+{
+    int[] faceVertexCounts = [4, 3, 3]
+    int[] faceVertexIndices = [0, 1, 2, 3, 0, 2, 4, 1, 2, 4]
+    int[] holeIndices = [2]
+    point3f[] points = [(0, 0, 0), (100, 0, 0), (100, 100, 0), (0, 100, 0), (50, 50, 100)]
+    texCoord2f[] primvars:st = [(0, 0), (1, 0), (1, 1), (0, 1)] (interpolation = "faceVarying")
+    int[] primvars:st:indices = [0, 1, 2, 3, 0, 2, 3, 0, 1, 2]
+    def GeomSubset "Top" (
+        prepend apiSchemas = ["MaterialBindingAPI"]
+    )
+    {
+        uniform token elementType = "face"
+        uniform token familyName = "materialBind"
+        int[] indices = [1]
+        rel material:binding = </Looks/Blue>
+    }
+}
+def Sphere "Proxy" { uniform token purpose = "proxy" }
+def Sphere "Hidden" { token visibility = "invisible" }
+def Scope "Looks"
+{
+    def Material "Blue"
+    {
+        token outputs:surface.connect = </Looks/Blue/S.outputs:surface>
+        def Shader "S"
+        {
+            uniform token info:id = "UsdPreviewSurface"
+            color3f inputs:diffuseColor = (0, 0, 1)
+            token outputs:surface
+        }
+    }
+}
+"#,
+    );
+    let desc = load(&p);
+    // The hole is skipped; the quad and the subset's triangle are two parts.
+    assert_eq!(
+        desc.objects.len(),
+        2,
+        "{:?}",
+        desc.objects.iter().map(|o| &o.name).collect::<Vec<_>>()
+    );
+    let parts: Vec<&lightpath::scene::desc::MeshData> = desc
+        .objects
+        .iter()
+        .map(|o| &o.shape.mesh_parts().unwrap()[0])
+        .collect();
+    assert_eq!(parts[0].indices.len(), 2);
+    assert_eq!(parts[1].indices.len(), 1);
+    assert_eq!(
+        desc.objects[1].material.as_ref().unwrap().name,
+        "/Looks/Blue"
+    );
+    // faceVarying st: a vertex per corner, t flipped to Lightpath's top-left origin.
+    assert_eq!(parts[0].positions.len(), 4);
+    assert_eq!(parts[0].uvs.as_ref().unwrap()[0], [0.0, 1.0]);
+    // Z up and centimetres: (100, 100, 0) cm is (1, 0, -1) m in Lightpath's Y-up world.
+    let world = |p: [f32; 3]| desc.objects[0].transform.transform_point3a(p.into());
+    assert!((world([100.0, 100.0, 0.0]) - glam::Vec3A::new(1.0, 0.0, -1.0)).length() < 1e-5);
+}
+
+#[test]
+fn instances_share_their_prototype_and_point_instancers_place_copies() {
+    let dir = Scratch::new("usd-instances");
+    let p = write(
+        &dir,
+        "inst.usda",
+        r#"#usda 1.0
+(
+    metersPerUnit = 1
+)
+def Xform "Proto"
+{
+    def Mesh "Tri"
+    {
+        int[] faceVertexCounts = [3]
+        int[] faceVertexIndices = [0, 1, 2]
+        point3f[] points = [(0, 0, 0), (1, 0, 0), (0, 1, 0)]
+    }
+}
+over "Src"
+{
+    def Mesh "Tri"
+    {
+        int[] faceVertexCounts = [3]
+        int[] faceVertexIndices = [0, 1, 2]
+        point3f[] points = [(0, 0, 0), (1, 0, 0), (0, 1, 0)]
+    }
+}
+def Xform "I1" (instanceable = true
+    prepend references = </Src>)
+{
+    double3 xformOp:translate = (5, 0, 0)
+    uniform token[] xformOpOrder = ["xformOp:translate"]
+}
+def Xform "I2" (instanceable = true
+    prepend references = </Src>)
+{
+    double3 xformOp:translate = (-5, 0, 0)
+    uniform token[] xformOpOrder = ["xformOp:translate"]
+}
+def PointInstancer "PI"
+{
+    rel prototypes = </PI/Protos/Ball>
+    int[] protoIndices = [0, 0, 0]
+    point3f[] positions = [(0, 0, 10), (0, 0, 20), (0, 0, 30)]
+    int64[] invisibleIds = [1]
+    def Scope "Protos"
+    {
+        def Sphere "Ball" { double radius = 0.5 }
+    }
+}
+"#,
+    );
+    let desc = load(&p);
+    let tris: Vec<_> = desc
+        .objects
+        .iter()
+        .filter(|o| o.shape_name == "Mesh")
+        .collect();
+    assert_eq!(tris.len(), 3, "Proto's own mesh and the two instances");
+    let shared = |o: &lightpath::scene::desc::ObjectDesc| match &o.shape {
+        ShapeDesc::SharedMesh { parts } => parts.clone(),
+        _ => panic!(),
+    };
+    assert!(std::sync::Arc::ptr_eq(&shared(tris[1]), &shared(tris[2])));
+    let xs: Vec<f32> = tris[1..]
+        .iter()
+        .map(|o| o.transform.translation.x)
+        .collect();
+    assert_eq!(xs, [5.0, -5.0]);
+    let balls: Vec<f32> = desc
+        .objects
+        .iter()
+        .filter(|o| o.shape_name == "Sphere")
+        .map(|o| o.transform.translation.z)
+        .collect();
+    assert_eq!(
+        balls,
+        [10.0, 30.0],
+        "id 1 is invisible, prototypes are not drawn themselves"
+    );
+}
+
+#[test]
+fn lights_in_the_usdlux_specifications_units() {
+    let dir = Scratch::new("usd-lights");
+    let p = write(
+        &dir,
+        "lights.usda",
+        r#"#usda 1.0
+(
+    metersPerUnit = 1
+)
+def SphereLight "Bulb" { float inputs:intensity = 10 float inputs:radius = 0.5 bool treatAsPoint = true }
+def SphereLight "BulbN" { float inputs:intensity = 10 float inputs:radius = 0.5 bool inputs:treatAsPoint = true bool inputs:normalize = true }
+def SphereLight "Ball" { float inputs:intensity = 10 float inputs:exposure = 1 float inputs:radius = 0.5 bool inputs:normalize = true }
+def DistantLight "Sun" { float inputs:intensity = 1000 float inputs:angle = 1 }
+def DiskLight "Disk" { float inputs:intensity = 2 float inputs:radius = 2 bool inputs:normalize = true
+    bool inputs:enableColorTemperature = true float inputs:colorTemperature = 6500 }
+def CylinderLight "Tube" { float inputs:intensity = 3 float inputs:length = 2 float inputs:radius = 0.1 bool inputs:normalize = true
+    bool inputs:enableColorTemperature = true float inputs:colorTemperature = 3000 }
+def SphereLight "Spot" (prepend apiSchemas = ["ShapingAPI"])
+{
+    float inputs:intensity = 4 float inputs:radius = 0.1 bool inputs:treatAsPoint = true
+    float inputs:shaping:cone:angle = 30 float inputs:shaping:cone:softness = 0
+}
+def DomeLight "Sky" { float inputs:intensity = 0.5 }
+"#,
+    );
+    let desc = load(&p);
+    let by = |n: &str| {
+        desc.lights
+            .iter()
+            .find(|l| l.name.as_deref() == Some(n))
+            .unwrap()
+    };
+    let close = |a: f32, b: f32| (a - b).abs() <= 1e-4 * b.abs().max(1.0);
+    // A point of the sphere's power: L·π·r²; normalized, L/4.
+    assert!(matches!(by("Bulb").kind, LightKind::Point { .. }));
+    assert!(close(by("Bulb").strength, 10.0 * PI * 0.25));
+    assert!(close(by("BulbN").strength, 10.0 / 4.0));
+    // exposure 1 doubles; normalize divides by the sphere's area.
+    assert!(close(by("Ball").strength, 20.0 / (4.0 * PI * 0.25)));
+    // An unnormalized sun: radiance over a disk of diameter 1°.
+    assert!(close(
+        by("Sun").strength,
+        1000.0 * PI * (0.5f32.to_radians()).sin().powi(2)
+    ));
+    assert!(close(by("Disk").strength, 2.0 / (PI * 4.0)));
+    // 6500 K is white; 3000 K is warm, of luminance 1.
+    for c in by("Disk").color {
+        assert!((c - 1.0).abs() < 1e-4, "{:?}", by("Disk").color);
+    }
+    let warm = by("Tube").color;
+    assert!(warm[0] > warm[1] && warm[1] > warm[2], "{warm:?}");
+    let y = 0.2126 * warm[0] + 0.7152 * warm[1] + 0.0722 * warm[2];
+    assert!((y - 1.0).abs() < 1e-4);
+    assert!(close(by("Tube").strength, 3.0 / (2.0 * PI * 0.1 * 2.0)));
+    match by("Spot").kind {
+        LightKind::Spot {
+            cone_angle,
+            cone_softness,
+            direction,
+            ..
+        } => {
+            assert!(close(cone_angle, 60.0));
+            assert!(cone_softness.abs() < 1e-3);
+            assert_eq!(direction, [0.0, 0.0, -1.0]);
+        }
+        ref k => panic!("{k:?}"),
+    }
+    assert!(matches!(by("Sky").kind, LightKind::Dome { map: None }));
+}
+
+#[test]
+fn a_normalized_distant_light_gives_its_intensity_as_irradiance() {
+    // A grey (0.5) Lambertian square facing a normalized distant light of intensity π:
+    // radiance 0.5 · π / π = 0.5 everywhere the camera sees it (direct light only).
+    let dir = Scratch::new("usd-irradiance");
+    let p = write(
+        &dir,
+        "sun.usda",
+        r#"#usda 1.0
+(
+    metersPerUnit = 1
+)
+def Camera "Cam"
+{
+    float focalLength = 50
+    float horizontalAperture = 10
+    float verticalAperture = 10
+    double3 xformOp:translate = (0, 0, 10)
+    uniform token[] xformOpOrder = ["xformOp:translate"]
+}
+def Mesh "Card"
+{
+    int[] faceVertexCounts = [4]
+    int[] faceVertexIndices = [0, 1, 2, 3]
+    point3f[] points = [(-5, -5, 0), (5, -5, 0), (5, 5, 0), (-5, 5, 0)]
+    color3f[] primvars:displayColor = [(0.5, 0.5, 0.5)]
+}
+def DistantLight "Sun"
+{
+    float inputs:intensity = 3.14159265
+    bool inputs:normalize = true
+}
+"#,
+    );
+    let mut desc = load(&p);
+    desc.render.resolution = [16, 16];
+    desc.render.spp = 4;
+    desc.render.max_depth = 2;
+    let scene = Scene::build(&desc, &aov::assemble(Vec::new())).unwrap();
+    let (film, _) = render(
+        &scene,
+        &RenderOptions {
+            spp: 4,
+            first_sample: 0,
+        },
+    );
+    // A delta light on a Lambertian surface: every sample is the same, up to float
+    // rounding.
+    for y in 0..film.height {
+        for x in 0..film.width {
+            let v = film.pixel(0, x, y);
+            assert!((v.x - 0.5).abs() < 1e-3, "pixel {x},{y}: {v}");
+        }
+    }
+}
+
+#[test]
+fn time_samples_are_read_at_the_frame() {
+    let dir = Scratch::new("usd-time");
+    let p = write(
+        &dir,
+        "anim.usda",
+        r#"#usda 1.0
+(
+    startTimeCode = 1
+    endTimeCode = 10
+    metersPerUnit = 1
+)
+def Sphere "Ball"
+{
+    double3 xformOp:translate.timeSamples = { 1: (0, 0, 0), 10: (9, 0, 0) }
+    uniform token[] xformOpOrder = ["xformOp:translate"]
+}
+"#,
+    );
+    let x = |frame| {
+        let d = load_with(
+            &p,
+            &UsdOptions {
+                frame,
+                ..UsdOptions::default()
+            },
+        );
+        d.objects[0].transform.translation.x
+    };
+    assert_eq!(x(None), 0.0, "the start time code");
+    assert_eq!(x(Some(10.0)), 9.0);
+    assert!((x(Some(4.0)) - 3.0).abs() < 1e-5, "linear interpolation");
+}
+
+#[test]
+fn a_usdz_with_a_texture_renders_as_packed() {
+    let dir = Scratch::new("usd-usdz");
+    let mut png = Vec::new();
+    image::RgbImage::from_pixel(2, 2, image::Rgb([255, 0, 0]))
+        .write_to(&mut std::io::Cursor::new(&mut png), image::ImageFormat::Png)
+        .unwrap();
+    let layer = r#"#usda 1.0
+(
+    metersPerUnit = 1
+)
+def Mesh "Card" (prepend apiSchemas = ["MaterialBindingAPI"])
+{
+    int[] faceVertexCounts = [4]
+    int[] faceVertexIndices = [0, 1, 2, 3]
+    point3f[] points = [(-1, -1, 0), (1, -1, 0), (1, 1, 0), (-1, 1, 0)]
+    texCoord2f[] primvars:st = [(0, 0), (1, 0), (1, 1), (0, 1)] (interpolation = "vertex")
+    rel material:binding = </M>
+}
+def Material "M"
+{
+    token outputs:surface.connect = </M/S.outputs:surface>
+    def Shader "S"
+    {
+        uniform token info:id = "UsdPreviewSurface"
+        color3f inputs:diffuseColor.connect = </M/T.outputs:rgb>
+        token outputs:surface
+    }
+    def Shader "T"
+    {
+        uniform token info:id = "UsdUVTexture"
+        asset inputs:file = @textures/red.png@
+        token inputs:wrapS = "clamp"
+        float3 outputs:rgb
+    }
+}
+"#;
+    let path = dir.join("card.usdz");
+    let mut w = openusd::usdz::ArchiveWriter::create(&path).unwrap();
+    w.add_layer("card.usda", layer.as_bytes()).unwrap();
+    w.add_layer("textures/red.png", &png).unwrap();
+    w.finish().unwrap();
+    let desc = load(&path);
+    let m = &desc.materials[&desc.objects[0].material.as_ref().unwrap().name];
+    let t = m
+        .textures
+        .base_color
+        .as_ref()
+        .expect("the base colour texture");
+    assert!(
+        matches!(&t.image, lightpath::scene::desc::ImageSource::Bytes { bytes, .. } if bytes[..] == png[..]),
+        "{}",
+        t.image
+    );
+    assert_eq!(t.wrap[0], lightpath::material::texture::Wrap::Clamp);
+    // And the scene builds (the image decodes).
+    Scene::build(&desc, &aov::assemble(Vec::new())).unwrap();
+}
+
+#[test]
+fn errors_name_the_layer_and_the_prim_and_never_panic() {
+    let dir = Scratch::new("usd-errors");
+    let bad = write(
+        &dir,
+        "bad.usda",
+        "#usda 1.0\ndef Xform \"A\" {\n  double3 xformOp:translate = (1, 2\n}\n",
+    );
+    let e = load_err(&bad);
+    assert!(e.contains("bad.usda"), "{e}");
+    let range = write(
+        &dir,
+        "range.usda",
+        r#"#usda 1.0
+def Xform "W" {
+    def Mesh "M"
+    {
+        int[] faceVertexCounts = [3]
+        int[] faceVertexIndices = [0, 1, 7]
+        point3f[] points = [(0, 0, 0), (1, 0, 0), (0, 1, 0)]
+    }
+}
+"#,
+    );
+    let e = load_err(&range);
+    assert!(
+        e.contains("range.usda") && e.contains("/W/M") && e.contains('7'),
+        "{e}"
+    );
+    let tex = write(
+        &dir,
+        "tex.usda",
+        r#"#usda 1.0
+def Mesh "M" (prepend apiSchemas = ["MaterialBindingAPI"])
+{
+    int[] faceVertexCounts = [3]
+    int[] faceVertexIndices = [0, 1, 2]
+    point3f[] points = [(0, 0, 0), (1, 0, 0), (0, 1, 0)]
+    rel material:binding = </Mat>
+}
+def Material "Mat"
+{
+    token outputs:surface.connect = </Mat/S.outputs:surface>
+    def Shader "S"
+    {
+        uniform token info:id = "UsdPreviewSurface"
+        color3f inputs:diffuseColor.connect = </Mat/T.outputs:rgb>
+        token outputs:surface
+    }
+    def Shader "T"
+    {
+        uniform token info:id = "UsdUVTexture"
+        asset inputs:file = @missing.png@
+        float3 outputs:rgb
+    }
+}
+"#,
+    );
+    let e = load_err(&tex);
+    assert!(e.contains("/Mat/T") && e.contains("missing.png"), "{e}");
+    let mtlx = write(
+        &dir,
+        "mtlx.usda",
+        r#"#usda 1.0
+def Mesh "M" (prepend apiSchemas = ["MaterialBindingAPI"])
+{
+    int[] faceVertexCounts = [3]
+    int[] faceVertexIndices = [0, 1, 2]
+    point3f[] points = [(0, 0, 0), (1, 0, 0), (0, 1, 0)]
+    color3f[] primvars:displayColor = [(0.1, 0.2, 0.3)]
+    rel material:binding = </Mat>
+}
+def Material "Mat"
+{
+    token outputs:mtlx:surface.connect = </Mat/S.outputs:out>
+    def Shader "S"
+    {
+        uniform token info:id = "ND_standard_surface_surfaceshader"
+        token outputs:out
+    }
+}
+"#,
+    );
+    let desc = load(&mtlx);
+    assert_eq!(
+        desc.warnings.iter().filter(|w| w.contains("/Mat")).count(),
+        1,
+        "{:?}",
+        desc.warnings
+    );
+    let m = &desc.materials[&desc.objects[0].material.as_ref().unwrap().name];
+    let MaterialKind::OpenPbr(p) = &m.kind else {
+        panic!()
+    };
+    assert_eq!(p.base_color.to_array(), [0.1, 0.2, 0.3]);
+    let e = load_err(&dir.join("nothing.usda"));
+    assert!(e.contains("nothing.usda"), "{e}");
+}
