@@ -1,14 +1,17 @@
 """A varied set of many-light scenes (issue 29: "build your own varied set; do not tune to
 one"), and the error of each light selection on them at equal samples.
 
-    python3 benches/sampling/many_lights_set.py LIGHTPATH OUT_DIR [SPP] [SEEDS]
+    python3 benches/sampling/many_lights_set.py LIGHTPATH OUT_DIR [SPP] [SEEDS] [VARIANTS]
 
 Writes OUT_DIR/<scene>.toml for six recipes (below), renders a reference of each with the
-tree at 64 x SPP samples, then each of `uniform`, `power`, `tree` at SPP for SEEDS seeds, and
-prints per scene the mean squared error of the beauty against the reference (median over
-seeds), each selection's MSE relative to uniform's, and its CPU time. Equal-sample MSE
-ratios are efficiency ratios when the selections cost the same per sample (the time column
-says whether they do). 128 x 128, clamps off, lamps hidden from the camera (their sub-pixel
+tree at 64 x SPP samples, then each variant at SPP for SEEDS seeds, and prints per scene
+the mean squared error of the beauty against the reference (median over seeds), each
+variant's MSE relative to uniform's, its CPU time, and its efficiency (1 / (MSE x CPU
+time)) relative to uniform's. VARIANTS is a comma-separated list of `uniform`, `power`,
+`tree` (the light selections, one candidate) and `tree:M` / `power:M` (M candidates
+resampled, `--light-candidates M`), each optionally with `/independent` (the sampler of
+the old build: `uniform/independent`); default `uniform,power,tree`. RECIPES=a,b in the
+environment runs only those recipes. 128 x 128, clamps off, lamps hidden from the camera (their sub-pixel
 coverage is noise no light selection touches). Needs numpy and OpenEXR.
 
 Recipes (a seeded RNG places everything, so the set is the same on every run):
@@ -25,7 +28,6 @@ import os
 import random
 import subprocess
 import sys
-import time
 
 import numpy as np
 import OpenEXR
@@ -33,6 +35,9 @@ import OpenEXR
 binary, out = sys.argv[1], sys.argv[2]
 spp = int(sys.argv[3]) if len(sys.argv) > 3 else 16
 seeds = int(sys.argv[4]) if len(sys.argv) > 4 else 3
+variants = (sys.argv[5] if len(sys.argv) > 5 else "uniform,power,tree").split(",")
+if "uniform" not in variants:
+    variants.insert(0, "uniform")
 os.makedirs(out, exist_ok=True)
 
 
@@ -169,6 +174,8 @@ def tuned_many_lights():
 
 
 RECIPES = [sky_key_lamps, clusters, ceiling_grid, spots, two_big_many, corridor, tuned_many_lights]
+if os.environ.get("RECIPES"):
+    RECIPES = [r for r in RECIPES if r.__name__ in os.environ["RECIPES"].split(",")]
 
 
 def beauty(path):
@@ -177,11 +184,16 @@ def beauty(path):
         return np.stack([np.asarray(ch[c].pixels, dtype=np.float64) for c in "RGB"], -1)
 
 
-def render(scene, img, selection, n, seed):
+def render(scene, img, variant, n, seed):
+    variant, _, sampler = variant.partition("/")
+    selection, _, candidates = variant.partition(":")
     args = [binary, "render", scene, "-o", img, "--aovs", "none", "--resolution", "128x128",
             "--spp", str(n), "--seed", str(seed), "--light-selection", selection,
             "--clamp-indirect", "0", "--threads", "1", "--quiet"]
-    t = time.process_time()
+    if candidates:
+        args += ["--light-candidates", candidates]
+    if sampler:
+        args += ["--sampler", sampler]
     t0 = os.times()
     subprocess.run(args, check=True, stdout=subprocess.DEVNULL)
     t1 = os.times()
@@ -199,14 +211,16 @@ for recipe in RECIPES:
         render(scene, ref, "tree", 64 * spp, 99)
     r = beauty(ref)
     res = {}
-    for sel in ("uniform", "power", "tree"):
+    for sel in variants:
         mses, secs = [], []
         for seed in range(1, seeds + 1):
-            img = os.path.join(out, f"{recipe.__name__}_{sel}_{seed}.exr")
+            tag = sel.replace(":", "_").replace("/", "_")
+            img = os.path.join(out, f"{recipe.__name__}_{tag}_{seed}.exr")
             secs.append(render(scene, img, sel, spp, seed))
             mses.append(float(((beauty(img) - r) ** 2).mean()))
         res[sel] = (float(np.median(mses)), float(np.median(secs)))
     rows.append((recipe.__name__, res))
-    u = res["uniform"][0]
+    u, ut = res["uniform"]
     print(f"{recipe.__name__:14s} " + "  ".join(
-        f"{s}: MSE {m:.3e} ({u / m:5.2f}x uniform) {t:5.2f} s" for s, (m, t) in res.items()), flush=True)
+        f"{s}: MSE {m:.3e} ({u / m:5.2f}x) {t:5.2f} s (eff {u * ut / (m * t):5.2f}x)"
+        for s, (m, t) in res.items()), flush=True)

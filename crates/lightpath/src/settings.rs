@@ -173,6 +173,16 @@ settings! {
                orientation), power, or uniform (with clamps off, relighting from AOVs \
                then equals re-rendering up to float rounding; docs/aovs.md).",
     }
+    light_candidates: u32 = 1, {
+        section: Render,
+        flag: "light-candidates",
+        range: Range::Between(1.0, 64.0),
+        role: Shared,
+        header: Header::Setting,
+        help: "Direct light: candidates drawn per shading point, one kept by resampled \
+               importance sampling on its unshadowed contribution (1: the light \
+               selection's choice alone; a few help with many lights).",
+    }
     noise_threshold: f32 = 0.0, {
         section: Render,
         flag: "noise-threshold",

@@ -125,21 +125,15 @@ impl Tracer<'_> {
         if scene.lights.is_empty() || lobes.iter().all(|l| l.delta) {
             return;
         }
-        let Some((li, select_pmf)) = scene.light_select.sample(u_light, v.hit.p, v.sh.frame.n)
-        else {
+        // One candidate, or several resampled (light_choice.rs).
+        let Some(chosen) = self.choose_light(path, v, u_light, u_point) else {
             return;
         };
+        let (li, ls, wi) = (chosen.li, chosen.ls, chosen.wi);
         let light = &scene.lights[li];
-        if !self.lit(v.hit.object, li as u32) {
-            return;
-        }
-        let Some(ls) = light.sample(v.hit.p, u_point, scene.accel.prims()) else {
-            return;
-        };
-        let wi = v.sh.frame.to_local(ls.wi);
         let l_class = light.classes.light;
         let (part, glow) = (light.part, light.glow);
-        let light_pdf = select_pmf * ls.pdf;
+        let (light_pdf, estimate_pdf) = (chosen.mis_pdf, chosen.estimate_pdf);
         // The shadow ray is traced once, and only if some lobe's contribution counts.
         let mut visible: Option<bool> = None;
         // With media, its transmittance instead (volume.rs).
@@ -179,7 +173,7 @@ impl Tracer<'_> {
                     let ray = self.spawn(v.hit, ls.wi, tmax);
                     self.transmittance(out, &ray, &stack, light.shadow_exempt(), &mut path.rng)
                 });
-                let value = f * ls.radiance / light_pdf;
+                let value = f * ls.radiance / estimate_pdf;
                 self.split_by_transmittance(out, s_light, path, value, w, tr, glow, part);
                 continue;
             }
@@ -208,7 +202,7 @@ impl Tracer<'_> {
                 scatters: path.depth + 1,
                 part,
             };
-            let value = f * ls.radiance / light_pdf;
+            let value = f * ls.radiance / estimate_pdf;
             self.contribute(out, s_light, path.throughput, value, w, origin);
         }
     }

@@ -9,6 +9,7 @@
 
 pub mod adaptive;
 mod direct;
+mod light_choice;
 mod path;
 mod pixel;
 mod routing;

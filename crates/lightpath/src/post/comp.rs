@@ -284,8 +284,9 @@ pub fn warnings(job: &CompJob) -> Vec<String> {
 /// Why relighting a file with gains differs from re-rendering it with the lights changed,
 /// read from the settings its header records (nothing for files without them): a clamp
 /// cuts a bright contribution to the same value whatever its light's strength, and light
-/// selection other than uniform picks each light by every light's power, so the noise of
-/// one light's part depends on the others (README.md, "Relighting equals re-rendering").
+/// selection other than uniform picks each light by every light's power (and several
+/// light candidates resample by every light's contribution), so the noise of one light's
+/// part depends on the others (README.md, "Relighting equals re-rendering").
 pub fn relight_caveat(attributes: &[(String, String)]) -> Option<String> {
     let setting = |key: &str| {
         let name = naming::setting_attribute(key);
@@ -305,6 +306,11 @@ pub fn relight_caveat(attributes: &[(String, String)]) -> Option<String> {
     if let Some(s) = selection {
         causes.push(format!("light_selection = {s}"));
     }
+    // Resampled candidates are weighed by every light's strength (light_choice.rs).
+    let candidates = setting("light_candidates").filter(|m| m.parse::<u32>().is_ok_and(|m| m > 1));
+    if let Some(m) = candidates {
+        causes.push(format!("light_candidates = {m}"));
+    }
     if causes.is_empty() {
         return None;
     }
@@ -312,12 +318,12 @@ pub fn relight_caveat(attributes: &[(String, String)]) -> Option<String> {
     if clamped {
         effects.push("they differ where contributions were clamped");
     }
-    if selection.is_some() {
+    if selection.is_some() || candidates.is_some() {
         effects.push("each light's part carries the noise of the others' choice");
     }
     Some(format!(
         "rendered with {}: relit images equal a re-render with the lights changed only \
-         with --light-selection uniform and no clamps; here {}",
+         with --light-selection uniform, one light candidate and no clamps; here {}",
         causes.join(", "),
         effects.join(", and ")
     ))
@@ -423,6 +429,11 @@ mod tests {
             note.contains("clamped") && !note.contains("light_selection"),
             "{note}"
         );
+        let resampled = header(&[("light_selection", "uniform"), ("light_candidates", "4")]);
+        let note = relight_caveat(&resampled).unwrap();
+        assert!(note.contains("light_candidates = 4"), "{note}");
+        let one = header(&[("light_selection", "uniform"), ("light_candidates", "1")]);
+        assert_eq!(relight_caveat(&one), None);
     }
 
     #[test]
