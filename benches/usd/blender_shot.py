@@ -118,12 +118,33 @@ td = """#usda 1.0
 (
     subLayers = [@shot.usdc@]
     renderSettingsPrimPath = "/Render/Settings"
+    metersPerUnit = 1
+    upAxis = "Z"
 )
 over "root"
 {
-    over "chrome" { string primvars:karma:object:lpetag = "balls" }
-    over "gold" { string primvars:karma:object:lpetag = "balls" }
-    over "key" { over "key" { string ri:light:lightGroup = "keygroup" } }
+    over "chrome"
+    {
+        string primvars:karma:object:lpetag = "balls"
+    }
+    over "gold"
+    {
+        string primvars:ri:attributes:identifier:lpegroup = "balls"
+    }
+    over "key"
+    {
+        over "key"
+        {
+            string ri:light:lightGroup = "keygroup"
+        }
+    }
+    over "sun"
+    {
+        over "sun"
+        {
+            string karma:light:lpetag = "sungroup"
+        }
+    }
 }
 def Scope "Render"
 {
@@ -135,14 +156,36 @@ def Scope "Render"
     def RenderProduct "Beauty"
     {
         token productName = "td.exr"
-        rel orderedVars = [</Render/Vars/Ci>, </Render/Vars/diffuse_key>, </Render/Vars/balls>, </Render/Vars/N>]
+        rel camera = </root/shot/shot>
+        rel orderedVars = [</Render/Vars/Ci>, </Render/Vars/diffuse_key>, </Render/Vars/balls>, </Render/Vars/sun>, </Render/Vars/N>]
     }
     def Scope "Vars"
     {
-        def RenderVar "Ci" { uniform string sourceName = "Ci"  uniform token sourceType = "raw" }
-        def RenderVar "diffuse_key" { uniform string sourceName = "C<RD>[<L.'keygroup'>O]"  uniform token sourceType = "lpe" }
-        def RenderVar "balls" { uniform string sourceName = "lpe:C<.'balls'>.*[<L.>O]"  uniform token sourceType = "lpe" }
-        def RenderVar "N" { uniform string sourceName = "normal"  uniform token sourceType = "raw" }
+        def RenderVar "Ci"
+        {
+            uniform string sourceName = "Ci"
+            uniform token sourceType = "raw"
+        }
+        def RenderVar "diffuse_key"
+        {
+            uniform string sourceName = "C<RD>[<L.'keygroup'>O]"
+            uniform token sourceType = "lpe"
+        }
+        def RenderVar "balls"
+        {
+            uniform string sourceName = "lpe:C<.'balls'>.*[<L.>O]"
+            uniform token sourceType = "lpe"
+        }
+        def RenderVar "sun"
+        {
+            uniform string sourceName = "C.*<L.'sungroup'>"
+            uniform token sourceType = "lpe"
+        }
+        def RenderVar "N"
+        {
+            uniform string sourceName = "normal"
+            uniform token sourceType = "raw"
+        }
     }
 }
 """

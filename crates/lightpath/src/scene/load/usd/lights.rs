@@ -9,7 +9,9 @@
 //!   radius: intensity L·π·r² (normalized: L/4), in W/sr.
 //! - A distant light with `normalize` gives irradiance `L` at a surface facing it; without
 //!   it, L is the radiance of the sun disk of diameter `angle`, whose irradiance is
-//!   L·π·sin²(angle/2) (an `angle` of 0 is read as normalized).
+//!   L·π·sin²(angle/2) (an `angle` of 0 is read as normalized). A distant light whose
+//!   intensity Blender's exporter wrote is read as Blender reads it back: irradiance
+//!   4·L, Blender's sun strength (its exporter divides the strength by 4).
 //! - A dome light emits radiance L (times its `latlong` EXR).
 //! - `ShapingAPI`'s cone on a sphere light makes it a spot (full angle 2·`cone:angle`, soft
 //!   edge as Blender reads `cone:softness`: its spot blend); on other kinds it is warned
@@ -41,7 +43,27 @@ pub const LIGHT_TAGS: &[&str] = &[
     "primvars:arnold:aov",
 ];
 
+/// What Blender's USD importer multiplies a DistantLight's intensity by to get the sun's
+/// strength (irradiance, W/m²), the inverse of its exporter's division.
+const BLENDER_SUN: f32 = 4.0;
+
 impl Loader {
+    /// Whether the strongest opinion on the light's intensity is in a layer Blender's USD
+    /// exporter wrote (its `doc` is `Blender v…`).
+    fn intensity_from_blender(&self, prim: &Prim) -> bool {
+        ["inputs:intensity", "intensity"].iter().any(|name| {
+            let attr = prim.attribute(*name);
+            let Some((layer, _)) = attr.property_stack().ok().and_then(|s| s.into_iter().next())
+            else {
+                return false;
+            };
+            self.stage
+                .layer(&layer)
+                .and_then(|l| l.pseudo_root().and_then(|r| r.documentation()))
+                .is_some_and(|doc| doc.starts_with("Blender v"))
+        })
+    }
+
     fn light_number(&self, prim: &Prim, name: &str, default: f32) -> f32 {
         stage::value_of(prim, &[&format!("inputs:{name}"), name], self.time)
             .and_then(|v| stage::f32_of(&v))
@@ -124,8 +146,15 @@ impl Loader {
         world: Affine3A,
     ) -> Result<(), SceneError> {
         let default_intensity = if ty == "DistantLight" { 50000.0 } else { 1.0 };
-        let (l, color) = self.emission(prim, default_intensity);
-        let normalize = self.light_bool(prim, "normalize");
+        let (mut l, color) = self.emission(prim, default_intensity);
+        let mut normalize = self.light_bool(prim, "normalize");
+        if ty == "DistantLight" && self.intensity_from_blender(prim) {
+            // Blender's exporter writes a sun of strength S W/m² as intensity S/4 and its
+            // importer reads it back as 4·intensity whatever `normalize` says: the number
+            // means Blender's sun strength, not the specification's illuminance.
+            l *= BLENDER_SUN;
+            normalize = true;
+        }
         let mut shaping = None;
         let cone = self.light_number(prim, "shaping:cone:angle", 90.0);
         if cone < 90.0 {
