@@ -414,6 +414,9 @@ pub struct LightDesc {
     pub color: [f32; 3],
     pub strength: f32,
     pub camera_visible: bool,
+    /// Whether the light's surface blocks other lights' shadow rays (UsdLux lights, as
+    /// in the renderers that read them, do not).
+    pub casts_shadows: bool,
     pub two_sided: bool,
     /// The surface material of an area light (it can reflect too); none by default.
     pub material: Option<NameRef>,

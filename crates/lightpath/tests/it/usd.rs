@@ -591,6 +591,132 @@ def DistantLight "Sun"
 }
 
 #[test]
+fn a_sun_blender_wrote_is_read_as_blenders_sun_strength() {
+    // Blender's exporter writes a sun of strength 1 W/m² as a normalized DistantLight of
+    // intensity 0.25 (and reads it back as 4 × 0.25); a TD's layer that overrides the
+    // intensity is read by the specification (illuminance = intensity).
+    let dir = Scratch::new("usd-blender-sun");
+    write(
+        &dir,
+        "export.usda",
+        r#"#usda 1.0
+(
+    doc = "Blender v5.0.1"
+    metersPerUnit = 1
+    upAxis = "Z"
+)
+def Xform "root"
+{
+    def DistantLight "sun"
+    {
+        float inputs:intensity = 0.25
+        bool inputs:normalize = 1
+        float inputs:angle = 0.263
+    }
+    def DistantLight "moon"
+    {
+        float inputs:intensity = 0.25
+        bool inputs:normalize = 1
+    }
+}
+"#,
+    );
+    let p = write(
+        &dir,
+        "td.usda",
+        r#"#usda 1.0
+(
+    subLayers = [@export.usda@]
+    metersPerUnit = 1
+    upAxis = "Z"
+)
+over "root"
+{
+    over "moon"
+    {
+        float inputs:intensity = 0.5
+    }
+}
+"#,
+    );
+    let desc = load(&p);
+    let by = |n: &str| {
+        desc.lights
+            .iter()
+            .find(|l| l.name.as_deref() == Some(n))
+            .unwrap()
+    };
+    assert_eq!(by("sun").strength, 1.0);
+    assert_eq!(by("moon").strength, 0.5);
+}
+
+#[test]
+fn usd_lights_do_not_block_other_lights() {
+    // A rect light between a normalized sun and a card: UsdLux lights are not occluders,
+    // so the card gets the sun's full irradiance (radiance 0.5 · π / π with albedo 0.5).
+    let dir = Scratch::new("usd-light-shadow");
+    let p = write(
+        &dir,
+        "blocker.usda",
+        r#"#usda 1.0
+(
+    metersPerUnit = 1
+)
+def Camera "Cam"
+{
+    float focalLength = 50
+    float horizontalAperture = 10
+    float verticalAperture = 10
+    double3 xformOp:translate = (0, 0, 10)
+    uniform token[] xformOpOrder = ["xformOp:translate"]
+}
+def Mesh "Card"
+{
+    int[] faceVertexCounts = [4]
+    int[] faceVertexIndices = [0, 1, 2, 3]
+    point3f[] points = [(-5, -5, 0), (5, -5, 0), (5, 5, 0), (-5, 5, 0)]
+    color3f[] primvars:displayColor = [(0.5, 0.5, 0.5)]
+}
+def DistantLight "Sun"
+{
+    float inputs:intensity = 3.14159265
+    bool inputs:normalize = true
+}
+def RectLight "Panel"
+{
+    float inputs:intensity = 0.0001
+    float inputs:width = 20
+    float inputs:height = 20
+    bool karma:light:renderlightgeo = false
+    double3 xformOp:translate = (0, 0, 5)
+    uniform token[] xformOpOrder = ["xformOp:translate"]
+}
+"#,
+    );
+    let mut desc = load(&p);
+    assert!(desc.lights.iter().all(|l| !l.casts_shadows));
+    desc.render.resolution = [8, 8];
+    desc.render.spp = 2;
+    desc.render.max_depth = 2;
+    let scene = Scene::build(&desc, &aov::assemble(Vec::new())).unwrap();
+    let (film, _) = render(
+        &scene,
+        &RenderOptions {
+            spp: 2,
+            first_sample: 0,
+        },
+    );
+    // Delta light, Lambertian card, a black panel seen by neither camera nor shadow rays:
+    // every sample is the same up to float rounding.
+    for y in 0..film.height {
+        for x in 0..film.width {
+            let v = film.pixel(0, x, y);
+            assert!((v.x - 0.5).abs() < 1e-3, "pixel {x},{y}: {v}");
+        }
+    }
+}
+
+#[test]
 fn time_samples_are_read_at_the_frame() {
     let dir = Scratch::new("usd-time");
     let p = write(
