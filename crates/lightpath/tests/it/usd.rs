@@ -907,3 +907,120 @@ def Material "Mat"
     let e = load_err(&dir.join("nothing.usda"));
     assert!(e.contains("nothing.usda"), "{e}");
 }
+
+/// A stage whose RenderVars redefine standard names, rendered with `--aovs standard`,
+/// light groups and bounces: its header declares only the partitions that hold.
+fn partitions_of(
+    dir: &Scratch,
+    vars: &str,
+    names: &[&str],
+) -> Vec<(String, lightpath::aov::naming::PartitionKind)> {
+    use lightpath::aov::naming;
+    let ordered: Vec<String> = names.iter().map(|n| format!("</Render/{n}>")).collect();
+    let text = format!(
+        r#"#usda 1.0
+(
+    metersPerUnit = 1
+)
+def Xform "World"
+{{
+    def Sphere "Ball" {{ double radius = 1 }}
+    def Cube "Floor"
+    {{
+        double size = 1
+        double3 xformOp:translate = (0, -1.5, 0)
+        float3 xformOp:scale = (8, 1, 8)
+        uniform token[] xformOpOrder = ["xformOp:translate", "xformOp:scale"]
+    }}
+    def SphereLight "Bulb"
+    {{
+        float inputs:intensity = 20
+        float inputs:radius = 0.3
+        string karma:light:lpetag = "key"
+        double3 xformOp:translate = (2, 3, 3)
+        uniform token[] xformOpOrder = ["xformOp:translate"]
+    }}
+    def DistantLight "Sun" {{ float inputs:intensity = 2 bool inputs:normalize = true }}
+    def Camera "Cam"
+    {{
+        double3 xformOp:translate = (0, 0, 6)
+        uniform token[] xformOpOrder = ["xformOp:translate"]
+    }}
+}}
+def Scope "Render"
+{{
+    def RenderSettings "Settings"
+    {{
+        rel products = </Render/Out>
+        uniform int2 resolution = (12, 9)
+    }}
+    def RenderProduct "Out"
+    {{
+        rel orderedVars = [{}]
+    }}
+    {vars}
+}}
+"#,
+        ordered.join(", ")
+    );
+    let scene = write(dir, "parts.usda", &text);
+    let out = dir.join("parts.exr");
+    let mut job = lightpath::job::RenderJob::new(scene.to_string_lossy());
+    job.output = Some(out.clone());
+    job.overrides.spp = Some(2);
+    job.aovs.standard_asked = true;
+    job.aovs.light_groups = true;
+    job.aovs.bounces = Some(1);
+    job.prepare()
+        .unwrap()
+        .run(&lightpath::progress::Silent)
+        .unwrap();
+    let exr = lightpath::output::read_exr(&out).unwrap();
+    let checks = lightpath::post::check_partitions(&exr);
+    for c in &checks {
+        // Every declared partition sums to its whole (float rounding only).
+        assert!(
+            c.max_relative_error <= 1e-4,
+            "{} = {:?}: {}",
+            c.whole,
+            c.parts,
+            c.max_relative_error
+        );
+    }
+    let mut kinds: Vec<(String, naming::PartitionKind)> =
+        naming::parts_from_attributes(&exr.attributes)
+            .into_iter()
+            .map(|p| (p.whole, p.kind))
+            .collect();
+    kinds.sort();
+    kinds.dedup();
+    kinds
+}
+
+#[test]
+fn header_declares_only_the_partitions_that_hold_when_vars_redefine_standard_names() {
+    use lightpath::aov::naming::PartitionKind::{Bounces, LightGroups, Standard};
+    let dir = Scratch::new("usd-partitions");
+    let var = |name: &str, ty: &str, source: &str| {
+        format!(
+            "def RenderVar \"{name}\" {{ uniform string sourceName = \"{source}\" uniform token sourceType = \"{ty}\" }}\n"
+        )
+    };
+    let b = || ("beauty".to_string(), Bounces);
+    let l = || ("beauty".to_string(), LightGroups);
+    let s = || ("beauty".to_string(), Standard);
+    // Standard names with the standard meaning: every partition holds and is declared.
+    let vars = var("emission", "raw", "emission") + &var("diffuse", "lpe", "lpe:diffuse");
+    assert_eq!(
+        partitions_of(&dir, &vars, &["emission", "diffuse"]),
+        [s(), b(), l()]
+    );
+    // A member of the standard partition redefined (direct diffuse from the key only):
+    // the standard partition no longer sums and is not declared; the others are.
+    let vars = var("directDiffuse", "lpe", "C<RD>[<L.'key'>O]");
+    assert_eq!(partitions_of(&dir, &vars, &["directDiffuse"]), [b(), l()]);
+    // The beauty itself redefined: neither the standard set nor the bounces sum to it;
+    // its light-group split (of the user's beauty) still does.
+    let vars = var("beauty", "lpe", "C<RD>L");
+    assert_eq!(partitions_of(&dir, &vars, &["beauty"]), [l()]);
+}

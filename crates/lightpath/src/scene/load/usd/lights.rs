@@ -53,7 +53,10 @@ impl Loader {
     fn intensity_from_blender(&self, prim: &Prim) -> bool {
         ["inputs:intensity", "intensity"].iter().any(|name| {
             let attr = prim.attribute(*name);
-            let Some((layer, _)) = attr.property_stack().ok().and_then(|s| s.into_iter().next())
+            let Some((layer, _)) = attr
+                .property_stack()
+                .ok()
+                .and_then(|s| s.into_iter().next())
             else {
                 return false;
             };
