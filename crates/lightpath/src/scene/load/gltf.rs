@@ -1148,6 +1148,7 @@ impl Loader {
             strength,
             camera_visible: false,
             casts_shadows: true,
+            shaping: None,
             two_sided: false,
             material: None,
             transform: Affine3A::IDENTITY,

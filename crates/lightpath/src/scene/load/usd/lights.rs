@@ -14,8 +14,10 @@
 //!   4·L, Blender's sun strength (its exporter divides the strength by 4).
 //! - A dome light emits radiance L (times its `latlong` EXR).
 //! - `ShapingAPI`'s cone on a sphere light makes it a spot (full angle 2·`cone:angle`, soft
-//!   edge as Blender reads `cone:softness`: its spot blend); on other kinds it is warned
-//!   about and ignored.
+//!   edge as Blender reads `cone:softness`: its spot blend). On rect and disk lights the
+//!   cone (`cone:angle`, `cone:softness`) and `focus` shape the emission about the normal
+//!   by the schema's formulas (`light/triangles.rs`); on other kinds they are warned about
+//!   and ignored.
 //!
 //! A light's group is the first authored of Karma's `karma:light:lpetag`, RenderMan's
 //! `ri:light:lightGroup`, Cycles' `cycles:lightgroup` and Arnold's `primvars:arnold:aov`,
@@ -28,7 +30,7 @@
 //! luminance 1.
 
 use super::{stage, Loader};
-use crate::scene::desc::{LightDesc, LightKind, ObjectDesc};
+use crate::scene::desc::{AreaShaping, LightDesc, LightKind, ObjectDesc};
 use crate::scene::SceneError;
 use glam::{Affine3A, Vec3, Vec3A};
 use openusd::usd::Prim;
@@ -167,6 +169,20 @@ impl Loader {
                     .clamp(0.0, 1.0),
             ));
         }
+        let focus = self.light_number(prim, "shaping:focus", 0.0).max(0.0);
+        // Rect and disk lights take the cone and the focus as their emission profile.
+        let area_shaping = if matches!(ty, "RectLight" | "DiskLight")
+            && (shaping.is_some() || focus > 0.0)
+        {
+            let (cone_angle, cone_softness) = shaping.take().unwrap_or((90.0, 0.0));
+            Some(AreaShaping {
+                cone_angle,
+                cone_softness,
+                focus,
+            })
+        } else {
+            None
+        };
         let (kind, transform, strength) =
             self.light_shape(prim, ty, world, (l, normalize), &mut shaping)?;
         if shaping.is_some() {
@@ -174,8 +190,16 @@ impl Loader {
                 &format!("shaping {}", prim.path()),
                 prim,
                 format!(
-                    "ShapingAPI's cone on a {ty} is not rendered (only sphere lights become spots)"
+                    "ShapingAPI's cone on a {ty} is not rendered (sphere lights become spots, \
+                     rect and disk lights are shaped)"
                 ),
+            );
+        }
+        if focus > 0.0 && area_shaping.is_none() {
+            self.warn_once(
+                &format!("focus {}", prim.path()),
+                prim,
+                format!("ShapingAPI's focus on a {ty} is not rendered (only on rect and disk lights)"),
             );
         }
         if !(strength.is_finite() && strength >= 0.0) {
@@ -195,6 +219,7 @@ impl Loader {
             strength,
             camera_visible,
             casts_shadows: false,
+            shaping: area_shaping,
             two_sided: false,
             material: None,
             transform,
@@ -431,6 +456,7 @@ impl Loader {
                 strength: radiance,
                 camera_visible: true,
                 casts_shadows: true,
+                shaping: None,
                 two_sided: false,
                 material: None,
                 transform: Affine3A::IDENTITY,
