@@ -305,6 +305,25 @@ def Xform "C" (
     assert_eq!(desc.lights.len(), 1);
     assert!(matches!(desc.lights[0].kind, LightKind::Distant { .. }));
     assert_eq!(desc.lights[0].strength, 3.0);
+    // And it renders as composed: the command line's default camera frames the two
+    // balls and the box, lit by the sublayer's sun.
+    let out = dir.join("root.exr");
+    let mut job = lightpath::job::RenderJob::new(root.to_string_lossy());
+    job.output = Some(out.clone());
+    job.overrides.spp = Some(1);
+    job.overrides.resolution = Some([24, 16]);
+    job.prepare()
+        .unwrap()
+        .run(&lightpath::progress::Silent)
+        .unwrap();
+    let exr = lightpath::output::read_exr(&out).unwrap();
+    let lit = exr
+        .channels
+        .iter()
+        .find(|(name, _)| name == "R")
+        .map(|(_, data)| data.iter().filter(|v| **v > 0.0).count())
+        .unwrap();
+    assert!(lit > 0, "nothing of the composed stage is lit");
 }
 
 #[test]
@@ -1044,7 +1063,11 @@ fn shaping_narrows_rect_and_disk_lights() {
         focus: 2.0,
     };
     let c = 30f32.to_radians().cos();
-    assert!((soft.factor(c) - 0.5 * c * c).abs() < 1e-5, "{}", soft.factor(c));
+    assert!(
+        (soft.factor(c) - 0.5 * c * c).abs() < 1e-5,
+        "{}",
+        soft.factor(c)
+    );
 
     let dir = Scratch::new("usd-shaping");
     let p = write(
@@ -1103,10 +1126,20 @@ def DiskLight "Disk" (
             .shaping
     };
     let rect = shaping("Panel").unwrap();
-    assert_eq!((rect.cone_angle, rect.cone_softness, rect.focus), (30.0, 0.0, 1.0));
+    assert_eq!(
+        (rect.cone_angle, rect.cone_softness, rect.focus),
+        (30.0, 0.0, 1.0)
+    );
     let disk = shaping("Disk").unwrap();
-    assert_eq!((disk.cone_angle, disk.cone_softness, disk.focus), (45.0, 0.5, 0.0));
-    assert!(desc.warnings.iter().all(|w| !w.contains("ShapingAPI")), "{:?}", desc.warnings);
+    assert_eq!(
+        (disk.cone_angle, disk.cone_softness, disk.focus),
+        (45.0, 0.5, 0.0)
+    );
+    assert!(
+        desc.warnings.iter().all(|w| !w.contains("ShapingAPI")),
+        "{:?}",
+        desc.warnings
+    );
     // Direct light only, the card seen from above: under the panel it is lit; a point of
     // the card 2 m aside sees every point of the panel more than 50° off its normal, past
     // the 30° cone, so it gets nothing (it would without the cone).

@@ -3,11 +3,11 @@
 
 use crate::geometry::shapes::{self, ShapePrims};
 use crate::geometry::{Accel, Prim};
+use crate::light::triangles::Shaping;
 use crate::light::{
     Cylinder, Distant, Dome, EnvMap, Light, LightModel, LightShape, Mesh, Point, Sphere, Spot,
     Triangles,
 };
-use crate::light::triangles::Shaping;
 use crate::sampling::Distribution1D;
 use crate::scene::desc::{LightDesc, LightKind, Origin};
 use crate::scene::{Object, SceneError};

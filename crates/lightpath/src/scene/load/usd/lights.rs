@@ -171,18 +171,17 @@ impl Loader {
         }
         let focus = self.light_number(prim, "shaping:focus", 0.0).max(0.0);
         // Rect and disk lights take the cone and the focus as their emission profile.
-        let area_shaping = if matches!(ty, "RectLight" | "DiskLight")
-            && (shaping.is_some() || focus > 0.0)
-        {
-            let (cone_angle, cone_softness) = shaping.take().unwrap_or((90.0, 0.0));
-            Some(AreaShaping {
-                cone_angle,
-                cone_softness,
-                focus,
-            })
-        } else {
-            None
-        };
+        let area_shaping =
+            if matches!(ty, "RectLight" | "DiskLight") && (shaping.is_some() || focus > 0.0) {
+                let (cone_angle, cone_softness) = shaping.take().unwrap_or((90.0, 0.0));
+                Some(AreaShaping {
+                    cone_angle,
+                    cone_softness,
+                    focus,
+                })
+            } else {
+                None
+            };
         let (kind, transform, strength) =
             self.light_shape(prim, ty, world, (l, normalize), &mut shaping)?;
         if shaping.is_some() {
@@ -199,7 +198,9 @@ impl Loader {
             self.warn_once(
                 &format!("focus {}", prim.path()),
                 prim,
-                format!("ShapingAPI's focus on a {ty} is not rendered (only on rect and disk lights)"),
+                format!(
+                    "ShapingAPI's focus on a {ty} is not rendered (only on rect and disk lights)"
+                ),
             );
         }
         if !(strength.is_finite() && strength >= 0.0) {
