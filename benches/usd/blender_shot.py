@@ -1,15 +1,19 @@
 """Builds the USD held-out shot of issue 28 in Blender and exports it with Blender's own USD
-exporter, then writes a TD's layer over it: RenderSettings, a product, LPE and raw
-RenderVars, a Karma object tag on the balls and a RenderMan light group on the key.
+exporter, then writes a TD's layer over it: the stage metrics (only the root layer's
+count), RenderSettings, a product, LPE and raw RenderVars, the object tag `balls` on the
+chrome ball (Karma) and the gold ball (RenderMan), and light groups on the key (RenderMan)
+and the sun (Karma).
 
 Run with Blender as a Python module (not a CI dependency):
 
     /path/to/python3.11 benches/usd/blender_shot.py OUT_DIR
-    lightpath render OUT_DIR/td.usda --spp 64
+    lightpath render OUT_DIR/td.usda --spp 64 --light-groups --cryptomatte -o lp.exr
+    /path/to/python3.11 benches/usd/cycles_shot.py OUT_DIR/td.usda -o cycles.exr
+    python benches/usd/compare.py cycles.exr lp.exr (flags: see compare.py)
 
 Writes OUT_DIR/shot.usdc (Blender's export: textured crate, two Suzannes, chrome and gold
-balls, rect, point, sun lights and a world dome) and OUT_DIR/td.usda (the TD's layer,
-sublayering the export). Cycles' reference of the export: the peers' cycles_file.py.
+balls, rect, sphere and distant lights and the world as a dome light) and OUT_DIR/td.usda
+(the TD's layer, sublayering the export).
 """
 
 import math
@@ -118,12 +122,33 @@ td = """#usda 1.0
 (
     subLayers = [@shot.usdc@]
     renderSettingsPrimPath = "/Render/Settings"
+    metersPerUnit = 1
+    upAxis = "Z"
 )
 over "root"
 {
-    over "chrome" { string primvars:karma:object:lpetag = "balls" }
-    over "gold" { string primvars:karma:object:lpetag = "balls" }
-    over "key" { over "key" { string ri:light:lightGroup = "keygroup" } }
+    over "chrome"
+    {
+        string primvars:karma:object:lpetag = "balls"
+    }
+    over "gold"
+    {
+        string primvars:ri:attributes:identifier:lpegroup = "balls"
+    }
+    over "key"
+    {
+        over "key"
+        {
+            string ri:light:lightGroup = "keygroup"
+        }
+    }
+    over "sun"
+    {
+        over "sun"
+        {
+            string karma:light:lpetag = "sungroup"
+        }
+    }
 }
 def Scope "Render"
 {
@@ -135,14 +160,36 @@ def Scope "Render"
     def RenderProduct "Beauty"
     {
         token productName = "td.exr"
-        rel orderedVars = [</Render/Vars/Ci>, </Render/Vars/diffuse_key>, </Render/Vars/balls>, </Render/Vars/N>]
+        rel camera = </root/shot/shot>
+        rel orderedVars = [</Render/Vars/Ci>, </Render/Vars/diffuse_key>, </Render/Vars/balls>, </Render/Vars/sun>, </Render/Vars/N>]
     }
     def Scope "Vars"
     {
-        def RenderVar "Ci" { uniform string sourceName = "Ci"  uniform token sourceType = "raw" }
-        def RenderVar "diffuse_key" { uniform string sourceName = "C<RD>[<L.'keygroup'>O]"  uniform token sourceType = "lpe" }
-        def RenderVar "balls" { uniform string sourceName = "lpe:C<.'balls'>.*[<L.>O]"  uniform token sourceType = "lpe" }
-        def RenderVar "N" { uniform string sourceName = "normal"  uniform token sourceType = "raw" }
+        def RenderVar "Ci"
+        {
+            uniform string sourceName = "Ci"
+            uniform token sourceType = "raw"
+        }
+        def RenderVar "diffuse_key"
+        {
+            uniform string sourceName = "C<RD>[<L.'keygroup'>O]"
+            uniform token sourceType = "lpe"
+        }
+        def RenderVar "balls"
+        {
+            uniform string sourceName = "lpe:C<.'balls'>.*[<L.>O]"
+            uniform token sourceType = "lpe"
+        }
+        def RenderVar "sun"
+        {
+            uniform string sourceName = "C.*<L.'sungroup'>"
+            uniform token sourceType = "lpe"
+        }
+        def RenderVar "N"
+        {
+            uniform string sourceName = "normal"
+            uniform token sourceType = "raw"
+        }
     }
 }
 """

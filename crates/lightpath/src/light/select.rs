@@ -606,6 +606,7 @@ mod tests {
                 by_area: Distribution1D::new(&[1.0]),
                 area: 0.5,
                 two_sided: false,
+                shaping: None,
             },
             20.0,
         ));
@@ -736,6 +737,7 @@ mod tests {
                 by_area: Distribution1D::new(&[1.0]),
                 area: 0.5,
                 two_sided: false,
+                shaping: None,
             },
             5.0,
         ));

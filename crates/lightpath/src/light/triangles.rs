@@ -1,6 +1,8 @@
 //! Area lights made of triangles: a rectangle, a quad or a disk (`type = "rect"`,
 //! `"quad"`, `"disk"`), sampled uniformly by area (directly on the parallelogram when the
-//! triangles form one). They emit on the side of their normal unless `two_sided`.
+//! triangles form one). They emit on the side of their normal unless `two_sided`. A
+//! [`Shaping`] (UsdLux's ShapingAPI on rect and disk lights) narrows their emission about
+//! the normal.
 //!
 //! ```toml
 //! [[lights]]
@@ -30,6 +32,42 @@ pub struct Triangles {
     pub by_area: Distribution1D,
     pub area: f32,
     pub two_sided: bool,
+    pub shaping: Option<Shaping>,
+}
+
+/// UsdLux ShapingAPI's emission profile about the normal (the schema's `shaping:focus`
+/// and `shaping:cone:*` formulas, focusTint black): at θ off the normal, emission times
+/// |cos θ|^focus · (1 − smoothstep(θ; start, cutoff)), zero beyond `cutoff`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Shaping {
+    /// Cutoff angle in radians.
+    pub cutoff: f32,
+    /// Where the fade to the cutoff starts, in radians (at most `cutoff`).
+    pub start: f32,
+    pub focus: f32,
+}
+
+impl Shaping {
+    /// The factor at cosine `cos` off the normal.
+    pub fn factor(&self, cos: f32) -> f32 {
+        let c = cos.abs().min(1.0);
+        let theta = c.acos();
+        if theta > self.cutoff {
+            return 0.0;
+        }
+        let cone = if self.start < self.cutoff && theta > self.start {
+            let t = (theta - self.start) / (self.cutoff - self.start);
+            1.0 - t * t * (3.0 - 2.0 * t)
+        } else {
+            1.0
+        };
+        let focus = if self.focus > 0.0 {
+            c.powf(self.focus)
+        } else {
+            1.0
+        };
+        cone * focus
+    }
 }
 
 impl LightModel for Triangles {
@@ -55,10 +93,17 @@ impl LightModel for Triangles {
         if cos_l <= 0.0 && !self.two_sided || cos_l == 0.0 {
             return None;
         }
+        let shaped = match &self.shaping {
+            Some(s) => s.factor(cos_l),
+            None => 1.0,
+        };
+        if shaped <= 0.0 {
+            return None;
+        }
         Some(LightSample {
             wi,
             dist,
-            radiance: color,
+            radiance: color * shaped,
             pdf: dist2 / (cos_l.abs() * self.area),
             delta: false,
         })
@@ -73,7 +118,10 @@ impl LightModel for Triangles {
     }
     fn emitted(&self, color: Vec3A, ng: Vec3A, dir: Vec3A) -> Vec3A {
         if self.two_sided || ng.dot(dir) < 0.0 {
-            color
+            match &self.shaping {
+                Some(s) => color * s.factor(ng.dot(dir)),
+                None => color,
+            }
         } else {
             Vec3A::ZERO
         }

@@ -405,6 +405,19 @@ pub enum LightKind {
     },
 }
 
+/// An area light's emission profile, as UsdLux's ShapingAPI defines it: off its normal by
+/// θ, emission is scaled by |cos θ|^focus and by 1 − smoothstep(θ; (1 − softness)·angle,
+/// angle), zero beyond `cone_angle`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct AreaShaping {
+    /// The cutoff angle off the normal, in degrees (90: none).
+    pub cone_angle: f32,
+    /// The share of the cone over which emission fades to zero, in [0, 1].
+    pub cone_softness: f32,
+    /// The exponent of the cosine falloff (0: none).
+    pub focus: f32,
+}
+
 #[derive(Clone, Debug)]
 pub struct LightDesc {
     pub kind: LightKind,
@@ -414,6 +427,12 @@ pub struct LightDesc {
     pub color: [f32; 3],
     pub strength: f32,
     pub camera_visible: bool,
+    /// Whether the light's surface blocks other lights' shadow rays (UsdLux lights, as
+    /// in the renderers that read them, do not).
+    pub casts_shadows: bool,
+    /// UsdLux ShapingAPI on an area light (rect, disk): its emission narrowed about its
+    /// normal. None: no shaping.
+    pub shaping: Option<AreaShaping>,
     pub two_sided: bool,
     /// The surface material of an area light (it can reflect too); none by default.
     pub material: Option<NameRef>,

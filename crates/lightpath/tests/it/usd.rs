@@ -305,6 +305,25 @@ def Xform "C" (
     assert_eq!(desc.lights.len(), 1);
     assert!(matches!(desc.lights[0].kind, LightKind::Distant { .. }));
     assert_eq!(desc.lights[0].strength, 3.0);
+    // And it renders as composed: the command line's default camera frames the two
+    // balls and the box, lit by the sublayer's sun.
+    let out = dir.join("root.exr");
+    let mut job = lightpath::job::RenderJob::new(root.to_string_lossy());
+    job.output = Some(out.clone());
+    job.overrides.spp = Some(1);
+    job.overrides.resolution = Some([24, 16]);
+    job.prepare()
+        .unwrap()
+        .run(&lightpath::progress::Silent)
+        .unwrap();
+    let exr = lightpath::output::read_exr(&out).unwrap();
+    let lit = exr
+        .channels
+        .iter()
+        .find(|(name, _)| name == "R")
+        .map(|(_, data)| data.iter().filter(|v| **v > 0.0).count())
+        .unwrap();
+    assert!(lit > 0, "nothing of the composed stage is lit");
 }
 
 #[test]
@@ -591,6 +610,132 @@ def DistantLight "Sun"
 }
 
 #[test]
+fn a_sun_blender_wrote_is_read_as_blenders_sun_strength() {
+    // Blender's exporter writes a sun of strength 1 W/m² as a normalized DistantLight of
+    // intensity 0.25 (and reads it back as 4 × 0.25); a TD's layer that overrides the
+    // intensity is read by the specification (illuminance = intensity).
+    let dir = Scratch::new("usd-blender-sun");
+    write(
+        &dir,
+        "export.usda",
+        r#"#usda 1.0
+(
+    doc = "Blender v5.0.1"
+    metersPerUnit = 1
+    upAxis = "Z"
+)
+def Xform "root"
+{
+    def DistantLight "sun"
+    {
+        float inputs:intensity = 0.25
+        bool inputs:normalize = 1
+        float inputs:angle = 0.263
+    }
+    def DistantLight "moon"
+    {
+        float inputs:intensity = 0.25
+        bool inputs:normalize = 1
+    }
+}
+"#,
+    );
+    let p = write(
+        &dir,
+        "td.usda",
+        r#"#usda 1.0
+(
+    subLayers = [@export.usda@]
+    metersPerUnit = 1
+    upAxis = "Z"
+)
+over "root"
+{
+    over "moon"
+    {
+        float inputs:intensity = 0.5
+    }
+}
+"#,
+    );
+    let desc = load(&p);
+    let by = |n: &str| {
+        desc.lights
+            .iter()
+            .find(|l| l.name.as_deref() == Some(n))
+            .unwrap()
+    };
+    assert_eq!(by("sun").strength, 1.0);
+    assert_eq!(by("moon").strength, 0.5);
+}
+
+#[test]
+fn usd_lights_do_not_block_other_lights() {
+    // A rect light between a normalized sun and a card: UsdLux lights are not occluders,
+    // so the card gets the sun's full irradiance (radiance 0.5 · π / π with albedo 0.5).
+    let dir = Scratch::new("usd-light-shadow");
+    let p = write(
+        &dir,
+        "blocker.usda",
+        r#"#usda 1.0
+(
+    metersPerUnit = 1
+)
+def Camera "Cam"
+{
+    float focalLength = 50
+    float horizontalAperture = 10
+    float verticalAperture = 10
+    double3 xformOp:translate = (0, 0, 10)
+    uniform token[] xformOpOrder = ["xformOp:translate"]
+}
+def Mesh "Card"
+{
+    int[] faceVertexCounts = [4]
+    int[] faceVertexIndices = [0, 1, 2, 3]
+    point3f[] points = [(-5, -5, 0), (5, -5, 0), (5, 5, 0), (-5, 5, 0)]
+    color3f[] primvars:displayColor = [(0.5, 0.5, 0.5)]
+}
+def DistantLight "Sun"
+{
+    float inputs:intensity = 3.14159265
+    bool inputs:normalize = true
+}
+def RectLight "Panel"
+{
+    float inputs:intensity = 0.0001
+    float inputs:width = 20
+    float inputs:height = 20
+    bool karma:light:renderlightgeo = false
+    double3 xformOp:translate = (0, 0, 5)
+    uniform token[] xformOpOrder = ["xformOp:translate"]
+}
+"#,
+    );
+    let mut desc = load(&p);
+    assert!(desc.lights.iter().all(|l| !l.casts_shadows));
+    desc.render.resolution = [8, 8];
+    desc.render.spp = 2;
+    desc.render.max_depth = 2;
+    let scene = Scene::build(&desc, &aov::assemble(Vec::new())).unwrap();
+    let (film, _) = render(
+        &scene,
+        &RenderOptions {
+            spp: 2,
+            first_sample: 0,
+        },
+    );
+    // Delta light, Lambertian card, a black panel seen by neither camera nor shadow rays:
+    // every sample is the same up to float rounding.
+    for y in 0..film.height {
+        for x in 0..film.width {
+            let v = film.pixel(0, x, y);
+            assert!((v.x - 0.5).abs() < 1e-3, "pixel {x},{y}: {v}");
+        }
+    }
+}
+
+#[test]
 fn time_samples_are_read_at_the_frame() {
     let dir = Scratch::new("usd-time");
     let p = write(
@@ -780,4 +925,240 @@ def Material "Mat"
     assert_eq!(p.base_color.to_array(), [0.1, 0.2, 0.3]);
     let e = load_err(&dir.join("nothing.usda"));
     assert!(e.contains("nothing.usda"), "{e}");
+}
+
+/// A stage whose RenderVars redefine standard names, rendered with `--aovs standard`,
+/// light groups and bounces: its header declares only the partitions that hold.
+fn partitions_of(
+    dir: &Scratch,
+    vars: &str,
+    names: &[&str],
+) -> Vec<(String, lightpath::aov::naming::PartitionKind)> {
+    use lightpath::aov::naming;
+    let ordered: Vec<String> = names.iter().map(|n| format!("</Render/{n}>")).collect();
+    let text = format!(
+        r#"#usda 1.0
+(
+    metersPerUnit = 1
+)
+def Xform "World"
+{{
+    def Sphere "Ball" {{ double radius = 1 }}
+    def Cube "Floor"
+    {{
+        double size = 1
+        double3 xformOp:translate = (0, -1.5, 0)
+        float3 xformOp:scale = (8, 1, 8)
+        uniform token[] xformOpOrder = ["xformOp:translate", "xformOp:scale"]
+    }}
+    def SphereLight "Bulb"
+    {{
+        float inputs:intensity = 20
+        float inputs:radius = 0.3
+        string karma:light:lpetag = "key"
+        double3 xformOp:translate = (2, 3, 3)
+        uniform token[] xformOpOrder = ["xformOp:translate"]
+    }}
+    def DistantLight "Sun" {{ float inputs:intensity = 2 bool inputs:normalize = true }}
+    def Camera "Cam"
+    {{
+        double3 xformOp:translate = (0, 0, 6)
+        uniform token[] xformOpOrder = ["xformOp:translate"]
+    }}
+}}
+def Scope "Render"
+{{
+    def RenderSettings "Settings"
+    {{
+        rel products = </Render/Out>
+        uniform int2 resolution = (12, 9)
+    }}
+    def RenderProduct "Out"
+    {{
+        rel orderedVars = [{}]
+    }}
+    {vars}
+}}
+"#,
+        ordered.join(", ")
+    );
+    let scene = write(dir, "parts.usda", &text);
+    let out = dir.join("parts.exr");
+    let mut job = lightpath::job::RenderJob::new(scene.to_string_lossy());
+    job.output = Some(out.clone());
+    job.overrides.spp = Some(2);
+    job.aovs.standard_asked = true;
+    job.aovs.light_groups = true;
+    job.aovs.bounces = Some(1);
+    job.prepare()
+        .unwrap()
+        .run(&lightpath::progress::Silent)
+        .unwrap();
+    let exr = lightpath::output::read_exr(&out).unwrap();
+    let checks = lightpath::post::check_partitions(&exr);
+    for c in &checks {
+        // Every declared partition sums to its whole (float rounding only).
+        assert!(
+            c.max_relative_error <= 1e-4,
+            "{} = {:?}: {}",
+            c.whole,
+            c.parts,
+            c.max_relative_error
+        );
+    }
+    let mut kinds: Vec<(String, naming::PartitionKind)> =
+        naming::parts_from_attributes(&exr.attributes)
+            .into_iter()
+            .map(|p| (p.whole, p.kind))
+            .collect();
+    kinds.sort();
+    kinds.dedup();
+    kinds
+}
+
+#[test]
+fn header_declares_only_the_partitions_that_hold_when_vars_redefine_standard_names() {
+    use lightpath::aov::naming::PartitionKind::{Bounces, LightGroups, Standard};
+    let dir = Scratch::new("usd-partitions");
+    let var = |name: &str, ty: &str, source: &str| {
+        format!(
+            "def RenderVar \"{name}\" {{ uniform string sourceName = \"{source}\" uniform token sourceType = \"{ty}\" }}\n"
+        )
+    };
+    let b = || ("beauty".to_string(), Bounces);
+    let l = || ("beauty".to_string(), LightGroups);
+    let s = || ("beauty".to_string(), Standard);
+    // Standard names with the standard meaning: every partition holds and is declared.
+    let vars = var("emission", "raw", "emission") + &var("diffuse", "lpe", "lpe:diffuse");
+    assert_eq!(
+        partitions_of(&dir, &vars, &["emission", "diffuse"]),
+        [s(), b(), l()]
+    );
+    // A member of the standard partition redefined (direct diffuse from the key only):
+    // the standard partition no longer sums and is not declared; the others are.
+    let vars = var("directDiffuse", "lpe", "C<RD>[<L.'key'>O]");
+    assert_eq!(partitions_of(&dir, &vars, &["directDiffuse"]), [b(), l()]);
+    // The beauty itself redefined: neither the standard set nor the bounces sum to it;
+    // its light-group split (of the user's beauty) still does.
+    let vars = var("beauty", "lpe", "C<RD>L");
+    assert_eq!(partitions_of(&dir, &vars, &["beauty"]), [l()]);
+}
+
+#[test]
+fn shaping_narrows_rect_and_disk_lights() {
+    use lightpath::light::triangles::Shaping;
+    // The schema's formulas: a hard cone at softness 0, a smoothstep in the angle over
+    // the last `softness` share of the cone, |cos θ|^focus.
+    let hard = Shaping {
+        cutoff: 30f32.to_radians(),
+        start: 30f32.to_radians(),
+        focus: 0.0,
+    };
+    assert_eq!(hard.factor(1.0), 1.0);
+    assert_eq!(hard.factor(29f32.to_radians().cos()), 1.0);
+    assert_eq!(hard.factor(31f32.to_radians().cos()), 0.0);
+    let soft = Shaping {
+        cutoff: 40f32.to_radians(),
+        start: 20f32.to_radians(),
+        focus: 2.0,
+    };
+    let c = 30f32.to_radians().cos();
+    assert!(
+        (soft.factor(c) - 0.5 * c * c).abs() < 1e-5,
+        "{}",
+        soft.factor(c)
+    );
+
+    let dir = Scratch::new("usd-shaping");
+    let p = write(
+        &dir,
+        "shaped.usda",
+        r#"#usda 1.0
+(
+    metersPerUnit = 1
+)
+def Camera "Cam"
+{
+    float focalLength = 10
+    float horizontalAperture = 20
+    float verticalAperture = 20
+    double3 xformOp:translate = (0, 0, 10)
+    uniform token[] xformOpOrder = ["xformOp:translate"]
+}
+def Mesh "Card"
+{
+    int[] faceVertexCounts = [4]
+    int[] faceVertexIndices = [0, 1, 2, 3]
+    point3f[] points = [(-20, -20, 0), (20, -20, 0), (20, 20, 0), (-20, 20, 0)]
+    color3f[] primvars:displayColor = [(0.5, 0.5, 0.5)]
+}
+def RectLight "Panel" (
+    prepend apiSchemas = ["ShapingAPI"]
+)
+{
+    float inputs:intensity = 50
+    float inputs:width = 1
+    float inputs:height = 1
+    float inputs:shaping:cone:angle = 30
+    float inputs:shaping:focus = 1
+    bool karma:light:renderlightgeo = false
+    double3 xformOp:translate = (0, 0, 1)
+    uniform token[] xformOpOrder = ["xformOp:translate"]
+}
+def DiskLight "Disk" (
+    prepend apiSchemas = ["ShapingAPI"]
+)
+{
+    float inputs:intensity = 1
+    float inputs:shaping:cone:angle = 45
+    float inputs:shaping:cone:softness = 0.5
+    double3 xformOp:translate = (0, 0, -5)
+    uniform token[] xformOpOrder = ["xformOp:translate"]
+}
+"#,
+    );
+    let mut desc = load(&p);
+    let shaping = |n: &str| {
+        desc.lights
+            .iter()
+            .find(|l| l.name.as_deref() == Some(n))
+            .unwrap()
+            .shaping
+    };
+    let rect = shaping("Panel").unwrap();
+    assert_eq!(
+        (rect.cone_angle, rect.cone_softness, rect.focus),
+        (30.0, 0.0, 1.0)
+    );
+    let disk = shaping("Disk").unwrap();
+    assert_eq!(
+        (disk.cone_angle, disk.cone_softness, disk.focus),
+        (45.0, 0.5, 0.0)
+    );
+    assert!(
+        desc.warnings.iter().all(|w| !w.contains("ShapingAPI")),
+        "{:?}",
+        desc.warnings
+    );
+    // Direct light only, the card seen from above: under the panel it is lit; a point of
+    // the card 2 m aside sees every point of the panel more than 50° off its normal, past
+    // the 30° cone, so it gets nothing (it would without the cone).
+    desc.render.resolution = [21, 21];
+    desc.render.spp = 16;
+    desc.render.max_depth = 2;
+    let scene = Scene::build(&desc, &aov::assemble(Vec::new())).unwrap();
+    let (film, _) = render(
+        &scene,
+        &RenderOptions {
+            spp: 16,
+            first_sample: 0,
+        },
+    );
+    // 20 m of card over 21 pixels at 10 m: pixel 10 is x = 0, each pixel ~0.95 m.
+    let centre = film.pixel(0, 10, 10);
+    assert!(centre.x > 0.1, "under the panel: {centre}");
+    for x in [0, 1, 2, 3, 4, 5, 6, 7, 13, 14, 15, 16, 17, 18, 19, 20] {
+        let v = film.pixel(0, x, 10);
+        assert_eq!(v.x, 0.0, "pixel {x},10 outside the cone: {v}");
+    }
 }

@@ -92,6 +92,7 @@ fn shape(range: &Range<u32>, accel: &Accel) -> Option<LightShape> {
             by_area: Distribution1D::new(&areas),
             area,
             two_sided: true,
+            shaping: None,
         })
         .into()
     })

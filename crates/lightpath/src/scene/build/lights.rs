@@ -3,6 +3,7 @@
 
 use crate::geometry::shapes::{self, ShapePrims};
 use crate::geometry::{Accel, Prim};
+use crate::light::triangles::Shaping;
 use crate::light::{
     Cylinder, Distant, Dome, EnvMap, Light, LightModel, LightShape, Mesh, Point, Sphere, Spot,
     Triangles,
@@ -32,6 +33,14 @@ pub fn light_shape(l: &LightDesc) -> Result<(LightShape, Option<ShapePrims>, Vec
             by_area: Distribution1D::new(&areas),
             area: areas.iter().sum(),
             two_sided: l.two_sided,
+            shaping: l.shaping.map(|s| {
+                let cutoff = s.cone_angle.clamp(0.0, 180.0).to_radians();
+                Shaping {
+                    cutoff,
+                    start: cutoff * (1.0 - s.cone_softness.clamp(0.0, 1.0)),
+                    focus: s.focus.max(0.0),
+                }
+            }),
         };
         Ok((shape.into(), Some(prims), color))
     };
@@ -100,6 +109,7 @@ pub fn light_shape(l: &LightDesc) -> Result<(LightShape, Option<ShapePrims>, Vec
                 by_area: Distribution1D::default(),
                 area: 0.0,
                 two_sided: l.two_sided,
+                shaping: None,
             });
             (shape.into(), None, color)
         }

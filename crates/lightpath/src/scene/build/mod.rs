@@ -229,7 +229,12 @@ fn add_lights(
             } else {
                 0
             };
-            range = Some(geometry.add(id, sp, camera | Visibility::INDIRECT | Visibility::SHADOW));
+            let shadow = if l.casts_shadows {
+                Visibility::SHADOW
+            } else {
+                0
+            };
+            range = Some(geometry.add(id, sp, camera | Visibility::INDIRECT | shadow));
             let name = l.name.clone().unwrap_or_else(|| format!("light{light_id}"));
             let groups = if l.groups.is_empty() {
                 vec![name.clone()]

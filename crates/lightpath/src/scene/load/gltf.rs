@@ -1147,6 +1147,8 @@ impl Loader {
             color: light.color(),
             strength,
             camera_visible: false,
+            casts_shadows: true,
+            shaping: None,
             two_sided: false,
             material: None,
             transform: Affine3A::IDENTITY,

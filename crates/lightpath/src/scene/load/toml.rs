@@ -325,6 +325,9 @@ struct LightDesc {
     strength: f32,
     #[serde(default = "yes")]
     camera_visible: bool,
+    /// Whether the light's surface blocks other lights' shadow rays.
+    #[serde(default = "yes")]
+    casts_shadows: bool,
     #[serde(default)]
     two_sided: bool,
     /// The surface material of an area light (it can reflect too); none by default.
@@ -959,6 +962,8 @@ fn light(src: &Source, l: &Spanned<LightDesc>) -> Result<d::LightDesc, SceneErro
         color,
         strength: l.strength,
         camera_visible: l.camera_visible,
+        casts_shadows: l.casts_shadows,
+        shaping: None,
         two_sided: l.two_sided,
         material: name_ref(src, &l.material),
         transform: placement(l.translate, l.rotate, l.scale, l.matrix),
@@ -1051,6 +1056,8 @@ fn mesh_lights(
             color: radiance,
             strength: l.strength,
             camera_visible: l.camera_visible,
+            casts_shadows: l.casts_shadows,
+            shaping: None,
             two_sided: l.two_sided,
             material: None,
             transform: glam::Affine3A::IDENTITY,

@@ -9,11 +9,15 @@
 //!   radius: intensity L·π·r² (normalized: L/4), in W/sr.
 //! - A distant light with `normalize` gives irradiance `L` at a surface facing it; without
 //!   it, L is the radiance of the sun disk of diameter `angle`, whose irradiance is
-//!   L·π·sin²(angle/2) (an `angle` of 0 is read as normalized).
+//!   L·π·sin²(angle/2) (an `angle` of 0 is read as normalized). A distant light whose
+//!   intensity Blender's exporter wrote is read as Blender reads it back: irradiance
+//!   4·L, Blender's sun strength (its exporter divides the strength by 4).
 //! - A dome light emits radiance L (times its `latlong` EXR).
 //! - `ShapingAPI`'s cone on a sphere light makes it a spot (full angle 2·`cone:angle`, soft
-//!   edge as Blender reads `cone:softness`: its spot blend); on other kinds it is warned
-//!   about and ignored.
+//!   edge as Blender reads `cone:softness`: its spot blend). On rect and disk lights the
+//!   cone (`cone:angle`, `cone:softness`) and `focus` shape the emission about the normal
+//!   by the schema's formulas (`light/triangles.rs`); on other kinds they are warned about
+//!   and ignored.
 //!
 //! A light's group is the first authored of Karma's `karma:light:lpetag`, RenderMan's
 //! `ri:light:lightGroup`, Cycles' `cycles:lightgroup` and Arnold's `primvars:arnold:aov`,
@@ -26,7 +30,7 @@
 //! luminance 1.
 
 use super::{stage, Loader};
-use crate::scene::desc::{LightDesc, LightKind, ObjectDesc};
+use crate::scene::desc::{AreaShaping, LightDesc, LightKind, ObjectDesc};
 use crate::scene::SceneError;
 use glam::{Affine3A, Vec3, Vec3A};
 use openusd::usd::Prim;
@@ -41,7 +45,30 @@ pub const LIGHT_TAGS: &[&str] = &[
     "primvars:arnold:aov",
 ];
 
+/// What Blender's USD importer multiplies a DistantLight's intensity by to get the sun's
+/// strength (irradiance, W/m²), the inverse of its exporter's division.
+const BLENDER_SUN: f32 = 4.0;
+
 impl Loader {
+    /// Whether the strongest opinion on the light's intensity is in a layer Blender's USD
+    /// exporter wrote (its `doc` is `Blender v…`).
+    fn intensity_from_blender(&self, prim: &Prim) -> bool {
+        ["inputs:intensity", "intensity"].iter().any(|name| {
+            let attr = prim.attribute(*name);
+            let Some((layer, _)) = attr
+                .property_stack()
+                .ok()
+                .and_then(|s| s.into_iter().next())
+            else {
+                return false;
+            };
+            self.stage
+                .layer(&layer)
+                .and_then(|l| l.pseudo_root().and_then(|r| r.documentation()))
+                .is_some_and(|doc| doc.starts_with("Blender v"))
+        })
+    }
+
     fn light_number(&self, prim: &Prim, name: &str, default: f32) -> f32 {
         stage::value_of(prim, &[&format!("inputs:{name}"), name], self.time)
             .and_then(|v| stage::f32_of(&v))
@@ -124,8 +151,15 @@ impl Loader {
         world: Affine3A,
     ) -> Result<(), SceneError> {
         let default_intensity = if ty == "DistantLight" { 50000.0 } else { 1.0 };
-        let (l, color) = self.emission(prim, default_intensity);
-        let normalize = self.light_bool(prim, "normalize");
+        let (mut l, color) = self.emission(prim, default_intensity);
+        let mut normalize = self.light_bool(prim, "normalize");
+        if ty == "DistantLight" && self.intensity_from_blender(prim) {
+            // Blender's exporter writes a sun of strength S W/m² as intensity S/4 and its
+            // importer reads it back as 4·intensity whatever `normalize` says: the number
+            // means Blender's sun strength, not the specification's illuminance.
+            l *= BLENDER_SUN;
+            normalize = true;
+        }
         let mut shaping = None;
         let cone = self.light_number(prim, "shaping:cone:angle", 90.0);
         if cone < 90.0 {
@@ -135,6 +169,19 @@ impl Loader {
                     .clamp(0.0, 1.0),
             ));
         }
+        let focus = self.light_number(prim, "shaping:focus", 0.0).max(0.0);
+        // Rect and disk lights take the cone and the focus as their emission profile.
+        let area_shaping =
+            if matches!(ty, "RectLight" | "DiskLight") && (shaping.is_some() || focus > 0.0) {
+                let (cone_angle, cone_softness) = shaping.take().unwrap_or((90.0, 0.0));
+                Some(AreaShaping {
+                    cone_angle,
+                    cone_softness,
+                    focus,
+                })
+            } else {
+                None
+            };
         let (kind, transform, strength) =
             self.light_shape(prim, ty, world, (l, normalize), &mut shaping)?;
         if shaping.is_some() {
@@ -142,7 +189,17 @@ impl Loader {
                 &format!("shaping {}", prim.path()),
                 prim,
                 format!(
-                    "ShapingAPI's cone on a {ty} is not rendered (only sphere lights become spots)"
+                    "ShapingAPI's cone on a {ty} is not rendered (sphere lights become spots, \
+                     rect and disk lights are shaped)"
+                ),
+            );
+        }
+        if focus > 0.0 && area_shaping.is_none() {
+            self.warn_once(
+                &format!("focus {}", prim.path()),
+                prim,
+                format!(
+                    "ShapingAPI's focus on a {ty} is not rendered (only on rect and disk lights)"
                 ),
             );
         }
@@ -162,6 +219,8 @@ impl Loader {
             color,
             strength,
             camera_visible,
+            casts_shadows: false,
+            shaping: area_shaping,
             two_sided: false,
             material: None,
             transform,
@@ -397,6 +456,8 @@ impl Loader {
                 color,
                 strength: radiance,
                 camera_visible: true,
+                casts_shadows: true,
+                shaping: None,
                 two_sided: false,
                 material: None,
                 transform: Affine3A::IDENTITY,
