@@ -107,8 +107,12 @@ impl Tracer<'_> {
             };
             let found = scene.accel.intersect(&ray, tmin, mask);
             tmin = 0.0;
-            let passes =
+            let null =
                 scene.has_media && found.as_ref().is_some_and(|h| self.passes(&path.media, h));
+            // A surface only partly there (presence) is absent for this ray: it goes on
+            // as through a null surface, without an event, the medium unchanged.
+            let absent = !null && found.as_ref().is_some_and(|h| self.see_through(h, &ray));
+            let passes = null || absent;
             if let Some(hit) = found.as_ref().filter(|_| !passes) {
                 let holdout = scene.objects[hit.object as usize].holdout;
                 if path.depth == 0 {
@@ -149,7 +153,9 @@ impl Tracer<'_> {
                 if crossings > MAX_CROSSINGS {
                     break;
                 }
-                self.cross(&mut path.media, &hit, ray.dir);
+                if null {
+                    self.cross(&mut path.media, &hit, ray.dir);
+                }
                 path.travelled += hit.t;
                 ray.origin = hit.p;
                 tmin = scene.epsilon;
@@ -175,7 +181,10 @@ impl Tracer<'_> {
                 (None, Some(rough)) if path.diffuse > 0 => (rough, hit.ns),
                 (None, _) => (&material.bsdf, hit.ns),
             };
-            let sh = Shading::new(bsdf, ns, hit.ng, -ray.dir);
+            let mut sh = Shading::new(bsdf, ns, hit.ng, -ray.dir);
+            if let Some(d) = &material.anisotropy {
+                sh = self.oriented(sh, d, &hit);
+            }
             if sh.wo.z == 0.0 {
                 break;
             }

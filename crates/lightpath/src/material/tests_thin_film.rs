@@ -342,5 +342,10 @@ fn metal_film_follows_the_f82_reflectance() {
     assert!((eta.x - 1.2474).abs() < 1e-3, "eta {eta}");
     assert!((kappa.x - 0.4488).abs() < 1e-3, "kappa {kappa}");
     let got = thin_film_fresnel(1.0, 1.0, 1.33, 400.0, ir.base);
-    assert_close(got, [0.123877, 0.053547, 0.014913], 3e-4, "f0 0.05 under 400 nm");
+    assert_close(
+        got,
+        [0.123877, 0.053547, 0.014913],
+        3e-4,
+        "f0 0.05 under 400 nm",
+    );
 }
