@@ -138,15 +138,18 @@ impl Tracer<'_> {
         true
     }
 
-    /// `sh` with its first axis along the direction anisotropy follows at `hit`: the
-    /// mesh's tangent turned by `d` (unchanged without tangents or UVs).
+    /// `sh` with its first axis along the direction `material`'s anisotropy follows at
+    /// `hit`: the mesh's tangent turned as it says (unchanged without one, or without UVs).
     pub(super) fn oriented(
         &self,
         sh: crate::material::Shading,
-        d: &crate::material::anisotropy::AnisotropyDirection,
+        material: &crate::scene::Material,
         hit: &Hit,
     ) -> crate::material::Shading {
         let scene = self.scene;
+        let Some(d) = material.anisotropy.as_deref() else {
+            return sh;
+        };
         let Some(s) = scene.surface.at(&scene.accel, hit).and_then(|p| p.uv) else {
             return sh;
         };
