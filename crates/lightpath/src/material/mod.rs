@@ -135,7 +135,8 @@ impl Shading {
         let n = self.frame.n;
         let s = tangent - n * n.dot(tangent);
         let len = s.length();
-        if !(len > 1e-6) {
+        // Also NaN: a degenerate tangent keeps the frame.
+        if len.is_nan() || len <= 1e-6 {
             return self;
         }
         let s = s / len;
