@@ -185,11 +185,7 @@ impl Tracer<'_> {
                     f32::INFINITY
                 };
                 tmax <= 0.0
-                    || !scene.accel.occluded(
-                        &self.spawn(v.hit, ls.wi, tmax),
-                        0.0,
-                        light.shadow_exempt(),
-                    )
+                    || !self.occluded(out, &self.spawn(v.hit, ls.wi, tmax), light.shadow_exempt())
             });
             let via = match (glow, vis) {
                 // A glow is no light: what cannot reach it is no shadow.
@@ -260,9 +256,7 @@ impl Tracer<'_> {
             f32::INFINITY
         };
         let visible = tmax <= 0.0
-            || !scene
-                .accel
-                .occluded(&self.spawn(hit, ls.wi, tmax), 0.0, light.shadow_exempt());
+            || !self.occluded(out, &self.spawn(hit, ls.wi, tmax), light.shadow_exempt());
         let via = match (light.glow, visible) {
             (true, false) => return,
             (true, true) => Via::Glow,
@@ -328,8 +322,9 @@ impl Tracer<'_> {
                     self.light_only_split(out, path, li as u32, le, w, tr);
                     return;
                 }
-                let reached =
-                    hit.is_some_and(|h| scene.objects[h.object as usize].light == Some(li as u32));
+                let reached = self
+                    .present_hit(ray, hit)
+                    .is_some_and(|h| scene.objects[h.object as usize].light == Some(li as u32));
                 self.light_only_seen(out, path, li as u32, le, w, !reached);
             }
             None => {
@@ -346,7 +341,8 @@ impl Tracer<'_> {
                         self.light_only_split(out, path, li, le, w, tr);
                         continue;
                     }
-                    self.light_only_seen(out, path, li, le, w, hit.is_some());
+                    let blocked = self.present_hit(ray, hit).is_some();
+                    self.light_only_seen(out, path, li, le, w, blocked);
                 }
             }
         }

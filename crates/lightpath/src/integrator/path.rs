@@ -107,15 +107,10 @@ impl Tracer<'_> {
             };
             let found = scene.accel.intersect(&ray, tmin, mask);
             tmin = 0.0;
-            let passes =
-                scene.has_media && found.as_ref().is_some_and(|h| self.passes(&path.media, h));
+            // A null surface, or one only partly there that this ray misses (presence).
+            let (passes, null) = self.passing(&path.media, found.as_ref(), &ray);
             if let Some(hit) = found.as_ref().filter(|_| !passes) {
-                let holdout = scene.objects[hit.object as usize].holdout;
-                if path.depth == 0 {
-                    alpha = if holdout { 0.0 } else { 1.0 };
-                    out.first_object = (!holdout).then_some(hit.object);
-                }
-                out.holdout |= holdout;
+                self.first_hit(out, path.depth, hit, &mut alpha);
             }
             // Here, after the roulette and with the real ray's result, so that the
             // lights-only estimate is the beauty's own, sample by sample; once per
@@ -149,7 +144,9 @@ impl Tracer<'_> {
                 if crossings > MAX_CROSSINGS {
                     break;
                 }
-                self.cross(&mut path.media, &hit, ray.dir);
+                if null {
+                    self.cross(&mut path.media, &hit, ray.dir);
+                }
                 path.travelled += hit.t;
                 ray.origin = hit.p;
                 tmin = scene.epsilon;
@@ -175,7 +172,7 @@ impl Tracer<'_> {
                 (None, Some(rough)) if path.diffuse > 0 => (rough, hit.ns),
                 (None, _) => (&material.bsdf, hit.ns),
             };
-            let sh = Shading::new(bsdf, ns, hit.ng, -ray.dir);
+            let sh = self.oriented(Shading::new(bsdf, ns, hit.ng, -ray.dir), material, &hit);
             if sh.wo.z == 0.0 {
                 break;
             }
@@ -209,6 +206,27 @@ impl Tracer<'_> {
             }
         }
         alpha
+    }
+
+    /// Whether the ray goes on through `found` without an event, and whether that is a
+    /// null surface (a medium boundary, crossed) rather than an absent one (presence:
+    /// the medium does not change).
+    fn passing(&self, media: &MediumStack, found: Option<&Hit>, ray: &Ray) -> (bool, bool) {
+        let Some(h) = found else {
+            return (false, false);
+        };
+        let null = self.scene.has_media && self.passes(media, h);
+        (null || self.see_through(h, ray), null)
+    }
+
+    /// The path's first real surface: alpha, the object for the ID AOVs, holdouts.
+    fn first_hit(&self, out: &mut Sink, depth: u32, hit: &Hit, alpha: &mut f32) {
+        let holdout = self.scene.objects[hit.object as usize].holdout;
+        if depth == 0 {
+            *alpha = if holdout { 0.0 } else { 1.0 };
+            out.first_object = (!holdout).then_some(hit.object);
+        }
+        out.holdout |= holdout;
     }
 
     /// The ray left the scene: the escape lights (domes, distant lights' sky) it sees.

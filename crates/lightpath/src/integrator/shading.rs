@@ -76,3 +76,111 @@ fn uv_width(cone_width: f32, uv_per_world: f32, dir: Vec3A, ng: Vec3A) -> f32 {
     let cos = dir.dot(ng).abs().max(1e-3);
     cone_width * uv_per_world / cos.sqrt()
 }
+
+impl Tracer<'_> {
+    /// Whether `ray` goes on through `hit` without an event: the surface's material is
+    /// only partly there (`material/presence.rs`) and this ray is one that misses it.
+    pub(super) fn see_through(&self, hit: &Hit, ray: &crate::geometry::Ray) -> bool {
+        let scene = self.scene;
+        if !scene.has_presence {
+            return false;
+        }
+        let Some(presence) = scene.objects[hit.object as usize]
+            .material
+            .and_then(|m| scene.materials[m as usize].presence.as_deref())
+        else {
+            return false;
+        };
+        let uv = if presence.texture.is_some() {
+            scene
+                .surface
+                .at(&scene.accel, hit)
+                .and_then(|p| p.uv)
+                .map(|s| s.uv)
+        } else {
+            None
+        };
+        crate::material::presence::passes_through(presence.at(uv), ray, hit)
+    }
+
+    /// Whether the shadow ray `ray` (up to `ray.tmax`) is blocked, `ignore` (a light's own
+    /// object) passed: past surfaces that are not there for it (presence), if any.
+    pub(super) fn occluded(
+        &self,
+        out: &mut super::Sink,
+        ray: &crate::geometry::Ray,
+        ignore: u32,
+    ) -> bool {
+        let scene = self.scene;
+        if !scene.has_presence {
+            return scene.accel.occluded(ray, 0.0, ignore);
+        }
+        let mut ray = *ray;
+        let mut tmin = 0.0;
+        for _ in 0..super::volume::MAX_CROSSINGS {
+            let Some(hit) = scene
+                .accel
+                .intersect(&ray, tmin, crate::geometry::Visibility::SHADOW)
+            else {
+                return false;
+            };
+            if hit.object != ignore && !self.see_through(&hit, &ray) {
+                return true;
+            }
+            out.rays += 1;
+            ray.origin = hit.p;
+            ray.tmax -= hit.t;
+            tmin = scene.epsilon;
+            if ray.tmax <= tmin {
+                return false;
+            }
+        }
+        true
+    }
+
+    /// `sh` with its first axis along the direction `material`'s anisotropy follows at
+    /// `hit`: the mesh's tangent turned as it says (unchanged without one, or without UVs).
+    pub(super) fn oriented(
+        &self,
+        sh: crate::material::Shading,
+        material: &crate::scene::Material,
+        hit: &Hit,
+    ) -> crate::material::Shading {
+        let scene = self.scene;
+        let Some(d) = material.anisotropy.as_deref() else {
+            return sh;
+        };
+        let Some(s) = scene.surface.at(&scene.accel, hit).and_then(|p| p.uv) else {
+            return sh;
+        };
+        let Some((t, b)) = s.tangent_frame(sh.frame.n) else {
+            return sh;
+        };
+        let (c, sn) = d.at(Some(s.uv));
+        sh.along(t * c + b * sn)
+    }
+
+    /// The first surface along the scattered `ray` that is there for it, from `hit`, the
+    /// first one found: past those it passes (presence) as the path itself does, so the
+    /// lights-only test sees what the real ray reaches.
+    pub(super) fn present_hit(&self, ray: &crate::geometry::Ray, hit: Option<&Hit>) -> Option<Hit> {
+        let scene = self.scene;
+        let mut hit = *hit?;
+        if !scene.has_presence {
+            return Some(hit);
+        }
+        let mut ray = *ray;
+        for _ in 0..super::volume::MAX_CROSSINGS {
+            if !self.see_through(&hit, &ray) {
+                return Some(hit);
+            }
+            ray.origin = hit.p;
+            hit = scene.accel.intersect(
+                &ray,
+                scene.epsilon,
+                crate::geometry::Visibility::INDIRECT,
+            )?;
+        }
+        None
+    }
+}

@@ -229,10 +229,11 @@ impl Tracer<'_> {
                 return tr;
             };
             if hit.object != ignore {
-                if !self.passes(&stack, &hit) {
+                if self.passes(&stack, &hit) {
+                    self.cross(&mut stack, &hit, ray.dir);
+                } else if !self.see_through(&hit, &ray) {
                     return Vec3A::ZERO;
                 }
-                self.cross(&mut stack, &hit, ray.dir);
             }
             ray.origin = hit.p;
             ray.tmax -= hit.t;

@@ -45,7 +45,7 @@ pub fn refract(wi: Vec3A, n: Vec3A, eta: f32) -> Option<Vec3A> {
 }
 
 /// The cosine of the F82-tint model's reference angle (about 82°): μ̄ = 1/7.
-const MU_BAR: f32 = 1.0 / 7.0;
+pub const MU_BAR: f32 = 1.0 / 7.0;
 
 /// Metal Fresnel as OpenPBR's "metal" section specifies it: Hoffman's (2023)
 /// generalized Schlick with an F82 tint, F(μ) = F_s(μ) − a·μ(1 − μ)⁶ with

@@ -20,6 +20,7 @@
 
 pub mod albedo;
 mod albedo_tables;
+pub mod anisotropy;
 mod coat;
 mod conductor;
 mod dielectric;
@@ -33,6 +34,7 @@ pub mod lobe;
 pub mod microfacet;
 pub mod openpbr;
 pub mod pbr;
+pub mod presence;
 mod specular;
 mod subsurface;
 pub mod texture;
@@ -123,6 +125,29 @@ impl Shading {
         Shading {
             frame,
             wo: frame.to_local(wo_world),
+        }
+    }
+
+    /// The same shading point with its first axis along `tangent` (projected onto the
+    /// normal's plane), which anisotropic lobes stretch along; a tangent along the normal
+    /// leaves the frame as it is.
+    pub fn along(self, tangent: Vec3A) -> Shading {
+        let n = self.frame.n;
+        let s = tangent - n * n.dot(tangent);
+        let len = s.length();
+        // Also NaN: a degenerate tangent keeps the frame.
+        if len.is_nan() || len <= 1e-6 {
+            return self;
+        }
+        let s = s / len;
+        let frame = Frame {
+            s,
+            t: n.cross(s),
+            n,
+        };
+        Shading {
+            frame,
+            wo: frame.to_local(self.frame.to_world(self.wo)),
         }
     }
 }

@@ -139,7 +139,7 @@ openpbr_inputs! {
     thin_film_ior: Scalar(1.4, 1.0, BIG) "Index of refraction of the film.";
     emission_luminance: Scalar(0.0, 0.0, BIG) "Emitted luminance (1 is radiance 1, as Cycles' emission strength).";
     emission_color: Color(1.0, 1.0, 1.0) "Colour of the emission.";
-    geometry_opacity: Scalar(1.0, 0.0, 1.0) "Presence (cut-out); only 1 is rendered today.";
+    geometry_opacity: Scalar(1.0, 0.0, 1.0) "Presence: the fraction of rays that find the surface; the others pass through it without an event (cut-outs).";
     geometry_thin_walled: Bool(false) "An infinitely thin shell: subsurface becomes translucency, glass does not bend light.";
 }
 

@@ -317,3 +317,35 @@ fn constants_follow_from_their_sources() {
         }
     }
 }
+
+/// A film on a metal given by colours (OpenPBR's base colour and F82 tint) lies on the
+/// complex index Gulbrandsen's mapping gives for f0 and the F82 model's reflectance at
+/// 82° (as Blender Cycles maps a Principled metal under a thin film): for f0 0.05, tint 1
+/// that is η 1.2474, κ 0.4488, and a 400 nm film of index 1.33 at normal incidence
+/// reflects what the independent integration (`tests_thin_film_reference.py`, last case)
+/// gives for that index. The tint itself as the mapping's colour (η 0.905) gave
+/// (0.19, 0.06, 0.07), outside the tolerance.
+#[test]
+fn metal_film_follows_the_f82_reflectance() {
+    use super::iridescence::Iridescence;
+    let ir = Iridescence::on_metal(
+        Vec3A::splat(0.05),
+        Vec3A::ONE,
+        1.33,
+        400.0,
+        1.0,
+        glam::Vec2::splat(0.1),
+    );
+    let FilmBase::Conductor { eta, kappa } = ir.base else {
+        panic!("a metal's film base is a conductor: {:?}", ir.base);
+    };
+    assert!((eta.x - 1.2474).abs() < 1e-3, "eta {eta}");
+    assert!((kappa.x - 0.4488).abs() < 1e-3, "kappa {kappa}");
+    let got = thin_film_fresnel(1.0, 1.0, 1.33, 400.0, ir.base);
+    assert_close(
+        got,
+        [0.123877, 0.053547, 0.014913],
+        3e-4,
+        "f0 0.05 under 400 nm",
+    );
+}

@@ -101,6 +101,8 @@ CASES = [
     (0.6, 1.0, 1.4, 400, ("conductor", (0.2, 0.9, 1.1), (3.0, 2.5, 2.2))),
     (0.9, 1.5, 2.0, 250, ("dielectric", 1.3)),
     (1.0, 1.0, 1.3, 650, ("conductor", (0.18, 0.42, 1.37), (3.42, 2.35, 1.77))),
+    # tests_thin_film.rs::metal_film_follows_the_f82_reflectance: f0 0.05, F82 tint 1.
+    (1.0, 1.0, 1.33, 400, ("conductor", (1.2474,) * 3, (0.4488,) * 3)),
 ]
 
 if __name__ == "__main__":

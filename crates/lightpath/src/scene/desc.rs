@@ -245,6 +245,12 @@ pub struct TexturesDesc {
     pub emissive: Option<TextureDesc>,
     /// OpenPBR inputs, each multiplied by a texture.
     pub inputs: Vec<InputTexture>,
+    /// glTF's `alphaCutoff` (alphaMode MASK): the surface is there where its opacity
+    /// (`geometry_opacity` × its texture) reaches this, absent elsewhere.
+    pub opacity_cutoff: Option<f32>,
+    /// glTF's `KHR_materials_anisotropy`: anisotropy follows the mesh's tangent turned by
+    /// this rotation (radians) and by the direction in this texture's red and green.
+    pub anisotropy_direction: Option<(f32, Option<TextureDesc>)>,
 }
 
 /// A texture on one OpenPBR input: colours take its RGB (sRGB-decoded when `srgb`), numbers

@@ -29,6 +29,12 @@ pub struct Material {
     pub user_color: Option<Vec3A>,
     /// Textures, if any: the BSDF is then rebuilt at each hit.
     pub textured: Option<Box<Textured>>,
+    /// Where the surface is only partly there (cut-outs, `geometry_opacity` < 1);
+    /// `None`: opaque.
+    pub presence: Option<Box<crate::material::presence::Presence>>,
+    /// The direction anisotropy follows on meshes with tangents (glTF); `None`: the
+    /// shading frame's first axis.
+    pub anisotropy: Option<Box<crate::material::anisotropy::AnisotropyDirection>>,
 }
 
 /// One scene object after building: what it is made of and its precomputed LPE classes.
@@ -130,4 +136,7 @@ pub struct Scene {
     /// Whether any object bounds a medium, has a null surface, or there is an
     /// atmosphere: paths then track media and shadow rays pass null boundaries.
     pub has_media: bool,
+    /// Whether any object's material is only partly there (`Material::presence`): rays
+    /// then test what they hit for presence.
+    pub has_presence: bool,
 }

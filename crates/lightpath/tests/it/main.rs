@@ -18,6 +18,7 @@ mod mutation;
 mod newcomer;
 mod openpbr;
 mod peer;
+mod presence;
 mod render;
 mod sampling;
 mod settings;

@@ -1,7 +1,9 @@
 //! Materials: each description becomes a BSDF (a list of lobes) and a user colour.
 
+use crate::material::anisotropy::AnisotropyDirection;
 use crate::material::openpbr::{self, InputKind, InputMut, LobeSet, OpenPbr};
 use crate::material::pbr::MIN_TEXTURED_ROUGHNESS;
+use crate::material::presence::Presence;
 use crate::material::texture::{ColorSpace, MipMap, Texture, UvTransform, Wrap};
 use crate::material::textured::{InputRef, MaterialTextures, ShadeModel, Textured};
 use crate::material::Bsdf;
@@ -140,7 +142,15 @@ fn material(
 ) -> Result<(Material, ShadeModel), SceneError> {
     check_parameters(name, m)?;
     let eta = index_of_refraction(name, m)?;
-    let t = &textures_of(m);
+    let mut t = textures_of(m);
+    // The opacity's texture is the presence's, not the BSDF's (it changes no lobe).
+    let opacity_texture = t
+        .inputs
+        .iter()
+        .position(|i| i.input == "geometry_opacity")
+        .map(|k| t.inputs.remove(k));
+    t.inputs.retain(|i| i.input != "geometry_opacity");
+    let t = &t;
     let (mut params, color_targets) = preset(m, eta);
     check_openpbr(name, m, &params)?;
     let rough_textured = t.metallic_roughness.is_some();
@@ -177,11 +187,30 @@ fn material(
     } else {
         None
     };
+    let opacity_texture = match opacity_texture {
+        Some(i) => Some((images.texture(&i.texture, ColorSpace::Linear)?, i.channel)),
+        None => None,
+    };
+    let presence = Presence::new(params.geometry_opacity, opacity_texture, t.opacity_cutoff);
+    let anisotropic =
+        params.specular_roughness_anisotropy > 0.0 || is_textured("specular_roughness_anisotropy");
+    let anisotropy = match &t.anisotropy_direction {
+        Some((rotation, texture)) if anisotropic => Some(Box::new(AnisotropyDirection {
+            rotation: *rotation,
+            texture: match texture {
+                Some(d) => Some(images.texture(d, ColorSpace::Linear)?),
+                None => None,
+            },
+        })),
+        _ => None,
+    };
     let material = Material {
         bsdf: Bsdf::openpbr(&params, &lobes),
         regularized: None,
         user_color: m.user_color.map(Vec3A::from),
         textured,
+        presence: presence.map(Box::new),
+        anisotropy,
     };
     Ok((material, model))
 }

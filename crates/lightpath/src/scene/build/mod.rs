@@ -68,6 +68,10 @@ impl Scene {
             || objects
                 .iter()
                 .any(|o| o.interior.is_some() || o.null_surface);
+        let has_presence = objects.iter().any(|o| {
+            o.material
+                .is_some_and(|m| materials[m as usize].presence.is_some())
+        });
         let light_groups = lights::groups(&mut lights);
         let aovs = output_aovs(&automaton, aovs, &light_groups);
         let data_live = data_live(&automaton, &objects, classes.data_light);
@@ -101,6 +105,7 @@ impl Scene {
             atmosphere,
             camera_media,
             has_media,
+            has_presence,
         })
     }
 }

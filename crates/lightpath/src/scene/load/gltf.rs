@@ -710,7 +710,7 @@ impl Loader {
             k += 1;
         }
         let pbr = m.pbr_metallic_roughness();
-        let [r, g, b, _a] = pbr.base_color_factor();
+        let [r, g, b, alpha] = pbr.base_color_factor();
         let base_color = Vec3A::new(r, g, b);
         let mut p = OpenPbr {
             base_color,
@@ -752,6 +752,19 @@ impl Loader {
         if let Some(info) = m.emissive_texture() {
             textures.emissive =
                 Some(self.texture(&info.texture(), info.texture_transform(), &pointer)?);
+        }
+        // Presence: MASK cuts out where alpha (factor × the base colour texture's alpha)
+        // is below alphaCutoff; BLEND lets a fraction 1 − alpha of rays through.
+        if m.alpha_mode() != gltf::material::AlphaMode::Opaque {
+            p.geometry_opacity = alpha.clamp(0.0, 1.0);
+            if let Some(t) = &textures.base_color {
+                textures
+                    .inputs
+                    .push(input_texture("geometry_opacity", t.clone(), 3, false));
+            }
+            if m.alpha_mode() == gltf::material::AlphaMode::Mask {
+                textures.opacity_cutoff = Some(m.alpha_cutoff().unwrap_or(0.5));
+            }
         }
         self.extensions(&m, &pointer, &mut p, &mut textures)?;
         if let Some(sigma_a) = self.volume(&m, &mut p) {
@@ -854,15 +867,20 @@ impl Loader {
             // Without KHR_materials_volume the surface is a thin sheet: translucency.
             p.geometry_thin_walled = m.extension_value("KHR_materials_volume").is_none();
         }
-        if let Some(rotation) =
-            value("KHR_materials_anisotropy", "anisotropyRotation").and_then(|v| v.as_f64())
-        {
-            if rotation != 0.0 {
-                self.warn(
-                    &at("KHR_materials_anisotropy", "anisotropyRotation"),
-                    "the rotation of anisotropy is not read: highlights stretch along the tangent",
-                );
-            }
+        // Anisotropy follows the mesh's tangent, turned by the rotation and by the
+        // texture's direction (red, green; its blue is the strength, in TEXTURES).
+        if m.extension_value("KHR_materials_anisotropy").is_some() {
+            let rotation = value("KHR_materials_anisotropy", "anisotropyRotation")
+                .and_then(|v| v.as_f64())
+                .filter(|r| r.is_finite())
+                .unwrap_or(0.0) as f32;
+            let texture = match value("KHR_materials_anisotropy", "anisotropyTexture") {
+                Some(info) => Some(
+                    self.texture_info(info, &at("KHR_materials_anisotropy", "anisotropyTexture"))?,
+                ),
+                None => None,
+            };
+            textures.anisotropy_direction = Some((rotation, texture));
         }
         for &(ext, key, input, channel, srgb) in TEXTURES {
             let Some(info) = value(ext, key) else {

@@ -825,6 +825,8 @@ fn textures(
         normal: tex(&m.normal_texture).map(|t| (t, m.normal_scale)),
         emissive: tex(&m.emission_texture),
         inputs,
+        opacity_cutoff: None,
+        anisotropy_direction: None,
     })
 }
 
