@@ -1,7 +1,7 @@
 // Writes scenes/smoke.vdb, the density of scenes/smoke.toml: a rising plume (a column
 // that widens and thins upwards, on a puff at its base) displaced by value-noise fBm.
-// 36 x 60 x 36 voxels of 1/30 scene unit, half floats, Blosc; index (0, 0, 0) at the
-// plume's base centre. Build and run (Debian's libopenvdb-dev, as
+// 36 x 60 x 36 voxels of 1/30 scene unit, half floats, Blosc, centred on the origin
+// (x, z in ±0.6, y in ±1: a cube's [-1, 1]³ holds it). Build and run (Debian's libopenvdb-dev, as
 // crates/lightpath/tests/data/vdb/make.sh):
 //   g++ -O2 -std=c++17 scenes/make_smoke.cpp -o /tmp/make_smoke -lopenvdb -ltbb -lImath-3_1
 //   (cd scenes && /tmp/make_smoke)
@@ -50,9 +50,9 @@ int main() {
     g->setTransform(math::Transform::createLinearTransform(h));
     auto acc = g->getAccessor();
     for (int i = -18; i < 18; ++i)
-        for (int j = 0; j < 60; ++j)
+        for (int j = -30; j < 30; ++j)
             for (int k = -18; k < 18; ++k) {
-                float x = i * h, y = j * h, z = k * h;  // scene units, y up
+                float x = i * h, y = (j + 30) * h, z = k * h;  // from the plume's base, y up
                 // The column's axis sways with height; its radius grows upwards.
                 float ax = 0.08f * std::sin(3.0f * y), az = 0.06f * std::cos(2.3f * y);
                 float r = std::hypot(x - ax, z - az);
