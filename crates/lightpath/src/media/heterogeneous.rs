@@ -153,7 +153,9 @@ impl Heterogeneous {
                 }
                 let p_null = 1.0 - p_real;
                 if p_null <= 0.0 {
-                    return Collision::Pass { weight: Vec3A::ZERO };
+                    return Collision::Pass {
+                        weight: Vec3A::ZERO,
+                    };
                 }
                 w *= sigma_n / (mu * p_null);
                 if w == Vec3A::ZERO {

@@ -31,7 +31,10 @@ fn density(d: &DensityDesc, grids: &mut Grids) -> Result<Arc<GridDensity>, Scene
     let vdb = vdb::load(&d.path, &d.grid, &d.origin)?;
     let g = DensityGrid::from_vdb(&vdb, d.scale)
         .and_then(|g| GridDensity::new(g, MAJORANT_CELL))
-        .map_err(|e| d.origin.error(format!("OpenVDB file {file}: grid '{}': {e}", d.grid)))?;
+        .map_err(|e| {
+            d.origin
+                .error(format!("OpenVDB file {file}: grid '{}': {e}", d.grid))
+        })?;
     let g = Arc::new(g);
     grids.insert(key, g.clone());
     Ok(g)

@@ -517,7 +517,9 @@ fn medium(src: &Source, name: &str, m: &Spanned<MediumToml>) -> Result<d::Medium
             if set {
                 return fail(
                     key,
-                    format!("{key} without density: name the OpenVDB file with density = \"….vdb\""),
+                    format!(
+                        "{key} without density: name the OpenVDB file with density = \"….vdb\""
+                    ),
                 );
             }
         }
