@@ -8,7 +8,16 @@ projected bounding boxes), and the relative differences.
   python3 benches/media/compare.py --spp 256 --mitsuba-spp 1024
   python3 benches/media/compare.py --lightpath target/release/lightpath --spp 4096
 
-The scene file it renders is written beside the outputs (out/fog_cornell.toml)."""
+The scene file it renders is written beside the outputs (out/fog_cornell.toml).
+
+Equal time (--equal-time SPP): Lightpath renders SPP samples (beauty only, samples after
+the reference's: --first-sample 4096 + run × SPP), timed by wall clock including loading;
+Mitsuba renders passes (after a 1-spp render that compiles its kernels) while the next is
+expected to fit in the same time (seeds from 1000); both are compared by RMSE against the
+reference, the mean of the two 4096-spp renders (out/lightpath_4096spp.exr and
+out/mitsuba_4096spp_<res>.exr, made by the plain mode with --spp 4096 --mitsuba-spp 4096):
+
+  python3 benches/media/compare.py --equal-time 64 --repeat 3"""
 import argparse
 import os
 import subprocess
@@ -62,10 +71,11 @@ fog_light = "C.*<V.'fog'>.*[LO]"
 """
 
 
-def lightpath_scene(path):
+def lightpath_scene(path, aovs=True):
     base = open(os.path.join(ROOT, "scenes", "cornell-classic.toml")).read()
+    media = MEDIA_TOML if aovs else MEDIA_TOML[:MEDIA_TOML.index("[aovs]")]
     with open(path, "w") as f:
-        f.write(base + MEDIA_TOML)
+        f.write(base + media)
 
 
 def mitsuba_scene(mi, spp, max_depth, res):
@@ -118,6 +128,76 @@ def load(path, layer=None):
     return img[..., [names.index(f"{layer}.{c}") for c in "RGB"]]
 
 
+def rmse(a, b, region=None):
+    if region is not None:
+        x0, x1, y0, y1 = region
+        a, b = a[y0:y1, x0:x1], b[y0:y1, x0:x1]
+    return float(np.sqrt(np.mean((a - b) ** 2)))
+
+
+def equal_time(args):
+    """Lightpath at args.equal_time spp and Mitsuba at the same wall time, RMSE against the
+    mean of the two 4096-spp references, args.repeat times."""
+    res = (args.res, args.res)
+    refs = [os.path.join(args.out, "lightpath_4096spp.exr"),
+            os.path.join(args.out, f"mitsuba_4096spp_{args.res}.exr")]
+    for r in refs:
+        if not os.path.exists(r):
+            sys.exit(f"missing reference {r}: run --spp 4096 --mitsuba-spp 4096 --res {args.res} first")
+    ref = (load(refs[0]) + load(refs[1])) / 2
+    w, h = res
+    fog = project_box(np.array(FOG_CENTER) - FOG_HALF, np.array(FOG_CENTER) + FOG_HALF, w, h)
+    toml = os.path.join(args.out, "fog_cornell_beauty.toml")
+    lightpath_scene(toml, aovs=False)
+    mc.pick_libllvm()
+    import drjit as dr
+    import mitsuba as mi
+    mi.set_variant("llvm_ad_rgb")
+    dr.set_thread_count(2)
+    rows = []
+    for rep in range(args.repeat):
+        lp_exr = os.path.join(args.out, f"lightpath_eqt_{args.equal_time}spp.exr")
+        t = time.perf_counter()
+        subprocess.run([args.lightpath, "render", toml, "--spp", str(args.equal_time), "--first-sample", str(4096 + rep * args.equal_time),
+                        "--max-depth", str(args.max_depth), "--resolution", f"{args.res}x{args.res}",
+                        "--aovs", "none", "-o", lp_exr], check=True, stdout=subprocess.DEVNULL)
+        lp_s = time.perf_counter() - t
+        lp = load(lp_exr)
+        # Mitsuba: the scene loaded and the kernels compiled (a 1-spp render), then its
+        # time per sample from a short run, then as many samples as Lightpath's time buys.
+        d, _ = mitsuba_scene(mi, 1, args.max_depth, res)
+        scene = mi.load_dict(d)
+        mc.render_np(mi, dr, scene, 1, 999, 0)
+        probe = max(4, args.equal_time // 8)
+        t = time.perf_counter()
+        mc.render_np(mi, dr, scene, probe, 998, 0)
+        per_spp = (time.perf_counter() - t) / probe
+        # Passes of about a quarter of the budget each (every pass pays Mitsuba's fixed
+        # cost per render), added while the next one is expected to fit.
+        q = max(1, int(lp_s / per_spp) // 4)
+        acc, m_spp, m_s, seed = None, 0, 0.0, 1000 + 100 * rep
+        while m_spp == 0 or m_s + m_s / (m_spp / q) * 0.5 < lp_s:
+            t = time.perf_counter()
+            img = mc.render_np(mi, dr, scene, q, seed, 0)
+            m_s += time.perf_counter() - t
+            acc = img * q if acc is None else acc + img * q
+            m_spp += q
+            seed += 1
+        mts = acc / m_spp
+        row = dict(lp_spp=args.equal_time, lp_s=lp_s, m_spp=m_spp, m_s=m_s,
+                   lp_rmse=rmse(lp, ref), m_rmse=rmse(mts, ref),
+                   lp_fog=rmse(lp, ref, fog), m_fog=rmse(mts, ref, fog))
+        rows.append(row)
+        print(f"run {rep}: lightpath {row['lp_spp']} spp {lp_s:.1f} s RMSE {row['lp_rmse']:.5f} (fog {row['lp_fog']:.5f}); "
+              f"mitsuba {m_spp} spp {m_s:.1f} s RMSE {row['m_rmse']:.5f} (fog {row['m_fog']:.5f}); "
+              f"ratio lightpath/mitsuba {row['lp_rmse'] / row['m_rmse']:.3f} (fog {row['lp_fog'] / row['m_fog']:.3f})",
+              flush=True)
+    # Error at equal time, corrected for the time actually spent (RMSE ~ 1/sqrt(time)).
+    adj = [r["lp_rmse"] / r["m_rmse"] * np.sqrt(r["lp_s"] / r["m_s"]) for r in rows]
+    print(f"mean ratio {np.mean([r['lp_rmse'] / r['m_rmse'] for r in rows]):.3f}, "
+          f"time-corrected {np.mean(adj):.3f} (≤ 1: Lightpath's error is at most Mitsuba's)")
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--lightpath", default=os.path.join(ROOT, "target", "release", "lightpath"))
@@ -128,8 +208,13 @@ def main():
     ap.add_argument("--out", default=os.path.join(HERE, "out"))
     ap.add_argument("--reuse-mitsuba", action="store_true", help="keep an existing Mitsuba image")
     ap.add_argument("--reuse-lightpath", action="store_true", help="keep an existing Lightpath image")
+    ap.add_argument("--equal-time", type=int, default=0, metavar="SPP",
+                    help="equal-time mode: Lightpath at SPP, Mitsuba at the same wall time, RMSE vs the reference")
+    ap.add_argument("--repeat", type=int, default=1, help="equal-time runs")
     args = ap.parse_args()
     os.makedirs(args.out, exist_ok=True)
+    if args.equal_time:
+        return equal_time(args)
     res = (args.res, args.res)
 
     toml = os.path.join(args.out, "fog_cornell.toml")

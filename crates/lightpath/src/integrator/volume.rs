@@ -472,7 +472,7 @@ impl Tracer<'_> {
     pub(super) fn medium_emission(
         &self,
         out: &mut Sink,
-        path: &PathState,
+        path: &mut PathState,
         m: MediumUse,
         seg: &Ray,
     ) {
@@ -490,6 +490,7 @@ impl Tracer<'_> {
             scatters: path.depth,
             part: self.default_part,
         };
-        self.contribute(out, s, path.throughput, volume.emitted(seg), 1.0, origin);
+        let le = volume.emitted(seg, &mut path.rng);
+        self.contribute(out, s, path.throughput, le, 1.0, origin);
     }
 }

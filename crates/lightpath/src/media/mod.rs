@@ -11,12 +11,14 @@
 
 pub mod equiangular;
 pub mod grid;
+pub mod heterogeneous;
 pub mod homogeneous;
 pub mod phase;
 
 use crate::geometry::Ray;
 use crate::sampling::Rng;
 use glam::Vec3A;
+pub use heterogeneous::Heterogeneous;
 pub use homogeneous::Homogeneous;
 pub use phase::HenyeyGreenstein;
 
@@ -36,6 +38,7 @@ pub enum Collision {
 #[derive(Clone, Debug, PartialEq)]
 pub enum Medium {
     Homogeneous(Homogeneous),
+    Heterogeneous(Heterogeneous),
 }
 
 impl Medium {
@@ -45,15 +48,17 @@ impl Medium {
     pub fn sample(&self, ray: &Ray, throughput: Vec3A, rng: &mut Rng) -> Collision {
         match self {
             Medium::Homogeneous(m) => m.sample(ray.tmax, throughput, rng),
+            Medium::Heterogeneous(m) => m.sample(ray, throughput, rng),
         }
     }
 
     /// The transmittance along `ray` up to `ray.tmax` (an unbiased estimate where it
-    /// cannot be computed exactly; exact here).
+    /// cannot be computed exactly: ratio tracking in a grid).
     #[inline]
-    pub fn transmittance(&self, ray: &Ray, _rng: &mut Rng) -> Vec3A {
+    pub fn transmittance(&self, ray: &Ray, rng: &mut Rng) -> Vec3A {
         match self {
             Medium::Homogeneous(m) => m.transmittance(ray.tmax),
+            Medium::Heterogeneous(m) => m.transmittance(ray, rng),
         }
     }
 
@@ -66,26 +71,28 @@ impl Medium {
     pub fn collision_terms(&self, t: f32, throughput: Vec3A) -> Option<(Vec3A, Vec3A, f32)> {
         match self {
             Medium::Homogeneous(m) => m.collision_terms(t, throughput),
+            Medium::Heterogeneous(_) => None,
         }
     }
 
-    /// ∫ T(s) ds along `ray` up to `ray.tmax`: what a constant emission per unit length
-    /// adds up to.
+    /// ∫ ρ(s) T(s) ds along `ray` up to `ray.tmax` (ρ = 1 in a homogeneous medium, the
+    /// density in a grid): what an emission per unit length at density 1 adds up to.
+    /// Exact for a homogeneous medium, an unbiased estimate for a grid.
     #[inline]
-    pub fn optical_integral(&self, ray: &Ray) -> Vec3A {
+    pub fn emission_integral(&self, ray: &Ray, rng: &mut Rng) -> Vec3A {
         match self {
             Medium::Homogeneous(m) => m.optical_integral(ray.tmax),
+            Medium::Heterogeneous(m) => m.emission_integral(ray, rng),
         }
     }
 
     /// The single-scattering albedo σs/σt (for reports and the furnace test).
     pub fn albedo(&self) -> Vec3A {
-        match self {
-            Medium::Homogeneous(m) => {
-                let t = m.sigma_t;
-                Vec3A::select(t.cmpgt(Vec3A::ZERO), m.sigma_s / t, Vec3A::ZERO)
-            }
-        }
+        let (s, t) = match self {
+            Medium::Homogeneous(m) => (m.sigma_s, m.sigma_t),
+            Medium::Heterogeneous(m) => (m.sigma_s, m.sigma_t),
+        };
+        Vec3A::select(t.cmpgt(Vec3A::ZERO), s / t, Vec3A::ZERO)
     }
 }
 
@@ -95,19 +102,19 @@ pub struct Volume {
     pub name: String,
     pub medium: Medium,
     pub phase: HenyeyGreenstein,
-    /// Radiance emitted per unit length (zero: none).
+    /// Radiance emitted per unit length (zero: none), at density 1 in a grid.
     pub emission: Vec3A,
 }
 
 impl Volume {
     /// The emission the segment `ray` collects, attenuated along it (exact for a
-    /// homogeneous medium).
+    /// homogeneous medium, an unbiased estimate in a grid).
     #[inline]
-    pub fn emitted(&self, ray: &Ray) -> Vec3A {
+    pub fn emitted(&self, ray: &Ray, rng: &mut Rng) -> Vec3A {
         if self.emission == Vec3A::ZERO {
             return Vec3A::ZERO;
         }
-        self.emission * self.medium.optical_integral(ray)
+        self.emission * self.medium.emission_integral(ray, rng)
     }
 }
 

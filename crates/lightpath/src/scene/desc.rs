@@ -88,14 +88,27 @@ pub struct MediaDesc {
     pub atmosphere: Option<NameRef>,
 }
 
-/// A homogeneous medium: coefficients per scene unit, Henyey–Greenstein `g`, emitted
-/// radiance per unit length.
+/// A medium: coefficients per scene unit (at density 1 where a grid gives the density),
+/// Henyey–Greenstein `g`, emitted radiance per unit length.
 #[derive(Clone, Debug)]
 pub struct MediumDesc {
     pub sigma_a: [f32; 3],
     pub sigma_s: [f32; 3],
     pub g: f32,
     pub emission: Option<[f32; 3]>,
+    /// A density grid (a heterogeneous medium); None: homogeneous.
+    pub density: Option<DensityDesc>,
+    pub origin: Origin,
+}
+
+/// `density = "smoke.vdb"`, `grid`, `density_scale`: a float grid of an OpenVDB file.
+#[derive(Clone, Debug)]
+pub struct DensityDesc {
+    /// Resolved against the scene file's folder.
+    pub path: std::path::PathBuf,
+    pub grid: String,
+    pub scale: f32,
+    /// The `density` key, which errors loading the file point at.
     pub origin: Origin,
 }
 

@@ -4,20 +4,66 @@
 
 use crate::geometry::{Accel, Ray, Visibility};
 use crate::material::openpbr::OpenPbr;
-use crate::media::{HenyeyGreenstein, Homogeneous, Medium, MediumStack, Volume};
-use crate::scene::desc::{MaterialKind, MediumDesc, NameRef, SceneDesc, ShapeDesc};
+use crate::media::grid::{DensityGrid, GridDensity};
+use crate::media::{HenyeyGreenstein, Heterogeneous, Homogeneous, Medium, MediumStack, Volume};
+use crate::scene::desc::{DensityDesc, MaterialKind, MediumDesc, NameRef, SceneDesc, ShapeDesc};
+use crate::scene::load::vdb;
 use crate::scene::{MediumUse, Object, SceneError};
-use glam::Vec3A;
+use glam::{Affine3A, Vec3A};
 use std::collections::HashMap;
+use std::sync::Arc;
 
-/// The volume of `[media.NAME]`, from its checked numbers.
-fn volume(name: &str, m: &MediumDesc) -> Volume {
-    Volume {
+/// Voxels along a majorant cell's edge: an OpenVDB leaf, so a cell over empty space is
+/// skipped in one DDA step and one over a leaf bounds little more than that leaf.
+const MAJORANT_CELL: u32 = 8;
+
+/// Density grids by file, grid name and scale: objects sharing a heterogeneous medium
+/// share its voxels.
+type Grids = HashMap<(std::path::PathBuf, String, u32), Arc<GridDensity>>;
+
+/// The density grid of `d`, read once.
+fn density(d: &DensityDesc, grids: &mut Grids) -> Result<Arc<GridDensity>, SceneError> {
+    let key = (d.path.clone(), d.grid.clone(), d.scale.to_bits());
+    if let Some(g) = grids.get(&key) {
+        return Ok(g.clone());
+    }
+    let file = d.path.display();
+    let vdb = vdb::load(&d.path, &d.grid, &d.origin)?;
+    let g = DensityGrid::from_vdb(&vdb, d.scale)
+        .and_then(|g| GridDensity::new(g, MAJORANT_CELL))
+        .map_err(|e| {
+            d.origin
+                .error(format!("OpenVDB file {file}: grid '{}': {e}", d.grid))
+        })?;
+    let g = Arc::new(g);
+    grids.insert(key, g.clone());
+    Ok(g)
+}
+
+/// The volume of `[media.NAME]`, from its checked numbers; a density grid is placed by
+/// `transform` (the bounding object's, after the grid's own).
+fn volume(
+    name: &str,
+    m: &MediumDesc,
+    transform: Affine3A,
+    grids: &mut Grids,
+) -> Result<Volume, SceneError> {
+    let (sigma_a, sigma_s) = (m.sigma_a.into(), m.sigma_s.into());
+    let medium = match &m.density {
+        None => Medium::Homogeneous(Homogeneous::new(sigma_a, sigma_s)),
+        Some(d) => Medium::Heterogeneous(Heterogeneous::new(
+            density(d, grids)?,
+            transform,
+            sigma_a,
+            sigma_s,
+        )),
+    };
+    Ok(Volume {
         name: name.to_string(),
-        medium: Medium::Homogeneous(Homogeneous::new(m.sigma_a.into(), m.sigma_s.into())),
+        medium,
         phase: HenyeyGreenstein::new(m.g),
         emission: m.emission.map_or(Vec3A::ZERO, Vec3A::from),
-    }
+    })
 }
 
 /// The scene's volumes (those something uses), each object's interior, and the
@@ -27,11 +73,11 @@ pub fn build(
     objects: &mut [Object],
 ) -> Result<(Vec<Volume>, Option<u32>), SceneError> {
     let mut volumes: Vec<Volume> = Vec::new();
-    let mut ids: HashMap<&str, u32> = HashMap::new();
-    let mut find = |r: &NameRef| -> Result<u32, SceneError> {
-        if let Some(&id) = ids.get(r.name.as_str()) {
-            return Ok(id);
-        }
+    // A homogeneous medium is one volume however many objects bound it; a grid is
+    // placed by each object's transform, so it is one volume per object.
+    let mut ids: HashMap<(&str, Option<usize>), u32> = HashMap::new();
+    let mut grids = Grids::new();
+    let mut find = |r: &NameRef, object: Option<usize>| -> Result<u32, SceneError> {
         let Some((name, m)) = desc.media.media.get_key_value(&r.name) else {
             let known: Vec<&String> = desc.media.media.keys().collect();
             return Err(r.origin.error(format!(
@@ -39,13 +85,21 @@ pub fn build(
                 r.name
             )));
         };
+        let key = (name.as_str(), object.filter(|_| m.density.is_some()));
+        if let Some(&id) = ids.get(&key) {
+            return Ok(id);
+        }
+        let transform = key
+            .1
+            .and_then(|o| desc.objects.get(o))
+            .map_or(Affine3A::IDENTITY, |o| o.transform);
         let id = volumes.len() as u32;
-        volumes.push(volume(name, m));
-        ids.insert(name.as_str(), id);
+        volumes.push(volume(name, m, transform, &mut grids)?);
+        ids.insert(key, id);
         Ok(id)
     };
     for i in &desc.media.interiors {
-        let volume = find(&i.medium)?;
+        let volume = find(&i.medium, Some(i.object))?;
         // In a file with lines (a TOML scene) an open mesh is an error; an imported
         // file's (glTF) is taken as it is.
         if i.medium.origin.line > 0 {
@@ -71,7 +125,12 @@ pub fn build(
         });
         o.priority = i.priority;
     }
-    let atmosphere = desc.media.atmosphere.as_ref().map(&mut find).transpose()?;
+    let atmosphere = desc
+        .media
+        .atmosphere
+        .as_ref()
+        .map(|r| find(r, None))
+        .transpose()?;
     // OpenPBR glass with a transmission depth bounds its own medium, unless the object
     // names another.
     let mut openpbr: HashMap<&str, u32> = HashMap::new();

@@ -775,6 +775,7 @@ impl Loader {
                 sigma_s: [0.0; 3],
                 g: 0.0,
                 emission: None,
+                density: None,
                 origin,
             };
             self.desc.media.media.insert(medium.clone(), desc);

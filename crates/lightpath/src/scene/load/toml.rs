@@ -63,8 +63,14 @@ struct MediumToml {
     /// Henyey–Greenstein asymmetry.
     #[serde(default)]
     g: f32,
-    /// Radiance emitted per unit length.
+    /// Radiance emitted per unit length (at density 1 with a grid).
     emission: Option<[f32; 3]>,
+    /// An OpenVDB file (relative to the scene file) whose float grid is the density.
+    density: Option<Spanned<String>>,
+    /// The grid's name in that file (default "density").
+    grid: Option<Spanned<String>>,
+    /// Multiplies the grid's values (default 1).
+    density_scale: Option<f32>,
 }
 
 /// `[[include]]`: a scene file, placed, with overrides of its objects by name.
@@ -500,11 +506,42 @@ fn medium(src: &Source, name: &str, m: &Spanned<MediumToml>) -> Result<d::Medium
             ),
         );
     }
+    if let Some(scale) = m.density_scale.filter(|s| !s.is_finite() || *s < 0.0) {
+        return fail(
+            "density_scale",
+            format!("density_scale is {scale}: expected a finite number ≥ 0"),
+        );
+    }
+    if m.density.is_none() {
+        for (key, set) in [
+            ("grid", m.grid.is_some()),
+            ("density_scale", m.density_scale.is_some()),
+        ] {
+            if set {
+                return fail(
+                    key,
+                    format!(
+                        "{key} without density: name the OpenVDB file with density = \"….vdb\""
+                    ),
+                );
+            }
+        }
+    }
+    let density = m.density.as_ref().map(|f| d::DensityDesc {
+        path: src.dir.join(f.get_ref()),
+        grid: m
+            .grid
+            .as_ref()
+            .map_or_else(|| "density".to_string(), |g| g.get_ref().clone()),
+        scale: m.density_scale.unwrap_or(1.0),
+        origin: src.origin(Some(f.span())),
+    });
     Ok(d::MediumDesc {
         sigma_a: m.sigma_a,
         sigma_s: m.sigma_s,
         g: m.g,
         emission: m.emission,
+        density,
         origin: src.origin(Some(span)),
     })
 }

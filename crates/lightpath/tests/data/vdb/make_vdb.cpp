@@ -95,5 +95,21 @@ int main() {
         dbl->tree().setValue(Coord(0, 0, 0), 1.0);
         write("grids.vdb", {d, temp, v, ls, dbl}, io::COMPRESS_BLOSC | io::COMPRESS_ACTIVE_MASK);
     }
+    // A puff for heterogeneous media in scenes (tests/it/media.rs): 2 exp(-|p|^2 / 0.18)
+    // at voxel centres p = 0.1 (i, j, k), i, j, k in [-8, 7], centred on the origin.
+    {
+        FloatGrid::Ptr g = FloatGrid::create(0.0f);
+        g->setName("density");
+        g->setGridClass(GRID_FOG_VOLUME);
+        g->setTransform(math::Transform::createLinearTransform(0.1));
+        auto acc = g->getAccessor();
+        for (int i = -8; i <= 7; ++i)
+            for (int j = -8; j <= 7; ++j)
+                for (int k = -8; k <= 7; ++k) {
+                    double r2 = 0.01 * (i * i + j * j + k * k);
+                    acc.setValue(Coord(i, j, k), float(2.0 * std::exp(-r2 / 0.18)));
+                }
+        write("puff.vdb", {g}, io::COMPRESS_BLOSC | io::COMPRESS_ACTIVE_MASK);
+    }
     return 0;
 }
