@@ -12,6 +12,7 @@ pub mod events;
 pub mod farm;
 pub mod film;
 pub mod geometry;
+pub mod guiding;
 pub mod identity;
 pub mod integrator;
 pub mod interrupt;

@@ -214,6 +214,17 @@ settings! {
                this rough (e.g. 0.3; 0: off). Tames caustic fireflies at the cost of sharp \
                caustics.",
     }
+    guiding_passes: u32 = 0, {
+        section: Render,
+        flag: "guiding-passes",
+        range: Range::Between(0.0, 12.0),
+        role: Shared,
+        header: Header::Setting,
+        help: "Path guiding (Müller et al. 2017's SD-tree): training passes of 1, 2, 4, … \
+               samples a pixel before the render, which then samples directions at diffuse \
+               surfaces half from what they learnt (e.g. 5: 31 training samples a pixel; \
+               0: off). Every farm part trains the same tree.",
+    }
     frame: Option<f32> = None, {
         section: Render,
         flag: "frame",

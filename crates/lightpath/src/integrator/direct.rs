@@ -3,6 +3,7 @@
 //! and sampled glows found by BSDF rays with the complementary weight, and the lights-only test that `unoccluded` and
 //! `shadows` AOVs see. The one power heuristic of the renderer lives here (docs/architecture.md).
 
+use super::guided::LobeValues;
 use super::path::{PathState, Vertex};
 use super::routing::{Origin, Via};
 use super::{Sink, Tracer};
@@ -138,6 +139,15 @@ impl Tracer<'_> {
         let mut visible: Option<bool> = None;
         // With media, its transmittance instead (volume.rs).
         let mut transmitted: Option<Vec3A> = None;
+        // At a guided vertex BSDF sampling is a mixture with the guide (guided.rs).
+        let mixture = match (v.guide, self.guide) {
+            (Some(g), Some(tree)) if g.alpha > 0.0 => Some((
+                g.alpha,
+                LobeValues::at(bsdf, &v.sh, wi),
+                tree.leaf(g.leaf).sampling.pdf(ls.wi),
+            )),
+            _ => None,
+        };
         for (k, tag) in lobes.iter().enumerate() {
             if tag.delta {
                 continue;
@@ -150,7 +160,12 @@ impl Tracer<'_> {
             if a.accepting(s_light).is_empty() {
                 continue;
             }
-            let (f, lobe_pdf) = bsdf.eval_lobe(k, &v.sh, wi);
+            let (f, lobe_pdf) = match &mixture {
+                Some((alpha, lv, guide_pdf)) => {
+                    (lv.f[k], lv.mixed_pdf(bsdf, k, *alpha, *guide_pdf))
+                }
+                None => bsdf.eval_lobe(k, &v.sh, wi),
+            };
             if f == Vec3A::ZERO {
                 continue;
             }

@@ -9,6 +9,7 @@
 
 pub mod adaptive;
 mod direct;
+mod guided;
 mod light_choice;
 mod path;
 mod pixel;
@@ -56,6 +57,12 @@ struct Tracer<'a> {
     /// Whether flights through media also sample distances towards point and spot
     /// lights (volume.rs).
     equiangular: bool,
+    /// The SD-tree paths sample from (guided.rs), if the render guides.
+    guide: Option<&'a crate::guiding::SdTree>,
+    /// Whether paths record into the guide (training passes).
+    learn: bool,
+    /// The seed of the sample numbers (the render's; a training pass's own).
+    seed: u64,
 }
 
 /// Where a worker's paths put what they find: the sample's AOV values and counters.
@@ -67,6 +74,8 @@ struct Sink<'b> {
     holdout: bool,
     /// The object the camera ray hit, unless it is a holdout (Cryptomatte).
     first_object: Option<u32>,
+    /// The current path's vertices recorded for training the guide (guided.rs).
+    record: guided::PathRecord,
 }
 
 impl<'b> Sink<'b> {
@@ -78,6 +87,7 @@ impl<'b> Sink<'b> {
             nonfinite: 0,
             holdout: false,
             first_object: None,
+            record: guided::PathRecord::default(),
         }
     }
 }
@@ -94,6 +104,9 @@ impl<'a> Tracer<'a> {
             default_part: scene.light_groups.len() as u32,
             equiangular: scene.has_media
                 && scene.lights.iter().any(|l| volume::point_of(l).is_some()),
+            guide: None,
+            learn: false,
+            seed: scene.settings.seed,
         }
     }
 
@@ -259,8 +272,14 @@ fn render_passes(
             Pilot::new(w * h)
         }
     });
+    // Path guiding trains first, over the whole frame (guided.rs): every window, part
+    // and resumed run of a frame samples from the same tree.
+    let passes = scene.settings.guiding_passes;
+    let guide = (passes > 0).then(|| guided::train(scene, passes));
+    let mut tracer = Tracer::new(scene);
+    tracer.guide = guide.as_ref();
     let frame = FrameRender {
-        tracer: Tracer::new(scene),
+        tracer,
         options,
         rule: Rule::new(&scene.settings, options.spp),
         window: win,

@@ -2,6 +2,7 @@
 //! data lobes, direct light (direct.rs), BSDF sampling and continuation, and Russian
 //! roulette. Each step reads the path state; only `scatter` and `roulette` change it.
 
+use super::guided::GuideAt;
 use super::routing::{Origin, Via};
 use super::volume::{media_seed, Flight, MAX_CROSSINGS};
 use super::{Sink, Tracer};
@@ -59,6 +60,8 @@ pub(super) struct Vertex<'a> {
     pub sh: Shading,
     /// The direction the path arrived along (world space).
     pub dir: Vec3A,
+    /// Path guiding here, if the render guides and the Bsdf is guided (guided.rs).
+    pub guide: Option<GuideAt>,
 }
 
 impl PathState {
@@ -87,8 +90,15 @@ impl PathState {
 }
 
 impl Tracer<'_> {
-    /// Traces one camera path; returns its alpha.
-    pub(super) fn trace<S: Sampler>(&self, mut ray: Ray, sampler: &mut S, out: &mut Sink) -> f32 {
+    /// Traces one camera path; returns its alpha. A training pass's path then records
+    /// its vertices into the guide (guided.rs).
+    pub(super) fn trace<S: Sampler>(&self, ray: Ray, sampler: &mut S, out: &mut Sink) -> f32 {
+        let alpha = self.trace_path(ray, sampler, out);
+        self.flush_record(out);
+        alpha
+    }
+
+    fn trace_path<S: Sampler>(&self, mut ray: Ray, sampler: &mut S, out: &mut Sink) -> f32 {
         let scene = self.scene;
         let mut path = PathState::start(scene, &ray);
         let mut alpha = 0.0;
@@ -112,9 +122,8 @@ impl Tracer<'_> {
             if let Some(hit) = found.as_ref().filter(|_| !passes) {
                 self.first_hit(out, path.depth, hit, &mut alpha);
             }
-            // Here, after the roulette and with the real ray's result, so that the
-            // lights-only estimate is the beauty's own, sample by sample; once per
-            // scatter, not again past a null boundary.
+            // Here, after the roulette and with the real ray's result, so that the lights-only
+            // estimate is the beauty's own, sample by sample; once per scatter, not past a null.
             if path.depth > 0 && scene.any_unoccluded && path.travelled == 0.0 {
                 self.lights_only(out, &path, &ray, found.as_ref());
             }
@@ -183,6 +192,7 @@ impl Tracer<'_> {
                 bsdf,
                 sh,
                 dir: ray.dir,
+                guide: self.guide_at(bsdf, hit.p),
             };
             self.data_lobes(out, &path, &v);
             self.direct_light(out, &mut path, &v, sampler);
@@ -325,7 +335,10 @@ impl Tracer<'_> {
         let bounce = dim::bounce(path.depth);
         let u_lobe = sampler.get_1d(bounce + dim::LOBE_CHOICE);
         let u_dir = sampler.get_2d(bounce + dim::DIRECTION);
-        let bs = v.bsdf.sample(&v.sh, u_lobe, u_dir)?;
+        let bs = match v.guide {
+            Some(g) if g.alpha > 0.0 => self.sample_guided(v, g, u_lobe, u_dir)?,
+            _ => v.bsdf.sample(&v.sh, u_lobe, u_dir)?,
+        };
         match v.bsdf.lobes()[bs.lobe].scatter.class {
             ScatterClass::Diffuse => {
                 path.diffuse += 1;
@@ -363,6 +376,9 @@ impl Tracer<'_> {
         path.prev_pdf = bs.pdf;
         path.prev_delta = bs.delta;
         path.prev_object = v.hit.object;
+        if let (Some(g), false) = (v.guide, bs.delta) {
+            self.record_vertex(out, path, g, bs.wi, bs.pdf);
+        }
         path.travelled = 0.0;
         if !bs.delta {
             path.cone_spread = path.cone_spread.max(super::shading::SCATTERED_SPREAD);

@@ -40,11 +40,9 @@ impl Tracer<'_> {
         let settings = &self.scene.settings;
         let index = job.y as u64 * self.scene.camera.width as u64 + job.x as u64;
         match settings.sampler {
-            SamplerKind::Sobol => {
-                self.pixel_samples(job, out, SobolPixel::new(settings.seed, index))
-            }
+            SamplerKind::Sobol => self.pixel_samples(job, out, SobolPixel::new(self.seed, index)),
             SamplerKind::Independent => {
-                self.pixel_samples(job, out, IndependentPixel::new(settings.seed, index))
+                self.pixel_samples(job, out, IndependentPixel::new(self.seed, index))
             }
         }
     }

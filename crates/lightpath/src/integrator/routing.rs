@@ -198,6 +198,15 @@ impl Tracer<'_> {
         mis: f32,
         origin: Origin,
     ) {
+        if self.learn
+            && !out.record.is_empty()
+            && matches!(
+                origin.via,
+                Via::Hit { .. } | Via::LightSample { visible: true } | Via::Glow
+            )
+        {
+            out.record.add(throughput * local * mis);
+        }
         let rules = self.scene.automaton.accepting(state);
         if rules.is_empty() {
             return;

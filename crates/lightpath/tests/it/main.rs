@@ -10,6 +10,7 @@ mod docs;
 mod embree;
 mod farm;
 mod gltf;
+mod guiding;
 mod hostile;
 mod identity;
 mod media;

@@ -1,0 +1,201 @@
+//! Path guiding (`--guiding-passes`, crates/lightpath/src/guiding/): it changes sampling
+//! densities only, so the image converges to the same mean, every partition still sums
+//! to the beauty, and renders stay deterministic across thread counts and sample ranges.
+
+use glam::Vec3A;
+use lightpath::aov::{self, AovSpec};
+use lightpath::film::Film;
+use lightpath::{render, RenderOptions, Scene, Source};
+
+/// A room lit only around a baffle: a lamp under the ceiling faces it, a plate below the
+/// lamp hides it from the floor, so the floor sees light after a bounce (the kind of
+/// scene guiding is for), plus a glass ball and a glossy plastic block (lobes guiding
+/// leaves to BSDF sampling, and a mixture of both).
+const ROOM: &str = r#"
+[camera]
+position = [0, 0, 3.5]
+look_at = [0, 0, 0]
+fov = 40
+[render]
+max_depth = 6
+[materials.white]
+type = "diffuse"
+albedo = [0.8, 0.8, 0.8]
+[materials.red]
+type = "diffuse"
+albedo = [0.8, 0.2, 0.2]
+[materials.glass]
+type = "dielectric"
+ior = 1.5
+[materials.plastic]
+type = "plastic"
+albedo = [0.2, 0.4, 0.8]
+roughness = 0.2
+[[objects]]
+name = "floor"
+shape = "quad"
+material = "white"
+corners = [[-1, -1, 1], [1, -1, 1], [1, -1, -1], [-1, -1, -1]]
+[[objects]]
+name = "ceiling"
+shape = "quad"
+material = "white"
+corners = [[-1, 1, -1], [1, 1, -1], [1, 1, 1], [-1, 1, 1]]
+[[objects]]
+name = "back"
+shape = "quad"
+material = "white"
+corners = [[-1, -1, -1], [1, -1, -1], [1, 1, -1], [-1, 1, -1]]
+[[objects]]
+name = "left"
+shape = "quad"
+material = "red"
+corners = [[-1, -1, 1], [-1, -1, -1], [-1, 1, -1], [-1, 1, 1]]
+[[objects]]
+name = "plate"
+shape = "quad"
+material = "white"
+corners = [[-0.4, 0.6, -0.4], [0.4, 0.6, -0.4], [0.4, 0.6, 0.4], [-0.4, 0.6, 0.4]]
+[[objects]]
+name = "ball"
+shape = "sphere"
+material = "glass"
+center = [0.4, -0.6, 0.2]
+radius = 0.35
+[[objects]]
+name = "block"
+shape = "sphere"
+material = "plastic"
+center = [-0.4, -0.7, -0.2]
+radius = 0.3
+[[lights]]
+type = "quad"
+name = "lamp"
+radiance = [30, 30, 30]
+corners = [[-0.2, 0.62, -0.2], [-0.2, 0.62, 0.2], [0.2, 0.62, 0.2], [0.2, 0.62, -0.2]]
+"#;
+
+fn scene(res: u32, passes: u32, seed: u64, extra: Vec<AovSpec>) -> Scene {
+    let src = Source {
+        name: "room.toml".into(),
+        text: ROOM.into(),
+        dir: Default::default(),
+    };
+    let mut desc = src.parse().unwrap();
+    desc.render.resolution = [res, res];
+    desc.render.guiding_passes = passes;
+    desc.render.seed = seed;
+    Scene::build(&desc, &aov::assemble(extra)).unwrap()
+}
+
+fn render_spp(scene: &Scene, spp: u32, first_sample: u32) -> Film {
+    render(scene, &RenderOptions { spp, first_sample }).0
+}
+
+fn index(scene: &Scene, name: &str) -> usize {
+    scene.aovs.iter().position(|a| a.name == name).unwrap()
+}
+
+/// The beauty's mean luminance over the image.
+fn image_mean(film: &Film) -> f64 {
+    let mut sum = 0.0;
+    for y in 0..film.height {
+        for x in 0..film.width {
+            sum += lightpath::light::luminance(film.pixel(0, x, y)) as f64;
+        }
+    }
+    sum / (film.width * film.height) as f64
+}
+
+/// Mean and standard error of the mean of independent estimates.
+fn mean_and_se(vals: &[f64]) -> (f64, f64) {
+    let n = vals.len() as f64;
+    let mean = vals.iter().sum::<f64>() / n;
+    let var = vals.iter().map(|v| (v - mean).powi(2)).sum::<f64>() / (n - 1.0);
+    (mean, (var / n).sqrt())
+}
+
+/// The image means of independent renders (seeds 1…runs; a guided render trains its
+/// own tree from its seed) agree with and without guiding within 5 standard errors of
+/// their difference, estimated from the spread of the runs themselves.
+#[test]
+fn guided_renders_converge_to_the_unguided_mean() {
+    let runs = 8;
+    let means = |passes: u32| -> Vec<f64> {
+        (1..=runs)
+            .map(|seed| image_mean(&render_spp(&scene(24, passes, seed, vec![]), 8, 0)))
+            .collect()
+    };
+    let (plain, se_plain) = mean_and_se(&means(0));
+    let (guided, se_guided) = mean_and_se(&means(4));
+    let se = (se_plain * se_plain + se_guided * se_guided).sqrt();
+    assert!(plain > 0.01, "the room is lit: {plain}");
+    assert!(
+        (plain - guided).abs() <= 5.0 * se,
+        "unguided {plain} ± {se_plain}, guided {guided} ± {se_guided}"
+    );
+}
+
+/// Guiding changes how lobes and directions are sampled, never which events a path
+/// takes: the standard partition and per-bounce AOVs still sum to the beauty.
+#[test]
+fn guided_partitions_sum_to_beauty() {
+    let mut extra = aov::standard();
+    extra.extend([
+        AovSpec::new("b1", "C[DS]{1}[<L.>O]"),
+        AovSpec::new("b2", "C[DS]{2}[<L.>O]"),
+        AovSpec::new("b3", "C[DS]{3,}[<L.>O]"),
+        AovSpec::new("b0", "C[<L.>O]"),
+    ]);
+    let scene = scene(24, 3, 0, extra);
+    let film = render_spp(&scene, 4, 0);
+    let beauty = index(&scene, "beauty");
+    for parts in [&lpe::BEAUTY_PARTITION[..], &["b0", "b1", "b2", "b3"][..]] {
+        let ids: Vec<usize> = parts.iter().map(|p| index(&scene, p)).collect();
+        for y in 0..film.height {
+            for x in 0..film.width {
+                let b = film.pixel(beauty, x, y);
+                let sum: Vec3A = ids.iter().map(|&k| film.pixel(k, x, y)).sum();
+                let err = (sum - b).abs() / b.abs().max(Vec3A::splat(1e-3));
+                assert!(
+                    err.max_element() <= 1e-5,
+                    "{parts:?} off by {err} at {x},{y}"
+                );
+            }
+        }
+    }
+}
+
+/// The tree is trained from integer sums: one thread and two give the same bits.
+#[test]
+fn guided_renders_are_bit_identical_for_any_thread_count() {
+    let run = |threads: usize| {
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .unwrap();
+        pool.install(|| render_spp(&scene(20, 4, 3, vec![]), 3, 0).planes.concat())
+    };
+    let one = run(1);
+    let two = run(2);
+    assert_eq!(one.len(), two.len());
+    assert!(one
+        .iter()
+        .zip(&two)
+        .all(|(a, b)| a.to_bits() == b.to_bits()));
+    // And guiding did change the render (the setting is not ignored).
+    let plain = render_spp(&scene(20, 0, 3, vec![]), 3, 0).planes.concat();
+    assert!(plain.iter().zip(&one).any(|(a, b)| a != b));
+}
+
+/// Farm parts (sample ranges) each train the same tree, so they merge into the whole.
+#[test]
+fn guided_sample_ranges_merge_into_the_whole_render() {
+    let s = scene(12, 3, 5, vec![]);
+    let whole = render_spp(&s, 4, 0);
+    let mut a = render_spp(&s, 2, 0);
+    a.merge(&render_spp(&s, 2, 2)).unwrap();
+    for (x, y) in whole.planes.concat().iter().zip(&a.planes.concat()) {
+        assert!((x - y).abs() <= 1e-5 * x.abs().max(1.0), "{x} {y}");
+    }
+}
