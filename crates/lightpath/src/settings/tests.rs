@@ -45,6 +45,7 @@ const EXAMPLES: &[Example] = &[
     ex("noise_threshold", ("0.1", "0.1"), ("-1", "-1")),
     ex("min_spp", ("8", "8"), ("0", "0")),
     ex("regularize", ("0.3", "0.3"), ("5", "5")),
+    ex("guiding_passes", ("4", "4"), ("13", "13")),
     ex("frame", ("12.5", "12.5"), ("1e12", "1e12")),
     ex(
         "render_settings",
@@ -211,6 +212,7 @@ fn the_header_keeps_its_attribute_names_and_values() {
         ("lightpath/setting/clamp_indirect", "0"),
         ("lightpath/setting/filter", "box"),
         ("lightpath/setting/frame", "none"),
+        ("lightpath/setting/guiding_passes", "0"),
         ("lightpath/setting/light_candidates", "1"),
         ("lightpath/setting/light_selection", "tree"),
         ("lightpath/setting/max_depth", "8"),
