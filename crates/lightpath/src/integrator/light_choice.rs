@@ -39,6 +39,7 @@ impl Tracer<'_> {
     /// resampled from `settings.light_candidates` candidates (the first from those
     /// numbers, the others from the path's own stream, so each sample's numbers still
     /// depend only on its seed, pixel and index). `None`: no light reaches `v`.
+    #[inline]
     pub(super) fn choose_light(
         &self,
         path: &mut PathState,
@@ -90,6 +91,7 @@ impl Tracer<'_> {
     }
 
     /// One (light, point) candidate from the selector, if the light lights `v`.
+    #[inline]
     fn candidate(&self, v: &Vertex, u_light: f32, u_point: Vec2) -> Option<Chosen> {
         let scene = self.scene;
         let (li, select_pmf) = scene.light_select.sample(u_light, v.hit.p, v.sh.frame.n)?;
