@@ -29,3 +29,12 @@ impl Drop for Scratch {
         let _ = std::fs::remove_dir_all(&self.0);
     }
 }
+
+/// The position of AOV `name` in a built scene's AOV list (panics naming it if absent).
+pub fn index(scene: &lightpath::Scene, name: &str) -> usize {
+    scene
+        .aovs
+        .iter()
+        .position(|a| a.name == name)
+        .unwrap_or_else(|| panic!("no AOV {name}"))
+}

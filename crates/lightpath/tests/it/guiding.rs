@@ -2,6 +2,7 @@
 //! densities only, so the image converges to the same mean, every partition still sums
 //! to the beauty, and renders stay deterministic across thread counts and sample ranges.
 
+use crate::common::index;
 use glam::Vec3A;
 use lightpath::aov::{self, AovSpec};
 use lightpath::film::Film;
@@ -90,10 +91,6 @@ fn scene(res: u32, passes: u32, seed: u64, extra: Vec<AovSpec>) -> Scene {
 
 fn render_spp(scene: &Scene, spp: u32, first_sample: u32) -> Film {
     render(scene, &RenderOptions { spp, first_sample }).0
-}
-
-fn index(scene: &Scene, name: &str) -> usize {
-    scene.aovs.iter().position(|a| a.name == name).unwrap()
 }
 
 /// The beauty's mean luminance over the image.

@@ -4,6 +4,7 @@
 //! errors. Tolerances are standard errors across pixels (each pixel an independent
 //! estimate), never tuned.
 
+use crate::common::index;
 use glam::{DVec3, Vec3A};
 use lightpath::aov::{self, AovSpec};
 use lightpath::film::Film;
@@ -27,14 +28,6 @@ fn render_aovs(text: &str, spp: u32, extra: Vec<AovSpec>) -> (Scene, Film) {
     };
     let (film, _) = render(&scene, &options);
     (scene, film)
-}
-
-fn index(scene: &Scene, name: &str) -> usize {
-    scene
-        .aovs
-        .iter()
-        .position(|a| a.name == name)
-        .unwrap_or_else(|| panic!("no AOV {name}"))
 }
 
 /// Mean and standard error over the pixels of AOV `k`, per channel.

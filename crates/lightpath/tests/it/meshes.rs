@@ -2,6 +2,7 @@
 //! include such files and override their objects by name. Every test writes its own
 //! small files in a temporary directory.
 
+use crate::common::index;
 use glam::Vec3A;
 use lightpath::aov::{self, AovSpec};
 use lightpath::film::Film;
@@ -125,10 +126,6 @@ fn render_desc(
         },
     );
     (scene, film)
-}
-
-fn index(scene: &Scene, name: &str) -> usize {
-    scene.aovs.iter().position(|a| a.name == name).unwrap()
 }
 
 fn parse(path: &Path) -> Result<SceneDesc, lightpath::SceneError> {

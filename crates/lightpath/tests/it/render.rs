@@ -2,6 +2,7 @@
 //! furnaces conserve energy, the guide's example expressions select what they say, and
 //! renders are deterministic.
 
+use crate::common::index;
 use glam::Vec3A;
 use lightpath::aov::{self, AovSpec};
 use lightpath::film::Film;
@@ -42,14 +43,6 @@ fn render_aovs(
 
 fn cornell() -> Source {
     lightpath::load_source("cornell").unwrap()
-}
-
-fn index(scene: &Scene, name: &str) -> usize {
-    scene
-        .aovs
-        .iter()
-        .position(|a| a.name == name)
-        .unwrap_or_else(|| panic!("no AOV {name}"))
 }
 
 /// Max over pixels of |Σ parts − beauty| / max(beauty, floor); infinite when any pixel's

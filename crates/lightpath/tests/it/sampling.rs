@@ -4,6 +4,7 @@
 //! for any thread count and merges by per-pixel counts, and the built-in `cornell` has
 //! few fireflies at its defaults.
 
+use crate::common::index;
 use glam::Vec3A;
 use lightpath::aov::{self, AovSpec};
 use lightpath::film::Film;
@@ -38,14 +39,6 @@ fn run(
         },
     );
     (scene, film)
-}
-
-fn index(scene: &Scene, name: &str) -> usize {
-    scene
-        .aovs
-        .iter()
-        .position(|a| a.name == name)
-        .unwrap_or_else(|| panic!("no AOV {name}"))
 }
 
 /// Two renders of the same image agree within their noise: in each of 4 × 4 blocks, the

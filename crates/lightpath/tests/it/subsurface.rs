@@ -3,6 +3,7 @@
 //! beauty, direct subsurface is `C<TD3>[<L.>O]`, and a white subsurface ball in a white
 //! furnace neither gains nor loses light.
 
+use crate::common::index;
 use glam::Vec3A;
 use lightpath::aov::{self, AovSpec};
 use lightpath::film::Film;
@@ -24,14 +25,6 @@ fn render_aovs(text: &str, res: u32, spp: u32, extra: Vec<AovSpec>) -> (Scene, F
     };
     let (film, _) = render(&scene, &options);
     (scene, film)
-}
-
-fn index(scene: &Scene, name: &str) -> usize {
-    scene
-        .aovs
-        .iter()
-        .position(|a| a.name == name)
-        .unwrap_or_else(|| panic!("no AOV {name}"))
 }
 
 /// Max over pixels of |Σ parts − whole| / max(whole, 1e-3).
