@@ -175,15 +175,22 @@ impl Accel {
     /// The nearest hit along the ray among primitives visible to rays of kind `mask`.
     #[inline]
     pub fn intersect(&self, ray: &Ray, tmin: f32, mask: u8) -> Option<Hit> {
+        self.intersect_except(ray, tmin, mask, u32::MAX)
+    }
+
+    /// As [`intersect`](Self::intersect), on anything but object `ignore` (`u32::MAX`:
+    /// none): what lies on a surface just passed, other than that surface's object.
+    #[inline]
+    pub fn intersect_except(&self, ray: &Ray, tmin: f32, mask: u8, ignore: u32) -> Option<Hit> {
         if self.prims.is_empty() {
             return None;
         }
         #[cfg(feature = "embree")]
         if let Some(embree) = &self.embree {
-            let (prim, t, inner) = embree.intersect(ray, tmin, mask)?;
+            let (prim, t, inner) = embree.intersect(ray, tmin, mask, ignore)?;
             return Some(self.surface(ray, prim, t, inner));
         }
-        let (prim, t, inner) = self.bvh_nearest(ray, tmin, mask);
+        let (prim, t, inner) = self.bvh_nearest(ray, tmin, mask, ignore);
         (prim != u32::MAX).then(|| self.surface(ray, prim, t, inner))
     }
 

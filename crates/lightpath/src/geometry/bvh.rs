@@ -398,10 +398,17 @@ impl Trees {
 /// The BVH's traversal of an accelerator's tree (the tree, primitives and instances
 /// `accel` holds).
 impl Accel {
-    /// The nearest hit (slot, t, instanced slot), or `u32::MAX` for none.
+    /// The nearest hit (slot, t, instanced slot) on anything but object `ignore`
+    /// (`u32::MAX`: none ignored), or `u32::MAX` for none.
     #[inline]
-    pub(super) fn bvh_nearest(&self, ray: &Ray, tmin: f32, mask: u8) -> (u32, f32, u32) {
-        self.nearest(ray, tmin, mask, &DEEP_CLOSEST)
+    pub(super) fn bvh_nearest(
+        &self,
+        ray: &Ray,
+        tmin: f32,
+        mask: u8,
+        ignore: u32,
+    ) -> (u32, f32, u32) {
+        self.nearest(ray, tmin, mask, ignore, &DEEP_CLOSEST)
     }
 
     /// Whether anything but object `ignore` blocks the shadow ray.
@@ -418,13 +425,16 @@ impl Accel {
         ray: &Ray,
         tmin: f32,
         mask: u8,
+        ignore: u32,
         deep: &'static DeepStack<(u32, f32)>,
     ) -> (u32, f32, u32) {
         match &self.tree {
-            Trees::Four(tree) => self.nearest_in(tree, ray, tmin, mask, deep),
+            Trees::Four(tree) => self.nearest_in(tree, ray, tmin, mask, ignore, deep),
             // SAFETY: `Eight` trees are only built where AVX2 was detected.
             #[cfg(target_arch = "x86_64")]
-            Trees::Eight(tree) => unsafe { self.nearest_avx2(tree, ray, tmin, mask, deep) },
+            Trees::Eight(tree) => unsafe {
+                self.nearest_avx2(tree, ray, tmin, mask, ignore, deep)
+            },
         }
     }
 
@@ -436,9 +446,10 @@ impl Accel {
         ray: &Ray,
         tmin: f32,
         mask: u8,
+        ignore: u32,
         deep: &'static DeepStack<(u32, f32)>,
     ) -> (u32, f32, u32) {
-        self.nearest_in(tree, ray, tmin, mask, deep)
+        self.nearest_in(tree, ray, tmin, mask, ignore, deep)
     }
 
     #[inline(always)]
@@ -448,6 +459,7 @@ impl Accel {
         ray: &Ray,
         tmin: f32,
         mask: u8,
+        ignore: u32,
         deep: &'static DeepStack<(u32, f32)>,
     ) -> (u32, f32, u32) {
         if tree.stack_need <= STACK {
@@ -456,6 +468,7 @@ impl Accel {
                 ray,
                 tmin,
                 mask,
+                ignore,
                 &mut Stack::<(u32, f32), STACK>::new(),
             )
         } else {
@@ -465,7 +478,7 @@ impl Accel {
             if stack.len() < tree.stack_need {
                 stack.resize(tree.stack_need, (0, 0.0));
             }
-            let found = self.closest(tree, ray, tmin, mask, &mut stack);
+            let found = self.closest(tree, ray, tmin, mask, ignore, &mut stack);
             deep.set(stack);
             found
         }
@@ -480,7 +493,13 @@ impl Accel {
         if mesh.prims.is_empty() {
             return (u32::MAX, f32::INFINITY);
         }
-        let (slot, t, _) = mesh.nearest(&local, tmin, Visibility::ALL, &DEEP_CLOSEST_MESH);
+        let (slot, t, _) = mesh.nearest(
+            &local,
+            tmin,
+            Visibility::ALL,
+            u32::MAX,
+            &DEEP_CLOSEST_MESH,
+        );
         if slot == u32::MAX {
             (slot, f32::INFINITY)
         } else {
@@ -510,6 +529,7 @@ impl Accel {
         ray: &Ray,
         tmin: f32,
         mask: u8,
+        ignore: u32,
         stack: &mut impl TraversalStack<(u32, f32)>,
     ) -> (u32, f32, u32) {
         let r = RayLanes::<L>::new(ray, tmin);
@@ -584,9 +604,13 @@ impl Accel {
                             while hits != 0 {
                                 let lane = hits.trailing_zeros() as usize;
                                 hits &= hits - 1;
-                                if t[lane] < tmax {
+                                let slot = leaf.first + lane as u32;
+                                if t[lane] < tmax
+                                    && (ignore == u32::MAX
+                                        || self.objects[slot as usize] != ignore)
+                                {
                                     tmax = t[lane];
-                                    best = leaf.first + lane as u32;
+                                    best = slot;
                                 }
                             }
                         }
@@ -595,6 +619,9 @@ impl Accel {
                     while spheres != 0 {
                         let slot = leaf.first + spheres.trailing_zeros();
                         spheres &= spheres - 1;
+                        if ignore != u32::MAX && self.objects[slot as usize] == ignore {
+                            continue;
+                        }
                         let prim = &self.prims[slot as usize];
                         let t = if let Prim::Instance { index, .. } = *prim {
                             let (hit, t) = self.instance_nearest(index, ray, tmin, tmax);
@@ -1203,8 +1230,8 @@ mod tests {
                 tmax: f32::INFINITY,
             };
             let need = tree.stack_need;
-            let fixed = accel.closest(tree, &ray, 0.0, 7, &mut Stack::<(u32, f32), STACK>::new());
-            let heap = accel.closest(tree, &ray, 0.0, 7, &mut vec![(0, 0.0); need]);
+            let fixed = accel.closest(tree, &ray, 0.0, 7, u32::MAX, &mut Stack::<(u32, f32), STACK>::new());
+            let heap = accel.closest(tree, &ray, 0.0, 7, u32::MAX, &mut vec![(0, 0.0); need]);
             assert_eq!(fixed, heap);
             let fixed = accel.any_hit(tree, &ray, 0.0, 2, &mut Stack::<u32, STACK>::new());
             let heap = accel.any_hit(tree, &ray, 0.0, 2, &mut vec![0; need]);

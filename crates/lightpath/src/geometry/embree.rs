@@ -17,8 +17,9 @@
 //! - each placement of a shared mesh to an instance geometry of that mesh's own Embree
 //!   scene, built once per mesh;
 //! - which ray kinds see a primitive (`Visibility`) to the geometry's ray mask;
-//! - the object a shadow ray ignores (the light it aims at) to a context filter function,
-//!   set only on shadow rays that ignore one.
+//! - the object a ray ignores (a shadow ray's light; the boundary a ray just passed, for
+//!   what coincides with it) to a context filter function, set only on rays that ignore
+//!   one.
 
 use super::accel::{Accel, Visibility};
 use super::{Prim, Ray};
@@ -68,7 +69,7 @@ fn device() -> Result<RTCDevice, AccelError> {
 #[repr(C)]
 struct Context {
     base: RTCIntersectContext,
-    /// The object a shadow ray ignores, or `u32::MAX`.
+    /// The object a ray ignores, or `u32::MAX`.
     ignore: u32,
     /// Object of each top-level geometry (the scene's `geom_object`).
     objects: *const u32,
@@ -109,7 +110,7 @@ impl Context {
 
 const RTC_INVALID_GEOMETRY_ID: u32 = u32::MAX;
 
-/// Rejects hits on the ignored object (a shadow ray's light).
+/// Rejects hits on the ignored object (a shadow ray's light, a boundary just passed).
 unsafe extern "C" fn ignore_filter(args: *const RTCFilterFunctionNArguments) {
     let args = &*args;
     let context = &*(args.context as *const Context);
@@ -190,7 +191,10 @@ unsafe extern "C" fn sphere_intersect(args: *const RTCIntersectFunctionNArgument
             continue;
         }
         let (o, d, tnear, tfar, mask) = ray_at(words, n, i);
-        if mask & spheres.visibility == 0 {
+        if mask & spheres.visibility == 0
+            || (context.ignore != u32::MAX
+                && context.object(args.geomID, context.base.instID[0]) == context.ignore)
+        {
             continue;
         }
         let t = prim.intersect(o, d, tnear, tfar);
@@ -410,11 +414,18 @@ impl EmbreeScene {
         self.geom_slots[(self.geom_first[geom as usize] + prim) as usize]
     }
 
-    /// The nearest hit among primitives rays of kind `mask` see: (slot, t, the instanced
-    /// mesh's slot or `u32::MAX`), as the BVH's `nearest`; `None` for a miss.
+    /// The nearest hit among primitives rays of kind `mask` see, other than object
+    /// `ignore`'s: (slot, t, the instanced mesh's slot or `u32::MAX`), as the BVH's
+    /// `nearest`; `None` for a miss.
     #[inline]
-    pub fn intersect(&self, ray: &Ray, tmin: f32, mask: u8) -> Option<(u32, f32, u32)> {
-        let mut context = Context::new(u32::MAX, &self.geom_object);
+    pub fn intersect(
+        &self,
+        ray: &Ray,
+        tmin: f32,
+        mask: u8,
+        ignore: u32,
+    ) -> Option<(u32, f32, u32)> {
+        let mut context = Context::new(ignore, &self.geom_object);
         let mut rayhit = RTCRayHit {
             ray: rtc_ray(ray, tmin, mask),
             hit: RTCHit {

@@ -4,7 +4,7 @@
 
 use super::guided::GuideAt;
 use super::routing::{Origin, Via};
-use super::volume::{media_seed, Flight, MAX_CROSSINGS};
+use super::volume::{media_seed, Coincident, Flight, MAX_CROSSINGS};
 use super::{Sink, Tracer};
 use crate::geometry::{Hit, Ray, Visibility};
 use crate::material::{Bsdf, Shading};
@@ -115,10 +115,20 @@ impl Tracer<'_> {
             } else {
                 Visibility::INDIRECT
             };
-            let found = scene.accel.intersect(&ray, tmin, mask);
+            let mut found = scene.accel.intersect(&ray, tmin, mask);
             tmin = 0.0;
             // A null surface, or one only partly there that this ray misses (presence).
-            let (passes, null) = self.passing(&path.media, found.as_ref(), &ray);
+            let (mut passes, null) = self.passing(&path.media, found.as_ref(), &ray);
+            // A surface the null boundary lies on (a fog box resting on a floor) is
+            // found instead; the boundary is not crossed (volume.rs, `coincident`).
+            let mut also = None;
+            if null {
+                match found.as_ref().and_then(|h| self.coincident(&path.media, &ray, h, mask)) {
+                    Some(Coincident::Surface(c)) => (found, passes) = (Some(c), false),
+                    Some(Coincident::Boundary(c)) => also = Some(c),
+                    None => {}
+                }
+            }
             if let Some(hit) = found.as_ref().filter(|_| !passes) {
                 self.first_hit(out, path.depth, hit, &mut alpha);
             }
@@ -155,6 +165,9 @@ impl Tracer<'_> {
                 }
                 if null {
                     self.cross(&mut path.media, &hit, ray.dir);
+                }
+                if let Some(c) = also {
+                    self.cross(&mut path.media, &c, ray.dir);
                 }
                 path.travelled += hit.t;
                 ray.origin = hit.p;

@@ -2,8 +2,10 @@
 //! that end at a scattering vertex (a `V` event, light sampled there with MIS against
 //! the phase function, the next direction from the phase function), single scattering
 //! towards point and spot lights at equiangularly sampled distances (MIS against the
-//! free-flight vertices), and the transmittance of shadow rays, which pass null
-//! boundaries and media and stop at any other surface.
+//! free-flight vertices in a homogeneous medium; in a grid thin along the flight, which
+//! has no free-flight density to weigh against, instead of those vertices' light
+//! samples), and the transmittance of shadow rays, which pass null boundaries and media
+//! and stop at any other surface.
 //!
 //! A `V` vertex is a bounce like a surface's: it takes the same sampler dimensions of
 //! its depth (light choice and point, direction, roulette), counts toward `max_depth`
@@ -19,12 +21,27 @@ use super::{Sink, Tracer};
 use crate::geometry::{Hit, Ray, Visibility};
 use crate::light::{Light, LightShape};
 use crate::media::equiangular::Equiangular;
-use crate::media::{Collision, MediumStack};
+use crate::media::{Collision, Medium, MediumStack};
 use crate::sampler::{dim, Sampler};
 use crate::sampling::{splitmix64, Rng};
 use crate::scene::MediumUse;
 use glam::{Vec2, Vec3A};
 use lpe::StateId;
+
+/// The optical depth (the majorants' bound, densest channel) below which a grid medium
+/// is thin along a flight: its transmittance there is at least e^(−1), so distances
+/// sampled towards a light waste little on light the medium has already absorbed.
+const THIN: f32 = 1.0;
+
+/// Whether single scattering towards point and spot lights along the flight `seg` in
+/// `medium` is left to equiangular sampling alone: a grid medium, thin along it. A grid
+/// has no free-flight density to weigh equiangular distances against (its tracking only
+/// samples one), so the two techniques split the lights instead of weighing each sample:
+/// by this test of the segment, which both sides make alike, so each light's single
+/// scattering is counted exactly once. Dense grids keep light sampling at the vertices.
+fn thin_grid(medium: &Medium, seg: &Ray) -> bool {
+    matches!(medium, Medium::Heterogeneous(h) if h.majorant_depth(seg) < THIN)
+}
 
 /// Boundaries a ray may pass without an event before it counts as lost: a cap on the
 /// work of one segment among many nested or overlapping null surfaces.
@@ -61,6 +78,15 @@ pub(super) fn point_of(light: &Light) -> Option<Vec3A> {
         LightShape::Spot(s) => Some(s.position),
         _ => None,
     }
+}
+
+/// What lies on a null boundary a ray passes (within `epsilon` of it, which the next
+/// segment would skip): see [`Tracer::coincident`].
+pub(super) enum Coincident {
+    /// A real surface, found in the boundary's place.
+    Surface(Hit),
+    /// Another null boundary (two media sharing a face), crossed with it.
+    Boundary(Hit),
 }
 
 /// How a ray's flight through the medium it is in ended.
@@ -192,6 +218,41 @@ impl Tracer<'_> {
         s
     }
 
+    /// What lies within `epsilon` of the null boundary `hit` along `ray`, other than
+    /// `hit`'s own object (nothing for a surface not there for this ray: presence). A ray that passes a boundary goes on from it skipping
+    /// `epsilon`, which would lose a surface the boundary rests on (a fog box on a floor:
+    /// the floor's footprint seen through) or shares a face with. A real surface there
+    /// takes the boundary's place: the ray meets it on the side it came from, in the
+    /// medium it was in, and does not cross the boundary (a path that goes on through
+    /// that surface keeps that medium: coplanar interfaces have no other order). Its `t`
+    /// is from `ray`'s origin, at least the boundary's less `epsilon`.
+    pub(super) fn coincident(
+        &self,
+        stack: &MediumStack,
+        ray: &Ray,
+        hit: &Hit,
+        mask: u8,
+    ) -> Option<Coincident> {
+        let eps = self.scene.epsilon;
+        let probe = Ray {
+            origin: hit.p - ray.dir * eps,
+            dir: ray.dir,
+            tmax: 2.0 * eps,
+        };
+        let mut c = self
+            .scene
+            .accel
+            .intersect_except(&probe, 0.0, mask, hit.object)?;
+        c.t = (hit.t - eps + c.t).max(0.0);
+        if self.passes(stack, &c) {
+            Some(Coincident::Boundary(c))
+        } else if self.see_through(&c, ray) {
+            None
+        } else {
+            Some(Coincident::Surface(c))
+        }
+    }
+
     /// The transmittance of the shadow ray `ray` (up to `ray.tmax`) starting in
     /// `stack`'s medium: through null boundaries and media, zero at any other surface
     /// (`ignore`: a light's own object, which it passes).
@@ -230,6 +291,15 @@ impl Tracer<'_> {
             };
             if hit.object != ignore {
                 if self.passes(&stack, &hit) {
+                    // As a camera path does (`coincident`): blocked by a surface the
+                    // boundary lies on, through a boundary it shares a face with.
+                    match self.coincident(&stack, &ray, &hit, Visibility::SHADOW) {
+                        Some(Coincident::Surface(c)) if c.object != ignore => {
+                            return Vec3A::ZERO;
+                        }
+                        Some(Coincident::Boundary(c)) => self.cross(&mut stack, &c, ray.dir),
+                        _ => {}
+                    }
                     self.cross(&mut stack, &hit, ray.dir);
                 } else if !self.see_through(&hit, &ray) {
                     return Vec3A::ZERO;
@@ -324,6 +394,8 @@ impl Tracer<'_> {
         let w = match self.equiangular_pdf(&v.seg, li, light, v.p) {
             // A point or spot light: weighed against equiangular sampling of the flight.
             Some(pdf_e) if v.pdf > 0.0 => power_heuristic(v.pdf * light_pdf, pdf_e),
+            // A grid thin along the flight: equiangular sampling takes it alone.
+            Some(pdf_e) if pdf_e > 0.0 && thin_grid(&volume.medium, &v.seg) => return,
             _ if ls.delta => 1.0,
             _ => power_heuristic(light_pdf, f),
         };
@@ -397,10 +469,20 @@ impl Tracer<'_> {
             return;
         };
         let (t, pdf_t) = e.sample(u_t);
-        let Some((sigma_s, tr, pdf_d)) = volume.medium.collision_terms(t, path.throughput) else {
-            return;
-        };
         let p = seg.origin + seg.dir * t;
+        // σs at the distance, the transmittance to it, and the free-flight density there
+        // (`None` for a grid, whose tracking has none to give: it takes the light alone).
+        let (sigma_s, tr, pdf_d) = match &volume.medium {
+            Medium::Heterogeneous(h) if thin_grid(&volume.medium, seg) => {
+                let to_t = Ray { tmax: t, ..*seg };
+                let tr = h.transmittance(&to_t, &mut path.rng);
+                (h.sigma_s_at(p), tr, None)
+            }
+            m => match m.collision_terms(t, path.throughput) {
+                Some((sigma_s, tr, pdf_d)) => (sigma_s, tr, Some(pdf_d)),
+                None => return,
+            },
+        };
         let Some(ls) = light.sample(p, Vec2::ZERO, scene.accel.prims()) else {
             return;
         };
@@ -409,8 +491,10 @@ impl Tracer<'_> {
         if f <= 0.0 || pdf_e.is_nan() || pdf_e <= 0.0 {
             return;
         }
-        let light_pdf = scene.light_select.pmf(li, p, Vec3A::ZERO) * ls.pdf;
-        let w = power_heuristic(pdf_e, pdf_d * light_pdf);
+        let w = pdf_d.map_or(1.0, |pdf_d| {
+            let light_pdf = scene.light_select.pmf(li, p, Vec3A::ZERO) * ls.pdf;
+            power_heuristic(pdf_e, pdf_d * light_pdf)
+        });
         let shadow = Ray {
             origin: p,
             dir: ls.wi,

@@ -180,6 +180,26 @@ impl Heterogeneous {
         )
     }
 
+    /// σs at the scene point `p`: the coefficients times the density there.
+    #[inline]
+    pub fn sigma_s_at(&self, p: Vec3A) -> Vec3A {
+        let q = self.to_grid.transform_point3(p.into());
+        self.sigma_s * self.grid.grid.density(q)
+    }
+
+    /// An upper bound on the optical depth along `ray` up to `ray.tmax` in the densest
+    /// channel: the majorants' integral over the cells it crosses (e^(−bound) is a lower
+    /// bound on its transmittance).
+    pub fn majorant_depth(&self, ray: &Ray) -> f32 {
+        let (o, d) = self.local(ray);
+        let st = self.sigma_t.max_element();
+        self.grid
+            .majorants
+            .segments(o, d, 0.0, ray.tmax)
+            .map(|s| s.max * st * (s.t1 - s.t0))
+            .sum()
+    }
+
     /// An unbiased estimate of ∫ ρ(s) T(s) ds along `ray` up to `ray.tmax` (what an
     /// emission of one per unit length at density 1 adds up to): one point chosen
     /// uniformly on the ray's stretch through the grid's box, its density times the
