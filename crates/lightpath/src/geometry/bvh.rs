@@ -432,9 +432,7 @@ impl Accel {
             Trees::Four(tree) => self.nearest_in(tree, ray, tmin, mask, ignore, deep),
             // SAFETY: `Eight` trees are only built where AVX2 was detected.
             #[cfg(target_arch = "x86_64")]
-            Trees::Eight(tree) => unsafe {
-                self.nearest_avx2(tree, ray, tmin, mask, ignore, deep)
-            },
+            Trees::Eight(tree) => unsafe { self.nearest_avx2(tree, ray, tmin, mask, ignore, deep) },
         }
     }
 
@@ -493,13 +491,8 @@ impl Accel {
         if mesh.prims.is_empty() {
             return (u32::MAX, f32::INFINITY);
         }
-        let (slot, t, _) = mesh.nearest(
-            &local,
-            tmin,
-            Visibility::ALL,
-            u32::MAX,
-            &DEEP_CLOSEST_MESH,
-        );
+        let (slot, t, _) =
+            mesh.nearest(&local, tmin, Visibility::ALL, u32::MAX, &DEEP_CLOSEST_MESH);
         if slot == u32::MAX {
             (slot, f32::INFINITY)
         } else {
@@ -606,8 +599,7 @@ impl Accel {
                                 hits &= hits - 1;
                                 let slot = leaf.first + lane as u32;
                                 if t[lane] < tmax
-                                    && (ignore == u32::MAX
-                                        || self.objects[slot as usize] != ignore)
+                                    && (ignore == u32::MAX || self.objects[slot as usize] != ignore)
                                 {
                                     tmax = t[lane];
                                     best = slot;
@@ -1230,7 +1222,14 @@ mod tests {
                 tmax: f32::INFINITY,
             };
             let need = tree.stack_need;
-            let fixed = accel.closest(tree, &ray, 0.0, 7, u32::MAX, &mut Stack::<(u32, f32), STACK>::new());
+            let fixed = accel.closest(
+                tree,
+                &ray,
+                0.0,
+                7,
+                u32::MAX,
+                &mut Stack::<(u32, f32), STACK>::new(),
+            );
             let heap = accel.closest(tree, &ray, 0.0, 7, u32::MAX, &mut vec![(0, 0.0); need]);
             assert_eq!(fixed, heap);
             let fixed = accel.any_hit(tree, &ray, 0.0, 2, &mut Stack::<u32, STACK>::new());

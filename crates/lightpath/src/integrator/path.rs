@@ -123,7 +123,10 @@ impl Tracer<'_> {
             // found instead; the boundary is not crossed (volume.rs, `coincident`).
             let mut also = None;
             if null {
-                match found.as_ref().and_then(|h| self.coincident(&path.media, &ray, h, mask)) {
+                match found
+                    .as_ref()
+                    .and_then(|h| self.coincident(&path.media, &ray, h, mask))
+                {
                     Some(Coincident::Surface(c)) => (found, passes) = (Some(c), false),
                     Some(Coincident::Boundary(c)) => also = Some(c),
                     None => {}
