@@ -115,23 +115,8 @@ impl Tracer<'_> {
             } else {
                 Visibility::INDIRECT
             };
-            let mut found = scene.accel.intersect(&ray, tmin, mask);
+            let (found, passes, null, also) = self.find(&path.media, &ray, tmin, mask);
             tmin = 0.0;
-            // A null surface, or one only partly there that this ray misses (presence).
-            let (mut passes, null) = self.passing(&path.media, found.as_ref(), &ray);
-            // A surface the null boundary lies on (a fog box resting on a floor) is
-            // found instead; the boundary is not crossed (volume.rs, `coincident`).
-            let mut also = None;
-            if null {
-                match found
-                    .as_ref()
-                    .and_then(|h| self.coincident(&path.media, &ray, h, mask))
-                {
-                    Some(Coincident::Surface(c)) => (found, passes) = (Some(c), false),
-                    Some(Coincident::Boundary(c)) => also = Some(c),
-                    None => {}
-                }
-            }
             if let Some(hit) = found.as_ref().filter(|_| !passes) {
                 self.first_hit(out, path.depth, hit, &mut alpha);
             }
@@ -232,6 +217,34 @@ impl Tracer<'_> {
             }
         }
         alpha
+    }
+
+    /// What `ray` finds: the hit, whether it passes it without an event (a null surface,
+    /// or one only partly there that this ray misses: presence), whether that is a null
+    /// boundary, and another boundary lying on that one (crossed with it). A surface a
+    /// passed null boundary lies on (a fog box resting on a floor) is found instead, and
+    /// the boundary is not crossed (volume.rs, `coincident`).
+    fn find(
+        &self,
+        media: &MediumStack,
+        ray: &Ray,
+        tmin: f32,
+        mask: u8,
+    ) -> (Option<Hit>, bool, bool, Option<Hit>) {
+        let mut found = self.scene.accel.intersect(ray, tmin, mask);
+        let (mut passes, null) = self.passing(media, found.as_ref(), ray);
+        let mut also = None;
+        if null {
+            match found
+                .as_ref()
+                .and_then(|h| self.coincident(media, ray, h, mask))
+            {
+                Some(Coincident::Surface(c)) => (found, passes) = (Some(c), false),
+                Some(Coincident::Boundary(c)) => also = Some(c),
+                None => {}
+            }
+        }
+        (found, passes, null, also)
     }
 
     /// Whether the ray goes on through `found` without an event, and whether that is a
