@@ -63,6 +63,8 @@ struct Tracer<'a> {
     learn: bool,
     /// The seed of the sample numbers (the render's; a training pass's own).
     seed: u64,
+    /// Boxes around the declared triangle lights, for the lights-only test (direct.rs).
+    light_boxes: Vec<Option<(Vec3A, Vec3A)>>,
 }
 
 /// Where a worker's paths put what they find: the sample's AOV values and counters.
@@ -107,6 +109,7 @@ impl<'a> Tracer<'a> {
             guide: None,
             learn: false,
             seed: scene.settings.seed,
+            light_boxes: direct::light_boxes(scene),
         }
     }
 
