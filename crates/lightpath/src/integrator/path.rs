@@ -395,6 +395,7 @@ impl Tracer<'_> {
 
     /// Russian roulette as Mitsuba does it: from `rr_depth` on, continue with
     /// probability max(throughput)·η², at most 0.95. `false`: the path ends.
+    #[inline(always)]
     pub(super) fn roulette<S: Sampler>(&self, path: &mut PathState, sampler: &mut S) -> bool {
         let t_max = path.throughput.max_element();
         if t_max <= 0.0 || !t_max.is_finite() {

@@ -108,6 +108,7 @@ impl Tracer<'_> {
 
     /// Whether the shadow ray `ray` (up to `ray.tmax`) is blocked, `ignore` (a light's own
     /// object) passed: past surfaces that are not there for it (presence), if any.
+    #[inline(always)]
     pub(super) fn occluded(
         &self,
         out: &mut super::Sink,
@@ -118,6 +119,16 @@ impl Tracer<'_> {
         if !scene.has_presence {
             return scene.accel.occluded(ray, 0.0, ignore);
         }
+        self.occluded_past_presence(out, ray, ignore)
+    }
+
+    fn occluded_past_presence(
+        &self,
+        out: &mut super::Sink,
+        ray: &crate::geometry::Ray,
+        ignore: u32,
+    ) -> bool {
+        let scene = self.scene;
         let mut ray = *ray;
         let mut tmin = 0.0;
         for _ in 0..super::volume::MAX_CROSSINGS {
