@@ -20,6 +20,9 @@ pub fn splitmix64(mut x: u64) -> u64 {
 }
 
 impl Rng {
+    /// A stream for paths that draw nothing from it: no seeding to pay for.
+    pub const UNUSED: Rng = Rng { state: 0, inc: 1 };
+
     /// The generator of one camera sample: seeded by (seed, pixel, sample index) so a
     /// render is identical for any thread count and sample ranges merge exactly.
     pub fn for_sample(seed: u64, pixel: u64, sample: u64) -> Rng {

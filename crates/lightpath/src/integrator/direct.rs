@@ -8,11 +8,49 @@ use super::path::{PathState, Vertex};
 use super::routing::{Origin, Via};
 use super::{Sink, Tracer};
 use crate::geometry::{Hit, Ray, Visibility};
-use crate::light::{Light, LightModel};
+use crate::light::{Light, LightModel, LightShape};
 use crate::sampler::{dim, Sampler};
 use crate::sampling::Rng;
 use glam::Vec3A;
 use std::f32::consts::FRAC_1_PI;
+
+/// A box around each declared triangle light (rect, quad, disk), padded far past float
+/// rounding (1e-4 of the scene's size): the lights-only test tries a light's triangles
+/// only when its ray crosses the box, and most rays miss a small light. The same
+/// answers for less work (on cornell-classic the two triangles were ~6 % of a render).
+pub(super) fn light_boxes(scene: &crate::scene::Scene) -> Vec<Option<(Vec3A, Vec3A)>> {
+    let prims = scene.accel.prims();
+    scene.lights[..scene.first_glow_light as usize]
+        .iter()
+        .map(|light| {
+            let LightShape::Triangles(t) = &light.shape else {
+                return None;
+            };
+            let (mut lo, mut hi) = (Vec3A::INFINITY, Vec3A::NEG_INFINITY);
+            for &i in &t.prims {
+                let (a, b) = prims.get(i as usize)?.bounds();
+                (lo, hi) = (lo.min(a), hi.max(b));
+            }
+            if !(lo.is_finite() && hi.is_finite()) {
+                return None;
+            }
+            let size = scene.scene_radius + lo.abs().max(hi.abs()).max_element();
+            let pad = Vec3A::splat(1e-4 * size);
+            Some((lo - pad, hi + pad))
+        })
+        .collect()
+}
+
+/// Whether `ray` may cross the box `lo`–`hi` (slab test). Rounding and NaN (a ray in
+/// a face's plane) answer yes, or no only for rays that stay outside the padding.
+#[inline]
+fn may_cross(ray: &Ray, lo: Vec3A, hi: Vec3A) -> bool {
+    let inv = ray.dir.recip();
+    let (t0, t1) = ((lo - ray.origin) * inv, (hi - ray.origin) * inv);
+    let near = t0.min(t1).max_element();
+    let far = t0.max(t1).min_element();
+    !(far < 0.0 || near > far + 1e-4 * far.abs())
+}
 
 /// The power heuristic with β = 2 (Veach 1997), for the strategy with pdf `a` against `b`.
 #[inline]
@@ -297,6 +335,11 @@ impl Tracer<'_> {
             .map(|h| (h.object as usize, h.t, h.ng));
         let declared = &scene.lights[..scene.first_glow_light as usize];
         for (li, light) in declared.iter().enumerate() {
+            if let Some(&Some((lo, hi))) = self.light_boxes.get(li) {
+                if !may_cross(ray, lo, hi) {
+                    continue;
+                }
+            }
             let tmax = best.map_or(f32::INFINITY, |b| b.1);
             if let Some((t, n)) = light.shape.intersect(ray, tmax, scene.accel.prims()) {
                 best = Some((li, t, n));

@@ -63,6 +63,11 @@ struct Tracer<'a> {
     learn: bool,
     /// The seed of the sample numbers (the render's; a training pass's own).
     seed: u64,
+    /// Whether paths draw numbers from their own stream (`PathState::rng`): through
+    /// media, or to resample light candidates. Other scenes skip seeding it.
+    path_rng: bool,
+    /// Boxes around the declared triangle lights, for the lights-only test (direct.rs).
+    light_boxes: Vec<Option<(Vec3A, Vec3A)>>,
 }
 
 /// Where a worker's paths put what they find: the sample's AOV values and counters.
@@ -107,6 +112,9 @@ impl<'a> Tracer<'a> {
             guide: None,
             learn: false,
             seed: scene.settings.seed,
+            path_rng: scene.has_media
+                || (scene.settings.light_candidates > 1 && scene.lights.len() > 1),
+            light_boxes: direct::light_boxes(scene),
         }
     }
 

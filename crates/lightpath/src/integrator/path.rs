@@ -66,7 +66,8 @@ pub(super) struct Vertex<'a> {
 
 impl PathState {
     /// A path at the camera, about to trace `ray`.
-    fn start(scene: &crate::scene::Scene, ray: &Ray) -> PathState {
+    /// `seeded`: whether the path draws from its own stream (`Tracer::path_rng`).
+    fn start(scene: &crate::scene::Scene, ray: &Ray, seeded: bool) -> PathState {
         let a = &scene.automaton;
         PathState {
             state: a.step(a.start(), scene.camera_class),
@@ -84,7 +85,12 @@ impl PathState {
             cone_spread: scene.camera.pixel_spread(),
             media: scene.camera_media,
             travelled: 0.0,
-            rng: Rng::for_sample(media_seed(ray), 0, 0),
+            // Seeding hashes the ray: only for the scenes that draw from it.
+            rng: if seeded {
+                Rng::for_sample(media_seed(ray), 0, 0)
+            } else {
+                Rng::UNUSED
+            },
         }
     }
 }
@@ -100,7 +106,7 @@ impl Tracer<'_> {
 
     fn trace_path<S: Sampler>(&self, mut ray: Ray, sampler: &mut S, out: &mut Sink) -> f32 {
         let scene = self.scene;
-        let mut path = PathState::start(scene, &ray);
+        let mut path = PathState::start(scene, &ray, self.path_rng);
         let mut alpha = 0.0;
         out.holdout = false;
         out.first_object = None;
@@ -418,6 +424,7 @@ impl Tracer<'_> {
 
     /// Russian roulette as Mitsuba does it: from `rr_depth` on, continue with
     /// probability max(throughput)·η², at most 0.95. `false`: the path ends.
+    #[inline(always)]
     pub(super) fn roulette<S: Sampler>(&self, path: &mut PathState, sampler: &mut S) -> bool {
         let t_max = path.throughput.max_element();
         if t_max <= 0.0 || !t_max.is_finite() {

@@ -80,11 +80,14 @@ fn uv_width(cone_width: f32, uv_per_world: f32, dir: Vec3A, ng: Vec3A) -> f32 {
 impl Tracer<'_> {
     /// Whether `ray` goes on through `hit` without an event: the surface's material is
     /// only partly there (`material/presence.rs`) and this ray is one that misses it.
+    /// Inlined, so that scenes without presence pay one test per hit, not a call.
+    #[inline]
     pub(super) fn see_through(&self, hit: &Hit, ray: &crate::geometry::Ray) -> bool {
+        self.scene.has_presence && self.see_through_presence(hit, ray)
+    }
+
+    fn see_through_presence(&self, hit: &Hit, ray: &crate::geometry::Ray) -> bool {
         let scene = self.scene;
-        if !scene.has_presence {
-            return false;
-        }
         let Some(presence) = scene.objects[hit.object as usize]
             .material
             .and_then(|m| scene.materials[m as usize].presence.as_deref())
@@ -105,6 +108,7 @@ impl Tracer<'_> {
 
     /// Whether the shadow ray `ray` (up to `ray.tmax`) is blocked, `ignore` (a light's own
     /// object) passed: past surfaces that are not there for it (presence), if any.
+    #[inline(always)]
     pub(super) fn occluded(
         &self,
         out: &mut super::Sink,
@@ -115,6 +119,16 @@ impl Tracer<'_> {
         if !scene.has_presence {
             return scene.accel.occluded(ray, 0.0, ignore);
         }
+        self.occluded_past_presence(out, ray, ignore)
+    }
+
+    fn occluded_past_presence(
+        &self,
+        out: &mut super::Sink,
+        ray: &crate::geometry::Ray,
+        ignore: u32,
+    ) -> bool {
+        let scene = self.scene;
         let mut ray = *ray;
         let mut tmin = 0.0;
         for _ in 0..super::volume::MAX_CROSSINGS {

@@ -73,6 +73,7 @@ impl Shaping {
 impl LightModel for Triangles {
     /// A point on the triangles (directly on the parallelogram when they are one), in
     /// solid angle.
+    #[inline(always)]
     fn sample(&self, color: Vec3A, p: Vec3A, u: Vec2, prims: &[Prim]) -> Option<LightSample> {
         let (q, n) = match self.parallelogram {
             Some([p0, e1, e2]) => (p0 + e1 * u.x + e2 * u.y, self.normals[0]),
