@@ -205,7 +205,14 @@ impl Tracer<'_> {
                 Via::Hit { .. } | Via::LightSample { visible: true } | Via::Glow
             )
         {
-            out.record.add(throughput * local * mis);
+            let direct_after = match origin.via {
+                Via::Hit {
+                    light_sampled: true,
+                    ..
+                } if super::guided::exclude_direct() => Some(origin.scatters),
+                _ => None,
+            };
+            out.record.add(throughput * local * mis, direct_after);
         }
         let rules = self.scene.automaton.accepting(state);
         if rules.is_empty() {

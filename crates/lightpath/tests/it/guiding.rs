@@ -1,11 +1,13 @@
-//! Path guiding (`--guiding-passes`, crates/lightpath/src/guiding/): it changes sampling
-//! densities only, so the image converges to the same mean, every partition still sums
-//! to the beauty, and renders stay deterministic across thread counts and sample ranges.
+//! Path guiding (`--guiding on|off|auto`, crates/lightpath/src/guiding/): it changes
+//! sampling densities only, so the image converges to the same mean, every partition
+//! still sums to the beauty, and renders stay deterministic across thread counts and
+//! sample ranges; `auto` renders exactly as `on` or as `off`, as its pilot decides.
 
 use crate::common::index;
 use glam::Vec3A;
 use lightpath::aov::{self, AovSpec};
 use lightpath::film::Film;
+use lightpath::guiding::GuidingMode;
 use lightpath::{render, RenderOptions, Scene, Source};
 
 /// A room lit only around a baffle: a lamp under the ceiling faces it, a plate below the
@@ -76,14 +78,32 @@ radiance = [30, 30, 30]
 corners = [[-0.2, 0.62, -0.2], [-0.2, 0.62, 0.2], [0.2, 0.62, 0.2], [0.2, 0.62, -0.2]]
 "#;
 
+/// The room with guiding on (`passes` > 0) or off.
 fn scene(res: u32, passes: u32, seed: u64, extra: Vec<AovSpec>) -> Scene {
+    let mode = if passes > 0 {
+        GuidingMode::On
+    } else {
+        GuidingMode::Off
+    };
+    scene_in(ROOM, res, mode, passes, seed, extra)
+}
+
+fn scene_in(
+    text: &str,
+    res: u32,
+    mode: GuidingMode,
+    passes: u32,
+    seed: u64,
+    extra: Vec<AovSpec>,
+) -> Scene {
     let src = Source {
         name: "room.toml".into(),
-        text: ROOM.into(),
+        text: text.into(),
         dir: Default::default(),
     };
     let mut desc = src.parse().unwrap();
     desc.render.resolution = [res, res];
+    desc.render.guiding = mode;
     desc.render.guiding_passes = passes;
     desc.render.seed = seed;
     Scene::build(&desc, &aov::assemble(extra)).unwrap()
