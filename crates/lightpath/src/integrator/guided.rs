@@ -50,8 +50,6 @@ pub(super) struct GuidedPdfs {
 #[derive(Clone, Copy, Debug, Default)]
 pub(super) struct RecordedVertex {
     leaf: u32,
-    /// The path's scattering vertices before this one.
-    depth: u32,
     dir: Vec3A,
     pdf: f32,
     /// The sampled lobe's `f` (cosine included) and, when the guide's density there was
@@ -82,18 +80,12 @@ impl Default for PathRecord {
 
 impl PathRecord {
     /// A contribution `c` (throughput included) reached the camera: each recorded vertex
-    /// before it receives its share, the radiance arriving along its direction.
-    /// `direct_after`: `c` is a light's emission that light sampling also covers, found
-    /// by the ray leaving the vertex of that many scatters before it. That vertex does
-    /// not learn it: its own light sample already estimates that light, and a guide
-    /// that learnt it would spend its samples where light sampling does the work
-    /// (the ceiling round a lamp).
+    /// before it receives its share, the radiance arriving along its direction (light
+    /// found by the vertex's own ray included, MIS-weighted as the paper does; leaving
+    /// out what light sampling covers measured no better).
     #[inline]
-    pub fn add(&mut self, c: Vec3A, direct_after: Option<u32>) {
+    pub fn add(&mut self, c: Vec3A) {
         for v in &mut self.verts[..self.n] {
-            if direct_after == Some(v.depth + 1) {
-                continue;
-            }
             // A channel the throughput lost is one `c` has not: 0, not 0/0.
             v.radiance += c / v.throughput.max(Vec3A::splat(1e-30));
         }
@@ -106,11 +98,6 @@ impl PathRecord {
     pub fn clear(&mut self) {
         self.n = 0;
     }
-}
-
-pub(super) fn exclude_direct() -> bool {
-    static X: std::sync::OnceLock<bool> = std::sync::OnceLock::new();
-    *X.get_or_init(|| std::env::var("LP_EXCL").is_ok_and(|v| v == "1"))
 }
 
 /// Whether lobe event `k` may be sampled by the guide: not a delta, and diffuse or a
@@ -191,9 +178,9 @@ impl Tracer<'_> {
             return None;
         }
         let leaf = tree.leaf_index(p);
-        let l = tree.leaf(leaf);
-        let trained = l.sampling.total() > 0.0;
-        let alpha = if trained { l.fraction } else { 0.0 };
+        let alpha = tree.alpha(leaf);
+        // Only training samples a leaf's guide where it does not guide (path.rs).
+        let trained = alpha > 0.0 || (self.learn && tree.leaf(leaf).sampling.total() > 0.0);
         Some(GuideAt {
             leaf,
             trained,
@@ -296,7 +283,6 @@ impl Tracer<'_> {
         }
         r.verts[r.n] = RecordedVertex {
             leaf: g.leaf,
-            depth: path.depth,
             dir: bs.wi,
             pdf,
             f: bs.weight * pdf,
@@ -351,9 +337,7 @@ pub(super) fn train(scene: &crate::scene::Scene) -> Option<SdTree> {
     let (lo, hi) = scene.accel.bounds();
     let mut tree = SdTree::new(lo, hi);
     let (w, h) = (scene.camera.width, scene.camera.height);
-    let debug = std::env::var("LP_GDEBUG").is_ok();
     for k in 0..passes {
-        let t0 = std::time::Instant::now();
         let mut tracer = Tracer::new(scene);
         tracer.guide = Some(&tree);
         tracer.learn = true;
@@ -361,47 +345,39 @@ pub(super) fn train(scene: &crate::scene::Scene) -> Option<SdTree> {
         let pilot = k < PILOT_PASSES;
         let step = if pilot { 2 } else { 1 };
         let stride = crate::film::Film::stride_with(scene.aovs.len(), scene.variance_aovs.len());
-        (0..h).into_par_iter().filter(|y| y % step == 0).for_each_init(
-            || {
-                (
-                    crate::film::SampleAccumulator::with_squares(
-                        scene.aovs.len(),
-                        scene.variance_aovs.clone(),
-                    ),
-                    vec![0.0f32; stride],
-                )
-            },
-            |(acc, run), y| {
-                let mut out = Sink::new(acc);
-                let mut nothing = |_: &Sink| {};
-                for x in (0..w).step_by(step as usize) {
-                    run.fill(0.0);
-                    let job = super::pixel::PixelJob {
-                        x,
-                        y,
-                        run,
-                        first_sample: 0,
-                        taken: 0,
-                        spp: 1 << k,
-                        after_sample: &mut nothing,
-                        moments: None,
-                    };
-                    tracer.render_pixel(job, &mut out);
-                }
-            },
-        );
-        tree.end_pass(k);
-        if debug {
-            let guided = (0..tree.leaf_count() as u32)
-                .filter(|&l| tree.leaf(l).fraction > 0.0)
-                .count();
-            eprintln!(
-                "guiding pass {k}: {:.2} s, {} leaves ({guided} guided), gain {:.3}",
-                t0.elapsed().as_secs_f64(),
-                tree.leaf_count(),
-                tree.gain
+        (0..h)
+            .into_par_iter()
+            .filter(|y| y % step == 0)
+            .for_each_init(
+                || {
+                    (
+                        crate::film::SampleAccumulator::with_squares(
+                            scene.aovs.len(),
+                            scene.variance_aovs.clone(),
+                        ),
+                        vec![0.0f32; stride],
+                    )
+                },
+                |(acc, run), y| {
+                    let mut out = Sink::new(acc);
+                    let mut nothing = |_: &Sink| {};
+                    for x in (0..w).step_by(step as usize) {
+                        run.fill(0.0);
+                        let job = super::pixel::PixelJob {
+                            x,
+                            y,
+                            run,
+                            first_sample: 0,
+                            taken: 0,
+                            spp: 1 << k,
+                            after_sample: &mut nothing,
+                            moments: None,
+                        };
+                        tracer.render_pixel(job, &mut out);
+                    }
+                },
             );
-        }
+        tree.end_pass(k);
         if k + 1 == PILOT_PASSES
             && settings.guiding == GuidingMode::Auto
             && tree.gain < AUTO_MIN_GAIN
@@ -409,5 +385,6 @@ pub(super) fn train(scene: &crate::scene::Scene) -> Option<SdTree> {
             return None;
         }
     }
-    Some(tree)
+    // Where no leaf chose to guide, the render is the unguided one, without lookups.
+    tree.guides().then_some(tree)
 }

@@ -205,14 +205,7 @@ impl Tracer<'_> {
                 Via::Hit { .. } | Via::LightSample { visible: true } | Via::Glow
             )
         {
-            let direct_after = match origin.via {
-                Via::Hit {
-                    light_sampled: true,
-                    ..
-                } if super::guided::exclude_direct() => Some(origin.scatters),
-                _ => None,
-            };
-            out.record.add(throughput * local * mis, direct_after);
+            out.record.add(throughput * local * mis);
         }
         let rules = self.scene.automaton.accepting(state);
         if rules.is_empty() {
