@@ -222,7 +222,7 @@ settings! {
         role: Shared,
         header: Header::Setting,
         help: "Path guiding (Müller et al. 2017's SD-tree): on, off, or auto (train a pilot \
-               on a quarter of the pixels and guide only if it measured that guiding pays). \
+               on a sixteenth of the pixels and guide only if it measured that guiding pays). \
                Every farm part trains the same guide.",
     }
     guiding_passes: u32 = 4, {
@@ -232,7 +232,7 @@ settings! {
         role: Shared,
         header: Header::Setting,
         help: "Path guiding's training passes before the render: 1 and 2 samples on a \
-               quarter of the pixels, then 4, 8, … on all (0: no guiding).",
+               sixteenth of the pixels, then 4, 8, … on all (0: no guiding).",
     }
     frame: Option<f32> = None, {
         section: Render,
