@@ -41,7 +41,7 @@ for scene in sorted({s for s, _ in runs}):
         means = " ".join(f"{r[2]:.4f}" for r in rs)
         print(f"  {renderer:>22}: {secs:7.2f} s  MSE {mse:.3e}  RMSE {mse ** 0.5:.5f}  "
               f"efficiency {eff[renderer]:10.1f}  mean/ref {means}  ({len(rs)} runs)")
-    for ours in ("lightpath", "lightpath_adaptive", "lightpath_guided"):
+    for ours in ("lightpath", "lightpath_adaptive", "lightpath_guided", "lightpath_auto"):
         if ours in eff:
             for renderer, e in sorted(eff.items()):
                 if renderer != ours:

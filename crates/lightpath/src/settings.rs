@@ -9,6 +9,7 @@
 use crate::aov::naming::{setting_attribute, SEED_ATTRIBUTE, SPP_ATTRIBUTE};
 use crate::camera::FilterKind;
 use crate::error::SettingError;
+use crate::guiding::GuidingMode;
 use crate::light::select::LightSelection;
 use crate::sampler::SamplerKind;
 
@@ -214,16 +215,24 @@ settings! {
                this rough (e.g. 0.3; 0: off). Tames caustic fireflies at the cost of sharp \
                caustics.",
     }
-    guiding_passes: u32 = 0, {
+    guiding: GuidingMode = GuidingMode::Auto, {
+        section: Render,
+        flag: "guiding",
+        range: Range::Any,
+        role: Shared,
+        header: Header::Setting,
+        help: "Path guiding (Müller et al. 2017's SD-tree): on, off, or auto (train a pilot \
+               on a sixteenth of the pixels and guide only if it measured that guiding pays). \
+               Every farm part trains the same guide.",
+    }
+    guiding_passes: u32 = 4, {
         section: Render,
         flag: "guiding-passes",
         range: Range::Between(0.0, 12.0),
         role: Shared,
         header: Header::Setting,
-        help: "Path guiding (Müller et al. 2017's SD-tree): training passes of 1, 2, 4, … \
-               samples a pixel before the render, which then samples directions at diffuse \
-               surfaces half from what they learnt (e.g. 5: 31 training samples a pixel; \
-               0: off). Every farm part trains the same tree.",
+        help: "Path guiding's training passes before the render: 1 and 2 samples on a \
+               sixteenth of the pixels, then 4, 8, … on all (0: no guiding).",
     }
     frame: Option<f32> = None, {
         section: Render,
@@ -724,6 +733,7 @@ macro_rules! choice {
 choice!(SamplerKind);
 choice!(LightSelection);
 choice!(FilterKind);
+choice!(GuidingMode);
 
 #[cfg(test)]
 mod tests;

@@ -18,21 +18,76 @@ use glam::Vec3A;
 pub use quadtree::{Quadtree, Recording};
 use std::sync::atomic::{AtomicU64, Ordering};
 
-/// The paper's spatial threshold constant c.
-const SPATIAL_C: f64 = 12000.0;
+/// Whether a render guides its paths: always, never, or where training measured that
+/// it pays (integrator/guided.rs, `train`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum GuidingMode {
+    #[default]
+    Auto,
+    On,
+    Off,
+}
+
+impl GuidingMode {
+    pub const NAMES: [&'static str; 3] = ["auto", "on", "off"];
+
+    pub fn parse(s: &str) -> Option<GuidingMode> {
+        match s {
+            "auto" => Some(GuidingMode::Auto),
+            "on" => Some(GuidingMode::On),
+            "off" => Some(GuidingMode::Off),
+            _ => None,
+        }
+    }
+
+    pub fn name(self) -> &'static str {
+        match self {
+            GuidingMode::Auto => "auto",
+            GuidingMode::On => "on",
+            GuidingMode::Off => "off",
+        }
+    }
+}
+
+/// The spatial threshold constant c: the paper's 12000 is for passes over megapixel
+/// frames; on the 128² to 256² frames measured here it left a few dozen cells, each
+/// mixing surfaces that face apart, and no leaf chose to guide (docs/performance.md,
+/// "Path guiding"). A quarter of it gave 7–8 % less error on the indirect box and room.
+const SPATIAL_C: f64 = 3000.0;
 /// The paper's directional energy threshold ρ.
 pub const RHO: f32 = 0.01;
 /// Most leaves of the spatial tree: with [`quadtree::MAX_NODES`] this bounds the guide
 /// at 4096 × 512 × 80 bytes ≈ 168 MB (typical trees are a few MB).
 pub const MAX_LEAVES: usize = 4096;
 
+/// The guide-sampling probabilities a leaf chooses among (Müller et al. 2019,
+/// "Practical Path Guiding in Production", learn this fraction per leaf by stochastic
+/// gradient descent on the estimator's second moment; here the same objective is
+/// estimated for each candidate from one pass's sums, which keeps training independent
+/// of the order threads record in). At most 0.9: some BSDF sampling always remains.
+pub const FRACTIONS: [f32; 7] = [0.0, 0.15, 0.3, 0.45, 0.6, 0.75, 0.9];
+/// The fraction of a leaf that has not measured its candidates yet (the paper's ½).
+pub const DEFAULT_FRACTION: f32 = 0.5;
+/// A guided vertex costs this much more than a BSDF-sampled one (the guide's lookups
+/// and every lobe evaluated; about 1.4x a sample measured on the indirect box where
+/// most vertices are guided): a fraction above 0 must lower the second moment below
+/// 1 / this of BSDF sampling's to be chosen.
+const GUIDED_COST: f64 = 1.15;
+/// Fixed-point scale of the candidates' second-moment sums.
+const MOMENT_FIXED: f64 = (1u64 << 24) as f64;
+/// The largest single second-moment term (fixed point), so that sums cannot overflow.
+const MOMENT_MAX: f64 = (1u64 << 40) as f64;
+
 /// A leaf of the spatial tree: the quadtree sampled in this pass, the one recorded
-/// into, and how many vertices recorded here.
+/// into, how many vertices recorded here, the probability of guide sampling here and
+/// the second moments of each candidate probability (fixed point).
 #[derive(Debug)]
 pub struct Leaf {
     pub sampling: Quadtree,
     pub recording: Recording,
     count: AtomicU64,
+    pub fraction: f32,
+    moments: [AtomicU64; FRACTIONS.len()],
 }
 
 impl Clone for Leaf {
@@ -41,6 +96,10 @@ impl Clone for Leaf {
             sampling: self.sampling.clone(),
             recording: self.recording.clone(),
             count: AtomicU64::new(self.count.load(Ordering::Relaxed)),
+            fraction: self.fraction,
+            moments: std::array::from_fn(|i| {
+                AtomicU64::new(self.moments[i].load(Ordering::Relaxed))
+            }),
         }
     }
 }
@@ -51,7 +110,48 @@ impl Leaf {
             sampling: Quadtree::default(),
             recording: Recording::default(),
             count: AtomicU64::new(0),
+            fraction: DEFAULT_FRACTION,
+            moments: Default::default(),
         }
+    }
+
+    /// Records what a vertex sampled with this leaf's guide tells about the candidate
+    /// fractions: the estimate's integrand `f_li` (luminance of f·Li) times the path's
+    /// throughput before the vertex, the BSDF's and the guide's densities of the (lobe,
+    /// direction) pair and the pdf it was actually sampled with. Each candidate α adds
+    /// f_li² / (q_α · pdf), an unbiased estimate of the second moment ∫ f_li² / q_α
+    /// had the vertex sampled with q_α: its share of the pixel's second moment.
+    pub fn record_moments(&self, f_li: f32, bsdf_pdf: f32, guide_pdf: f32, pdf: f32) {
+        if !(f_li.is_finite() && f_li > 0.0 && pdf > 0.0 && pdf.is_finite()) {
+            return;
+        }
+        let f2 = f_li as f64 * f_li as f64 / pdf as f64;
+        for (m, &a) in self.moments.iter().zip(&FRACTIONS) {
+            let q = (1.0 - a as f64) * bsdf_pdf as f64 + a as f64 * guide_pdf as f64;
+            let term = if q > 0.0 {
+                (f2 / q * MOMENT_FIXED).min(MOMENT_MAX)
+            } else {
+                MOMENT_MAX
+            };
+            m.fetch_add(term as u64, Ordering::Relaxed);
+        }
+    }
+
+    /// The candidate fraction of least second moment times cost (the current one if
+    /// nothing was measured), that cost-weighted moment and BSDF sampling's.
+    fn best_fraction(&self) -> (f32, f64, f64) {
+        let m: [f64; FRACTIONS.len()] =
+            std::array::from_fn(|i| self.moments[i].load(Ordering::Relaxed) as f64);
+        if m[0] <= 0.0 {
+            return (self.fraction, 0.0, 0.0);
+        }
+        let mut best = (m[0], 0.0);
+        for (i, &a) in FRACTIONS.iter().enumerate().skip(1) {
+            if m[i] * GUIDED_COST < best.0 {
+                best = (m[i] * GUIDED_COST, a);
+            }
+        }
+        (best.1, best.0, m[0])
     }
 
     /// Records a vertex whose path arrived along unit `dir` with `value` = incident
@@ -84,6 +184,13 @@ pub struct SdTree {
     /// Each node's depth (its split axis is depth mod 3).
     depth: Vec<u8>,
     leaves: Vec<Leaf>,
+    /// Each leaf's probability of guide sampling, 0 where its guide learnt nothing: a
+    /// dense copy, so that a vertex whose leaf does not guide never touches its trees.
+    alphas: Vec<f32>,
+    /// What the last pass measured over all leaves: the second moment with each leaf's
+    /// chosen fraction (guided vertices' cost included) over BSDF sampling's alone;
+    /// 1 before anything was measured.
+    pub gain: f64,
 }
 
 impl SdTree {
@@ -105,6 +212,8 @@ impl SdTree {
             nodes: vec![SNode::Leaf(0)],
             depth: vec![0],
             leaves: vec![Leaf::new()],
+            alphas: vec![0.0],
+            gain: 1.0,
         }
     }
 
@@ -136,6 +245,17 @@ impl SdTree {
         self.leaves.len()
     }
 
+    /// The probability of guide sampling in leaf `index` (0: BSDF sampling alone).
+    #[inline]
+    pub fn alpha(&self, index: u32) -> f32 {
+        self.alphas[index as usize]
+    }
+
+    /// Whether any leaf samples its guide.
+    pub fn guides(&self) -> bool {
+        self.alphas.iter().any(|&a| a > 0.0)
+    }
+
     /// Total quadtree nodes (sampling trees), for reporting and memory checks.
     pub fn node_count(&self) -> usize {
         self.leaves.iter().map(|l| l.sampling.node_count()).sum()
@@ -145,9 +265,14 @@ impl SdTree {
     /// samples, leaves that saw many vertices are split, and every leaf's recording
     /// tree is refined from its new sampling tree.
     pub fn end_pass(&mut self, k: u32) {
+        let (mut chosen, mut bsdf) = (0.0, 0.0);
         for leaf in &mut self.leaves {
             leaf.sampling = leaf.recording.freeze();
+            let (fraction, m, m0) = leaf.best_fraction();
+            leaf.fraction = fraction;
+            (chosen, bsdf) = (chosen + m, bsdf + m0);
         }
+        self.gain = if bsdf > 0.0 { bsdf / chosen } else { 1.0 };
         let threshold = SPATIAL_C * 2f64.powi(k as i32).sqrt();
         // Breadth over the node list: the children a split appends are visited too.
         let mut n = 0;
@@ -174,7 +299,19 @@ impl SdTree {
         for leaf in &mut self.leaves {
             leaf.recording = leaf.sampling.refined(RHO);
             leaf.count = AtomicU64::new(0);
+            leaf.moments = Default::default();
         }
+        self.alphas = self
+            .leaves
+            .iter()
+            .map(|l| {
+                if l.sampling.total() > 0.0 {
+                    l.fraction
+                } else {
+                    0.0
+                }
+            })
+            .collect();
     }
 }
 
@@ -212,6 +349,28 @@ mod tests {
         assert_ne!(far, near);
         // The corner's leaves learnt the +z records of the second pass.
         assert!(tree.leaf(near).sampling.pdf(Vec3A::Z) > 1.0);
+    }
+
+    /// Samples drawn by BSDF sampling (uniform on [0, 1) here) of an integrand bright on
+    /// a tenth of the domain: a guide proportional to it earns the largest fraction, a
+    /// guide that avoids it earns none.
+    #[test]
+    fn leaves_choose_the_fraction_that_lowers_the_second_moment() {
+        let integrand = |x: f32| if x < 0.1 { 1.0 } else { 0.01 };
+        let total = 0.1 + 0.9 * 0.01;
+        let mut rng = Rng::for_sample(11, 0, 0);
+        let (good, bad) = (Leaf::new(), Leaf::new());
+        for _ in 0..20_000 {
+            let x = rng.next_f32();
+            let f = integrand(x);
+            good.record_moments(f, 1.0, f / total, 1.0);
+            let avoid = if x < 0.1 { 0.0 } else { 1.0 / 0.9 };
+            bad.record_moments(f, 1.0, avoid, 1.0);
+        }
+        assert_eq!(good.best_fraction().0, *FRACTIONS.last().unwrap());
+        assert_eq!(bad.best_fraction().0, 0.0);
+        // Nothing recorded: the leaf keeps its fraction.
+        assert_eq!(Leaf::new().best_fraction().0, DEFAULT_FRACTION);
     }
 
     #[test]

@@ -12,15 +12,13 @@
 
 use super::path::{PathState, Vertex};
 use super::{Sink, Tracer};
-use crate::guiding::SdTree;
+use crate::guiding::{GuidingMode, SdTree};
 use crate::light::luminance;
 use crate::material::{Bsdf, BsdfSample, Shading, MAX_LOBES};
 use glam::{Vec2, Vec3A};
 use lpe::ScatterClass;
 use rayon::prelude::*;
 
-/// The probability of guide sampling at a guided vertex (the paper's baseline).
-const GUIDE_FRACTION: f32 = 0.5;
 /// Lobe events a Bsdf can have.
 const MAX_EVENTS: usize = 2 * MAX_LOBES;
 /// Vertices of one path that are recorded for training (later ones are not).
@@ -29,12 +27,22 @@ pub(super) const MAX_RECORDED: usize = 16;
 /// never reuses the render's own numbers.
 const TRAINING_SEED: u64 = 0x6775_6964_696e_6721;
 
-/// Guiding at one vertex: the spatial leaf there and the probability of guide sampling
-/// (0 where the leaf has learnt nothing yet, in the first training pass).
+/// Guiding at one vertex: the spatial leaf there, whether its guide learnt anything
+/// and the probability of guide sampling (the leaf's learnt fraction; 0 where it learnt
+/// nothing yet, in the first training pass).
 #[derive(Clone, Copy, Debug)]
 pub(super) struct GuideAt {
     pub leaf: u32,
+    pub trained: bool,
     pub alpha: f32,
+}
+
+/// The two densities of a guided vertex's (lobe, direction) pair: BSDF sampling's and
+/// the guide's (times its lobe choice), which the leaf's fraction mixes.
+#[derive(Clone, Copy, Debug, Default)]
+pub(super) struct GuidedPdfs {
+    pub bsdf: f32,
+    pub guide: f32,
 }
 
 /// A recorded vertex of a path: where it left, along which direction with which pdf,
@@ -44,6 +52,12 @@ pub(super) struct RecordedVertex {
     leaf: u32,
     dir: Vec3A,
     pdf: f32,
+    /// The sampled lobe's `f` (cosine included) and, when the guide's density there was
+    /// evaluated, the mixture's parts (for learning the fraction).
+    f: Vec3A,
+    pdfs: Option<GuidedPdfs>,
+    /// The luminance of the path's throughput before the vertex.
+    before: f32,
     throughput: Vec3A,
     radiance: Vec3A,
 }
@@ -66,7 +80,9 @@ impl Default for PathRecord {
 
 impl PathRecord {
     /// A contribution `c` (throughput included) reached the camera: each recorded vertex
-    /// before it receives its share, the radiance arriving along its direction.
+    /// before it receives its share, the radiance arriving along its direction (light
+    /// found by the vertex's own ray included, MIS-weighted as the paper does; leaving
+    /// out what light sampling covers measured no better).
     #[inline]
     pub fn add(&mut self, c: Vec3A) {
         for v in &mut self.verts[..self.n] {
@@ -135,12 +151,21 @@ impl LobeValues {
     /// The mixture's pdf of lobe `k` and the direction, the guide's density there
     /// being `guide_pdf`.
     pub fn mixed_pdf(&self, bsdf: &Bsdf, k: usize, alpha: f32, guide_pdf: f32) -> f32 {
+        let p = self.parts(bsdf, k, guide_pdf);
+        (1.0 - alpha) * p.bsdf + alpha * p.guide
+    }
+
+    /// BSDF sampling's and guide sampling's densities of lobe `k` and the direction.
+    pub fn parts(&self, bsdf: &Bsdf, k: usize, guide_pdf: f32) -> GuidedPdfs {
         let q = if eligible(bsdf, k) && self.eligible_sum > 0.0 {
             luminance(self.f[k]).max(0.0) / self.eligible_sum
         } else {
             0.0
         };
-        (1.0 - alpha) * self.pdf[k] + alpha * guide_pdf * q
+        GuidedPdfs {
+            bsdf: self.pdf[k],
+            guide: guide_pdf * q,
+        }
     }
 }
 
@@ -153,22 +178,26 @@ impl Tracer<'_> {
             return None;
         }
         let leaf = tree.leaf_index(p);
-        let alpha = if tree.leaf(leaf).sampling.total() > 0.0 {
-            GUIDE_FRACTION
-        } else {
-            0.0
-        };
-        Some(GuideAt { leaf, alpha })
+        let alpha = tree.alpha(leaf);
+        // Only training samples a leaf's guide where it does not guide (path.rs).
+        let trained = alpha > 0.0 || (self.learn && tree.leaf(leaf).sampling.total() > 0.0);
+        Some(GuideAt {
+            leaf,
+            trained,
+            alpha,
+        })
     }
 
-    /// One-sample MIS of BSDF and guide sampling at a guided vertex (`g.alpha > 0`).
+    /// One-sample MIS of BSDF and guide sampling at a guided vertex (`g.trained`; with
+    /// `g.alpha` 0, a training pass's BSDF sample that also measures the guide), and
+    /// the densities it mixed (none for a delta lobe's sample).
     pub(super) fn sample_guided(
         &self,
         v: &Vertex,
         g: GuideAt,
         u_lobe: f32,
         u_dir: Vec2,
-    ) -> Option<BsdfSample> {
+    ) -> Option<(BsdfSample, Option<GuidedPdfs>)> {
         let tree = self.guide?;
         let quad = &tree.leaf(g.leaf).sampling;
         let bsdf = v.bsdf;
@@ -178,14 +207,15 @@ impl Tracer<'_> {
             let bs = bsdf.sample(&v.sh, u, u_dir)?;
             if bs.delta {
                 // The guide never samples a delta lobe's direction.
-                return Some(BsdfSample {
+                let bs = BsdfSample {
                     lobe: bs.lobe,
                     wi: bs.wi,
                     weight: bs.weight / keep,
                     pdf: bs.pdf * keep,
                     delta: true,
                     eta: bs.eta,
-                });
+                };
+                return Some((bs, None));
             }
             (Some(bs.lobe), bs.wi, v.sh.frame.to_local(bs.wi))
         } else {
@@ -218,38 +248,46 @@ impl Tracer<'_> {
             }
         };
         let f = lv.f[lobe];
-        let pdf = lv.mixed_pdf(bsdf, lobe, g.alpha, quad.pdf(wi_world));
+        let pdfs = lv.parts(bsdf, lobe, quad.pdf(wi_world));
+        let pdf = (1.0 - g.alpha) * pdfs.bsdf + g.alpha * pdfs.guide;
         if pdf <= 0.0 || f == Vec3A::ZERO {
             return None;
         }
-        Some(BsdfSample {
+        let bs = BsdfSample {
             lobe,
             wi: wi_world,
             weight: f / pdf,
             pdf,
             delta: false,
             eta: 1.0,
-        })
+        };
+        Some((bs, Some(pdfs)))
     }
 
-    /// Records vertex `g` left along `dir` with `pdf` into the training path record
-    /// (after `path.throughput` took the vertex's weight).
+    /// Records vertex `g` left by sample `bs` (with the mixture's parts `pdfs`) into
+    /// the training path record (after `path.throughput` took the vertex's weight and
+    /// before `path.depth` counts it).
     pub(super) fn record_vertex(
         &self,
         out: &mut Sink,
         path: &PathState,
         g: GuideAt,
-        dir: Vec3A,
-        pdf: f32,
+        bs: &BsdfSample,
+        pdfs: Option<GuidedPdfs>,
+        before: Vec3A,
     ) {
         let r = &mut out.record;
+        let pdf = bs.pdf;
         if !self.learn || r.n >= MAX_RECORDED || pdf.is_nan() || pdf <= 0.0 {
             return;
         }
         r.verts[r.n] = RecordedVertex {
             leaf: g.leaf,
-            dir,
+            dir: bs.wi,
             pdf,
+            f: bs.weight * pdf,
+            pdfs,
+            before: luminance(before),
             throughput: path.throughput,
             radiance: Vec3A::ZERO,
         };
@@ -263,19 +301,40 @@ impl Tracer<'_> {
         }
         if let (Some(tree), true) = (self.guide, self.learn) {
             for v in &out.record.verts[..out.record.n] {
-                let l = luminance(v.radiance);
-                tree.leaf(v.leaf).record(v.dir, l / v.pdf);
+                let leaf = tree.leaf(v.leaf);
+                leaf.record(v.dir, luminance(v.radiance) / v.pdf);
+                if let Some(p) = v.pdfs {
+                    let f_li = luminance(v.f * v.radiance) * v.before;
+                    leaf.record_moments(f_li, p.bsdf, p.guide, v.pdf);
+                }
             }
         }
         out.record.clear();
     }
 }
 
-/// The guide a render samples from: `passes` training passes over the whole frame
-/// (1, 2, 4, … samples a pixel, seeds of their own), each sampling what the one before
-/// learnt. The same scene and settings give the same tree whatever the thread count,
-/// the window or the farm part.
-pub(super) fn train(scene: &crate::scene::Scene, passes: u32) -> SdTree {
+/// Training passes that sample a sixteenth of the pixels (x and y multiples of 4): the
+/// pilot that decides `auto`, 0.19 samples a pixel at about twice a render sample's
+/// cost, so ~2 % of a 16-spp render where guiding does not pay.
+const PILOT_PASSES: u32 = 2;
+/// Under `auto` the render guides only if the pilot measured that the leaves' chosen
+/// fractions lower the second moment (guided vertices' cost included) to below this
+/// share of BSDF sampling's: a gain smaller than that would not pay back the rest of
+/// training and the lookups in the render.
+const AUTO_MIN_GAIN: f64 = 1.25;
+
+/// The guide a render samples from, if it guides: `guiding_passes` training passes over
+/// the frame (1, 2 samples a pixel on a sixteenth of the pixels, then 4, 8, … on all;
+/// seeds of their own), each sampling what the one before learnt. Under `auto`, after
+/// the first two the render goes on unguided unless they measured a gain (`SdTree::gain`).
+/// The same scene and settings give the same tree and the same decision whatever the
+/// thread count, the window or the farm part.
+pub(super) fn train(scene: &crate::scene::Scene) -> Option<SdTree> {
+    let settings = &scene.settings;
+    let passes = settings.guiding_passes;
+    if settings.guiding == GuidingMode::Off || passes == 0 {
+        return None;
+    }
     let (lo, hi) = scene.accel.bounds();
     let mut tree = SdTree::new(lo, hi);
     let (w, h) = (scene.camera.width, scene.camera.height);
@@ -283,38 +342,50 @@ pub(super) fn train(scene: &crate::scene::Scene, passes: u32) -> SdTree {
         let mut tracer = Tracer::new(scene);
         tracer.guide = Some(&tree);
         tracer.learn = true;
-        tracer.seed = scene.settings.seed ^ TRAINING_SEED.wrapping_add(k as u64);
+        tracer.seed = settings.seed ^ TRAINING_SEED.wrapping_add(k as u64);
+        let pilot = k < PILOT_PASSES;
+        let step = if pilot { 4 } else { 1 };
         let stride = crate::film::Film::stride_with(scene.aovs.len(), scene.variance_aovs.len());
-        (0..h).into_par_iter().for_each_init(
-            || {
-                (
-                    crate::film::SampleAccumulator::with_squares(
-                        scene.aovs.len(),
-                        scene.variance_aovs.clone(),
-                    ),
-                    vec![0.0f32; stride],
-                )
-            },
-            |(acc, run), y| {
-                let mut out = Sink::new(acc);
-                let mut nothing = |_: &Sink| {};
-                for x in 0..w {
-                    run.fill(0.0);
-                    let job = super::pixel::PixelJob {
-                        x,
-                        y,
-                        run,
-                        first_sample: 0,
-                        taken: 0,
-                        spp: 1 << k,
-                        after_sample: &mut nothing,
-                        moments: None,
-                    };
-                    tracer.render_pixel(job, &mut out);
-                }
-            },
-        );
+        (0..h)
+            .into_par_iter()
+            .filter(|y| y % step == 0)
+            .for_each_init(
+                || {
+                    (
+                        crate::film::SampleAccumulator::with_squares(
+                            scene.aovs.len(),
+                            scene.variance_aovs.clone(),
+                        ),
+                        vec![0.0f32; stride],
+                    )
+                },
+                |(acc, run), y| {
+                    let mut out = Sink::new(acc);
+                    let mut nothing = |_: &Sink| {};
+                    for x in (0..w).step_by(step as usize) {
+                        run.fill(0.0);
+                        let job = super::pixel::PixelJob {
+                            x,
+                            y,
+                            run,
+                            first_sample: 0,
+                            taken: 0,
+                            spp: 1 << k,
+                            after_sample: &mut nothing,
+                            moments: None,
+                        };
+                        tracer.render_pixel(job, &mut out);
+                    }
+                },
+            );
         tree.end_pass(k);
+        if k + 1 == PILOT_PASSES
+            && settings.guiding == GuidingMode::Auto
+            && tree.gain < AUTO_MIN_GAIN
+        {
+            return None;
+        }
     }
-    tree
+    // Where no leaf chose to guide, the render is the unguided one, without lookups.
+    tree.guides().then_some(tree)
 }

@@ -282,8 +282,7 @@ fn render_passes(
     });
     // Path guiding trains first, over the whole frame (guided.rs): every window, part
     // and resumed run of a frame samples from the same tree.
-    let passes = scene.settings.guiding_passes;
-    let guide = (passes > 0).then(|| guided::train(scene, passes));
+    let guide = guided::train(scene);
     let mut tracer = Tracer::new(scene);
     tracer.guide = guide.as_ref();
     let frame = FrameRender {

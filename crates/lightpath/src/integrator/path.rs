@@ -370,9 +370,13 @@ impl Tracer<'_> {
         let bounce = dim::bounce(path.depth);
         let u_lobe = sampler.get_1d(bounce + dim::LOBE_CHOICE);
         let u_dir = sampler.get_2d(bounce + dim::DIRECTION);
-        let bs = match v.guide {
-            Some(g) if g.alpha > 0.0 => self.sample_guided(v, g, u_lobe, u_dir)?,
-            _ => v.bsdf.sample(&v.sh, u_lobe, u_dir)?,
+        // A training pass measures the guide even where its leaf samples the BSDF alone,
+        // so that the leaf can learn to guide again (guiding/mod.rs, `FRACTIONS`).
+        let (bs, pdfs) = match v.guide {
+            Some(g) if g.alpha > 0.0 || (self.learn && g.trained) => {
+                self.sample_guided(v, g, u_lobe, u_dir)?
+            }
+            _ => (v.bsdf.sample(&v.sh, u_lobe, u_dir)?, None),
         };
         match v.bsdf.lobes()[bs.lobe].scatter.class {
             ScatterClass::Diffuse => {
@@ -400,6 +404,7 @@ impl Tracer<'_> {
         if scene.automaton.is_dead(path.state) {
             return None;
         }
+        let before = path.throughput;
         path.throughput *= bs.weight;
         path.eta_scale *= bs.eta;
         if let Some(lobe) = v.bsdf.subsurface(bs.lobe) {
@@ -412,7 +417,7 @@ impl Tracer<'_> {
         path.prev_delta = bs.delta;
         path.prev_object = v.hit.object;
         if let (Some(g), false) = (v.guide, bs.delta) {
-            self.record_vertex(out, path, g, bs.wi, bs.pdf);
+            self.record_vertex(out, path, g, &bs, pdfs, before);
         }
         path.travelled = 0.0;
         if !bs.delta {

@@ -1,11 +1,13 @@
-//! Path guiding (`--guiding-passes`, crates/lightpath/src/guiding/): it changes sampling
-//! densities only, so the image converges to the same mean, every partition still sums
-//! to the beauty, and renders stay deterministic across thread counts and sample ranges.
+//! Path guiding (`--guiding on|off|auto`, crates/lightpath/src/guiding/): it changes
+//! sampling densities only, so the image converges to the same mean, every partition
+//! still sums to the beauty, and renders stay deterministic across thread counts and
+//! sample ranges; `auto` renders exactly as `on` or as `off`, as its pilot decides.
 
 use crate::common::index;
 use glam::Vec3A;
 use lightpath::aov::{self, AovSpec};
 use lightpath::film::Film;
+use lightpath::guiding::GuidingMode;
 use lightpath::{render, RenderOptions, Scene, Source};
 
 /// A room lit only around a baffle: a lamp under the ceiling faces it, a plate below the
@@ -76,14 +78,32 @@ radiance = [30, 30, 30]
 corners = [[-0.2, 0.62, -0.2], [-0.2, 0.62, 0.2], [0.2, 0.62, 0.2], [0.2, 0.62, -0.2]]
 "#;
 
+/// The room with guiding on (`passes` > 0) or off.
 fn scene(res: u32, passes: u32, seed: u64, extra: Vec<AovSpec>) -> Scene {
+    let mode = if passes > 0 {
+        GuidingMode::On
+    } else {
+        GuidingMode::Off
+    };
+    scene_in(ROOM, res, mode, passes, seed, extra)
+}
+
+fn scene_in(
+    text: &str,
+    res: u32,
+    mode: GuidingMode,
+    passes: u32,
+    seed: u64,
+    extra: Vec<AovSpec>,
+) -> Scene {
     let src = Source {
         name: "room.toml".into(),
-        text: ROOM.into(),
+        text: text.into(),
         dir: Default::default(),
     };
     let mut desc = src.parse().unwrap();
     desc.render.resolution = [res, res];
+    desc.render.guiding = mode;
     desc.render.guiding_passes = passes;
     desc.render.seed = seed;
     Scene::build(&desc, &aov::assemble(extra)).unwrap()
@@ -120,17 +140,21 @@ fn guided_renders_converge_to_the_unguided_mean() {
     let runs = 8;
     let means = |passes: u32| -> Vec<f64> {
         (1..=runs)
-            .map(|seed| image_mean(&render_spp(&scene(24, passes, seed, vec![]), 8, 0)))
+            .map(|seed| image_mean(&render_spp(&scene(48, passes, seed, vec![]), 4, 0)))
             .collect()
     };
     let (plain, se_plain) = mean_and_se(&means(0));
-    let (guided, se_guided) = mean_and_se(&means(4));
+    let (guided, se_guided) = mean_and_se(&means(5));
     let se = (se_plain * se_plain + se_guided * se_guided).sqrt();
     assert!(plain > 0.01, "the room is lit: {plain}");
     assert!(
         (plain - guided).abs() <= 5.0 * se,
         "unguided {plain} ± {se_plain}, guided {guided} ± {se_guided}"
     );
+    // The renders did guide (a tree whose leaves all chose BSDF sampling is dropped;
+    // at 48² five passes give the room a few cells that guide).
+    let guided = render_spp(&scene(48, 5, 1, vec![]), 2, 0).planes;
+    assert!(guided != render_spp(&scene(48, 0, 1, vec![]), 2, 0).planes);
 }
 
 /// Guiding changes how lobes and directions are sampled, never which events a path
@@ -144,7 +168,7 @@ fn guided_partitions_sum_to_beauty() {
         AovSpec::new("b3", "C[DS]{3,}[<L.>O]"),
         AovSpec::new("b0", "C[<L.>O]"),
     ]);
-    let scene = scene(24, 3, 0, extra);
+    let scene = scene(48, 5, 0, extra);
     let film = render_spp(&scene, 4, 0);
     let beauty = index(&scene, "beauty");
     for parts in [&lpe::BEAUTY_PARTITION[..], &["b0", "b1", "b2", "b3"][..]] {
@@ -163,16 +187,21 @@ fn guided_partitions_sum_to_beauty() {
     }
 }
 
-/// The tree is trained from integer sums: one thread and two give the same bits.
+/// The tree is trained from integer sums: one thread and two give the same bits, on
+/// and auto.
 #[test]
 fn guided_renders_are_bit_identical_for_any_thread_count() {
-    let run = |threads: usize| {
+    let run_in = |threads: usize, mode: GuidingMode| {
         let pool = rayon::ThreadPoolBuilder::new()
             .num_threads(threads)
             .build()
             .unwrap();
-        pool.install(|| render_spp(&scene(20, 4, 3, vec![]), 3, 0).planes.concat())
+        let s = scene_in(ROOM, 48, mode, 5, 3, vec![]);
+        pool.install(|| render_spp(&s, 3, 0).planes.concat())
     };
+    let auto = run_in(1, GuidingMode::Auto);
+    assert_eq!(auto, run_in(2, GuidingMode::Auto));
+    let run = |threads: usize| run_in(threads, GuidingMode::On);
     let one = run(1);
     let two = run(2);
     assert_eq!(one.len(), two.len());
@@ -181,18 +210,45 @@ fn guided_renders_are_bit_identical_for_any_thread_count() {
         .zip(&two)
         .all(|(a, b)| a.to_bits() == b.to_bits()));
     // And guiding did change the render (the setting is not ignored).
-    let plain = render_spp(&scene(20, 0, 3, vec![]), 3, 0).planes.concat();
+    let plain = render_spp(&scene(48, 0, 3, vec![]), 3, 0).planes.concat();
     assert!(plain.iter().zip(&one).any(|(a, b)| a != b));
 }
 
-/// Farm parts (sample ranges) each train the same tree, so they merge into the whole.
+/// Farm parts (sample ranges) each train the same tree and take the same auto
+/// decision, so they merge into the whole.
 #[test]
 fn guided_sample_ranges_merge_into_the_whole_render() {
-    let s = scene(12, 3, 5, vec![]);
-    let whole = render_spp(&s, 4, 0);
-    let mut a = render_spp(&s, 2, 0);
-    a.merge(&render_spp(&s, 2, 2)).unwrap();
-    for (x, y) in whole.planes.concat().iter().zip(&a.planes.concat()) {
-        assert!((x - y).abs() <= 1e-5 * x.abs().max(1.0), "{x} {y}");
+    for mode in [GuidingMode::On, GuidingMode::Auto] {
+        let s = scene_in(ROOM, 48, mode, 5, 5, vec![]);
+        let whole = render_spp(&s, 4, 0);
+        let mut a = render_spp(&s, 2, 0);
+        a.merge(&render_spp(&s, 2, 2)).unwrap();
+        for (x, y) in whole.planes.concat().iter().zip(&a.planes.concat()) {
+            assert!(
+                (x - y).abs() <= 1e-5 * x.abs().max(1.0),
+                "{mode:?}: {x} {y}"
+            );
+        }
+    }
+}
+
+/// `auto` renders bit for bit as `on` or as `off` (its pilot is `on`'s first two
+/// passes), in the room and in the room lit directly (no plate under the lamp): it
+/// never makes an image of its own, so `on`'s and `off`'s tests cover its mean.
+#[test]
+fn auto_renders_exactly_as_on_or_as_off() {
+    let lit = ROOM.replace(
+        "corners = [[-0.4, 0.6, -0.4], [0.4, 0.6, -0.4], [0.4, 0.6, 0.4], [-0.4, 0.6, 0.4]]",
+        "corners = [[5, 5, 5], [5.1, 5, 5], [5.1, 5, 5.1], [5, 5, 5.1]]",
+    );
+    assert_ne!(lit, ROOM);
+    for text in [ROOM, lit.as_str()] {
+        for seed in [1, 2] {
+            let render_in = |mode| render_spp(&scene_in(text, 48, mode, 5, seed, vec![]), 2, 0);
+            let auto = render_in(GuidingMode::Auto).planes;
+            let on = render_in(GuidingMode::On).planes;
+            let off = render_in(GuidingMode::Off).planes;
+            assert!(auto == on || auto == off, "seed {seed}");
+        }
     }
 }
