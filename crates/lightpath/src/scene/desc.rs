@@ -73,9 +73,24 @@ pub struct SceneDesc {
     pub media: MediaDesc,
     /// The output the scene names (a USD render product's `productName`); `-o` wins.
     pub output: Option<PathBuf>,
+    /// A USD stage's render products when it has several: each is a file of its own
+    /// (`output` is the first's). Empty: one file, `output`.
+    pub products: Vec<ProductDesc>,
     /// Whether the standard AOVs are added unless the command line says (None: yes;
     /// a USD stage with render settings: no, its RenderVars are the AOVs).
     pub standard_aovs: Option<bool>,
+}
+
+/// One output file of several (a USD `RenderProduct`): its path and the AOVs it holds.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct ProductDesc {
+    /// The product's file (its `productName`).
+    pub output: PathBuf,
+    /// The AOVs it holds (its vars' names, in order).
+    pub aovs: Vec<String>,
+    /// Whether it holds the beauty (R, G, B, A): one of its vars names it (`Ci`, `C`,
+    /// `color`, …).
+    pub beauty: bool,
 }
 
 /// Participating media (`[media.NAME]`), which objects bound them, and the atmosphere.

@@ -1162,3 +1162,160 @@ def DiskLight "Disk" (
         assert_eq!(v.x, 0.0, "pixel {x},10 outside the cone: {v}");
     }
 }
+
+/// `SHOT` with two render products: `aovs.exr` (N, specular) before `beauty.exr` (Ci,
+/// diffuseKey).
+fn two_products() -> String {
+    SHOT.replace(
+        "rel products = </Render/Product>",
+        "rel products = [</Render/Aovs>, </Render/Beauty>]",
+    )
+    .replace(
+        r#"    def RenderProduct "Product"
+    {
+        rel orderedVars = [</Render/Vars/diffuseKey>, </Render/Vars/N>, </Render/Vars/Ci>, </Render/Vars/spec>]
+        token productName = "shot_out.exr""#,
+        r#"    def RenderProduct "Aovs"
+    {
+        rel orderedVars = [</Render/Vars/N>, </Render/Vars/spec>]
+        token productName = "aovs.exr"
+    }
+    def RenderProduct "Beauty"
+    {
+        rel orderedVars = [</Render/Vars/Ci>, </Render/Vars/diffuseKey>]
+        token productName = "beauty.exr""#,
+    )
+}
+
+#[test]
+fn each_render_product_is_a_file_with_exactly_its_vars() {
+    use lightpath::job::RenderJob;
+    use std::sync::atomic::AtomicBool;
+    use std::sync::Arc;
+    let dir = Scratch::new("usd-products");
+    let scene = write(&dir, "shot.usda", &two_products());
+    let desc = load(&scene);
+    let products: Vec<(&str, Vec<&str>, bool)> = desc
+        .products
+        .iter()
+        .map(|p| {
+            (
+                p.output.to_str().unwrap(),
+                p.aovs.iter().map(String::as_str).collect(),
+                p.beauty,
+            )
+        })
+        .collect();
+    assert_eq!(
+        products,
+        [
+            ("aovs.exr", vec!["N", "specular"], false),
+            ("beauty.exr", vec!["diffuseKey"], true)
+        ]
+    );
+    let job = |out: &Path, cancelled: bool| {
+        let mut job = RenderJob::new(scene.to_string_lossy());
+        job.output = Some(out.to_path_buf());
+        job.overrides.spp = Some(2);
+        job.overrides.resolution = Some([16, 12]);
+        job.aovs.light_groups = true;
+        job.cancel = Some(Arc::new(AtomicBool::new(cancelled)));
+        job
+    };
+    let silent = lightpath::progress::Silent;
+    // -o naming a directory: each product there under its own name.
+    let renders = dir.join("renders");
+    std::fs::create_dir(&renders).unwrap();
+    let summary = job(&renders, false)
+        .prepare()
+        .unwrap()
+        .run(&silent)
+        .unwrap();
+    let (beauty, aovs) = (renders.join("beauty.exr"), renders.join("aovs.exr"));
+    assert_eq!(
+        summary.files,
+        [aovs.clone(), beauty.clone(), renders.join("beauty.png")]
+    );
+    assert!(!renders.join("aovs.png").exists());
+    let read = |p: &Path| lightpath::output::read_exr(p).unwrap();
+    let names = |p: &Path| -> Vec<String> {
+        let mut v: Vec<String> = read(p).aovs().into_iter().map(|a| a.0).collect();
+        v.sort();
+        v
+    };
+    assert_eq!(names(&aovs), ["N", "specular"]);
+    assert_eq!(
+        names(&beauty),
+        [
+            "beauty",
+            "beauty__default",
+            "beauty_fill",
+            "beauty_key",
+            "diffuseKey"
+        ]
+    );
+    let a = read(&aovs);
+    assert!(a.channel("R").is_none() && a.channel("A").is_none());
+    assert_eq!(a.channels.len(), 6);
+    assert!(read(&beauty).channel("A").is_some());
+    for p in [&beauty, &aovs] {
+        let (report, ok) = lightpath::post::partitions::report(p, 1e-4).unwrap();
+        assert!(ok, "{report}");
+    }
+    assert!(read(&beauty)
+        .attributes
+        .iter()
+        .any(|(k, v)| k == "lightpath/partition/beauty_key" && v == "lightgroups"));
+
+    // -o naming a file: all in it, with a warning; the same pixels as the products'.
+    let all = dir.join("all.exr");
+    let prepared = job(&all, false).prepare().unwrap();
+    assert!(
+        prepared
+            .warnings
+            .iter()
+            .any(|w| w.contains("aovs.exr, beauty.exr are written as one file")),
+        "{:?}",
+        prepared.warnings
+    );
+    prepared.run(&silent).unwrap();
+    let whole = read(&all);
+    for p in [&beauty, &aovs] {
+        for (name, values) in &read(p).channels {
+            let w = whole.channel(name).unwrap_or_else(|| panic!("{name}"));
+            assert!(
+                w.iter()
+                    .zip(values)
+                    .all(|(x, y)| x.to_bits() == y.to_bits()),
+                "{name}"
+            );
+        }
+    }
+
+    // Interrupted: each product's rows done beside it, one checkpoint beside the beauty;
+    // resumed, the products equal the uninterrupted ones.
+    let again = dir.join("again");
+    std::fs::create_dir(&again).unwrap();
+    let stopped = job(&again, true).prepare().unwrap().run(&silent).unwrap();
+    let checkpoint = stopped.interrupted.expect("stopped").checkpoint;
+    assert_eq!(checkpoint.parent(), Some(again.as_path()));
+    assert!(checkpoint.exists());
+    assert!(again.join("aovs.partial.exr").exists() && again.join("beauty.partial.exr").exists());
+    assert!(!again.join("beauty.exr").exists());
+    let mut resume = job(&again, false);
+    resume.resume = true;
+    let prepared = resume.prepare().unwrap();
+    assert!(prepared.resume.is_some());
+    prepared.run(&silent).unwrap();
+    assert!(!checkpoint.exists() && !again.join("aovs.partial.exr").exists());
+    for name in ["beauty.exr", "aovs.exr"] {
+        let (x, y) = (read(&again.join(name)), read(&renders.join(name)));
+        assert_eq!(x.channels.len(), y.channels.len());
+        for ((n, a), (_, b)) in x.channels.iter().zip(&y.channels) {
+            assert!(
+                a.iter().zip(b).all(|(p, q)| p.to_bits() == q.to_bits()),
+                "{name} {n} differs after the resume"
+            );
+        }
+    }
+}

@@ -473,6 +473,7 @@ pub fn load(src: &Source) -> Result<d::SceneDesc, SceneError> {
         variance: file.variance,
         media,
         output: None,
+        products: Vec::new(),
         standard_aovs: None,
     })
 }
