@@ -27,8 +27,8 @@ pub struct RenderJob {
     /// A scene file or the name of a built-in scene.
     pub scene: String,
     /// Output EXR; `None`: `<scene stem>.exr` (or the USD stage's products) in the
-    /// working directory. A directory (one that exists, or a path ending in `/`): those
-    /// default names in it. A file, for a stage of several products: all in that file.
+    /// working directory. A directory (one that exists and is not named `.exr`, or a
+    /// path ending in `/`): those default names in it. A file, for a stage of several products: all in that file.
     pub output: Option<PathBuf>,
     pub overrides: SettingOverrides,
     pub aovs: AovRequest,
@@ -360,7 +360,12 @@ impl RenderJob {
         let dir = self
             .output
             .as_deref()
-            .filter(|p| p.is_dir() || p.as_os_str().to_string_lossy().ends_with('/'));
+            // A directory named like an EXR (`-o shot.exr` where one is) is a mistake,
+            // refused by the output checks.
+            .filter(|p| {
+                p.as_os_str().to_string_lossy().ends_with('/')
+                    || (p.is_dir() && !p.extension().is_some_and(|e| e.eq_ignore_ascii_case("exr")))
+            });
         let several = desc.products.len() > 1;
         if several && (dir.is_some() || self.output.is_none()) {
             let paths = output::products::product_paths(&desc.products, dir);
