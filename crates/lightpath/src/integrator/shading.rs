@@ -103,16 +103,19 @@ impl Tracer<'_> {
         crate::material::presence::passes_through(presence.at(uv), ray, hit)
     }
 
-    /// Whether the shadow ray `ray` (up to `ray.tmax`) is blocked, `ignore` (a light's own
-    /// object) passed: past surfaces that are not there for it (presence), if any.
+    /// Whether the shadow ray `ray` (up to `ray.tmax`) towards light `li` is blocked, the
+    /// light's own object passed: past surfaces that are not there for it (presence) and
+    /// objects that cast no shadow from it (shadow linking), if any.
     pub(super) fn occluded(
         &self,
         out: &mut super::Sink,
         ray: &crate::geometry::Ray,
-        ignore: u32,
+        li: u32,
     ) -> bool {
         let scene = self.scene;
-        if !scene.has_presence {
+        let light = &scene.lights[li as usize];
+        let ignore = light.shadow_exempt();
+        if !scene.has_presence && !light.shadow_linked {
             return scene.accel.occluded(ray, 0.0, ignore);
         }
         let mut ray = *ray;
@@ -124,7 +127,10 @@ impl Tracer<'_> {
             else {
                 return false;
             };
-            if hit.object != ignore && !self.see_through(&hit, &ray) {
+            if hit.object != ignore
+                && !self.unshadowing(hit.object, li)
+                && !self.see_through(&hit, &ray)
+            {
                 return true;
             }
             out.rays += 1;

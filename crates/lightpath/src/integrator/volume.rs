@@ -194,13 +194,14 @@ impl Tracer<'_> {
 
     /// The transmittance of the shadow ray `ray` (up to `ray.tmax`) starting in
     /// `stack`'s medium: through null boundaries and media, zero at any other surface
-    /// (`ignore`: a light's own object, which it passes).
+    /// (`ignore`: a light's own object, which it passes; `li`: the light, whose
+    /// unshadowing objects it passes too, `u32::MAX`: none).
     pub(super) fn transmittance(
         &self,
         out: &mut Sink,
         ray: &Ray,
         stack: &MediumStack,
-        ignore: u32,
+        (ignore, li): (u32, u32),
         rng: &mut Rng,
     ) -> Vec3A {
         let scene = self.scene;
@@ -228,7 +229,7 @@ impl Tracer<'_> {
             let Some(hit) = hit else {
                 return tr;
             };
-            if hit.object != ignore {
+            if hit.object != ignore && !self.unshadowing(hit.object, li) {
                 if self.passes(&stack, &hit) {
                     self.cross(&mut stack, &hit, ray.dir);
                 } else if !self.see_through(&hit, &ray) {
@@ -324,7 +325,7 @@ impl Tracer<'_> {
         let w = match self.equiangular_pdf(&v.seg, li, light, v.p) {
             // A point or spot light: weighed against equiangular sampling of the flight.
             Some(pdf_e) if v.pdf > 0.0 => power_heuristic(v.pdf * light_pdf, pdf_e),
-            _ if ls.delta => 1.0,
+            _ if ls.delta || light.shadow_linked => 1.0,
             _ => power_heuristic(light_pdf, f),
         };
         let tmax = if ls.dist.is_finite() {
@@ -344,7 +345,7 @@ impl Tracer<'_> {
                 out,
                 &shadow,
                 &path.media,
-                light.shadow_exempt(),
+                (light.shadow_exempt(), li as u32),
                 &mut path.rng,
             )
         };
@@ -423,7 +424,7 @@ impl Tracer<'_> {
                 out,
                 &shadow,
                 &path.media,
-                light.shadow_exempt(),
+                (light.shadow_exempt(), li as u32),
                 &mut path.rng,
             )
         };

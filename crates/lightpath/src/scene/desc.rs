@@ -475,5 +475,10 @@ pub struct LightDesc {
     pub include: Option<Vec<String>>,
     /// … except objects in these.
     pub exclude: Vec<String>,
+    /// Shadow linking: only objects in these lpegroups cast shadows from this light
+    /// (None: all) …
+    pub shadow_include: Option<Vec<String>>,
+    /// … except objects in these.
+    pub shadow_exclude: Vec<String>,
     pub origin: Origin,
 }

@@ -1319,3 +1319,132 @@ fn each_render_product_is_a_file_with_exactly_its_vars() {
         }
     }
 }
+
+/// A floor seen from above, a sphere light to the side and a ball between them (out of
+/// the camera's view) whose shadow covers the whole view; `{link}` goes on the light.
+const SHADOW_LINK: &str = r#"#usda 1.0
+(
+    metersPerUnit = 1
+)
+def Camera "Cam"
+{
+    float focalLength = 50
+    float horizontalAperture = 10
+    float verticalAperture = 10
+    double3 xformOp:translate = (0, 5, 0)
+    float3 xformOp:rotateXYZ = (-90, 0, 0)
+    uniform token[] xformOpOrder = ["xformOp:translate", "xformOp:rotateXYZ"]
+}
+def Mesh "Floor"
+{
+    int[] faceVertexCounts = [4]
+    int[] faceVertexIndices = [0, 1, 2, 3]
+    point3f[] points = [(-5, 0, 5), (5, 0, 5), (5, 0, -5), (-5, 0, -5)]
+    color3f[] primvars:displayColor = [(0.5, 0.5, 0.5)]
+}
+def Sphere "Blocker" ({active})
+{
+    double radius = 0.6
+    double3 xformOp:translate = (2, 2, 0)
+    uniform token[] xformOpOrder = ["xformOp:translate"]
+}
+def SphereLight "Lamp"
+{
+    float inputs:intensity = 50
+    float inputs:radius = 0.5
+    {link}
+    double3 xformOp:translate = (4, 4, 0)
+    uniform token[] xformOpOrder = ["xformOp:translate"]
+}
+"#;
+
+#[test]
+fn shadow_linking_lets_light_pass_the_objects_it_excludes() {
+    let dir = Scratch::new("usd-shadow-link");
+    let stage = |name: &str, link: &str, active: bool| {
+        let text = SHADOW_LINK.replace("{link}", link).replace(
+            "{active}",
+            if active {
+                "active = true"
+            } else {
+                "active = false"
+            },
+        );
+        load(&write(&dir, name, &text))
+    };
+    let excludes = "rel collection:shadowLink:excludes = </Blocker>";
+    let linked = stage("linked.usda", excludes, true);
+    assert_eq!(linked.lights[0].shadow_exclude, ["Blocker"]);
+    assert_eq!(linked.lights[0].shadow_include, None);
+    // ShadowAPI's switch: no object shadows the light.
+    let off = stage("off.usda", "bool inputs:shadow:enable = false", true);
+    assert_eq!(off.lights[0].shadow_include, Some(Vec::new()));
+    // Only the floor casts shadows (an include list without the root).
+    let only_floor = stage(
+        "floor.usda",
+        "uniform bool collection:shadowLink:includeRoot = 0\n    rel collection:shadowLink:includes = </Floor>",
+        true,
+    );
+    let plain = stage("plain.usda", "", true);
+    let removed = stage("removed.usda", "", false);
+
+    // Direct diffuse light on the floor (C<RD>L: no light the ball passes on), in the
+    // ball's shadow everywhere in view.
+    let (w, spp) = (24u32, 16u32);
+    let direct = |mut desc: SceneDesc| -> Vec<f32> {
+        desc.render.resolution = [w, w];
+        desc.render.spp = spp;
+        let specs = aov::assemble([aov::AovSpec::new("direct", "C<RD>L")]);
+        let scene = Scene::build(&desc, &specs).unwrap();
+        let (film, _) = render(
+            &scene,
+            &RenderOptions {
+                spp,
+                first_sample: 0,
+            },
+        );
+        (0..w * w).map(|i| film.pixel(1, i % w, i / w).x).collect()
+    };
+    let removed = direct(removed);
+    let mean = |v: &[f32]| v.iter().map(|x| *x as f64).sum::<f64>() / v.len() as f64;
+    // Pixel means differ by the render's noise: their mean difference is within five
+    // standard errors of it.
+    let agree = |a: &[f32], b: &[f32], what: &str| {
+        let d: Vec<f64> = a.iter().zip(b).map(|(x, y)| (*x - *y) as f64).collect();
+        let m = d.iter().sum::<f64>() / d.len() as f64;
+        let var = d.iter().map(|x| (x - m) * (x - m)).sum::<f64>() / (d.len() - 1) as f64;
+        let se = (var / d.len() as f64).sqrt();
+        assert!(m.abs() <= 5.0 * se + 1e-6, "{what}: {m} ± {se}");
+    };
+    let lit = mean(&removed);
+    assert!(lit > 0.01, "{lit}");
+    agree(&direct(linked), &removed, "the ball excluded");
+    agree(&direct(off), &removed, "shadows off");
+    agree(&direct(only_floor), &removed, "only the floor shadows");
+    // Without linking the ball's shadow covers the view: the umbra has no direct light.
+    let shadowed = mean(&direct(plain));
+    assert!(shadowed < 1e-3 * lit, "{shadowed} vs {lit}");
+}
+
+#[test]
+fn toml_lights_take_shadow_linking_keys() {
+    let dir = Scratch::new("toml-shadow-link");
+    let p = write(
+        &dir,
+        "s.toml",
+        r#"
+[[lights]]
+type = "point"
+position = [0, 1, 0]
+intensity = [1, 1, 1]
+shadow_include = ["floor"]
+shadow_exclude = ["ball"]
+"#,
+    );
+    let desc = lightpath::load_scene(p.to_str().unwrap()).unwrap();
+    assert_eq!(
+        desc.lights[0].shadow_include.as_deref(),
+        Some(&["floor".to_string()][..])
+    );
+    assert_eq!(desc.lights[0].shadow_exclude, ["ball"]);
+}

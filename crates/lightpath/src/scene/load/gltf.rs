@@ -1173,6 +1173,8 @@ impl Loader {
             transform: Affine3A::IDENTITY,
             include: None,
             exclude: Vec::new(),
+            shadow_include: None,
+            shadow_exclude: Vec::new(),
             origin: Origin::file(&self.file),
         });
         Ok(())

@@ -362,6 +362,12 @@ struct LightDesc {
     /// … except objects in these.
     #[serde(default)]
     exclude: Vec<String>,
+    /// Shadow linking: only objects in these lpegroups cast shadows from this light
+    /// (default: all) …
+    shadow_include: Option<Vec<String>>,
+    /// … except objects in these.
+    #[serde(default)]
+    shadow_exclude: Vec<String>,
 }
 
 fn one() -> f32 {
@@ -1009,6 +1015,8 @@ fn light(src: &Source, l: &Spanned<LightDesc>) -> Result<d::LightDesc, SceneErro
         transform: placement(l.translate, l.rotate, l.scale, l.matrix),
         include: l.include.clone(),
         exclude: l.exclude.clone(),
+        shadow_include: l.shadow_include.clone(),
+        shadow_exclude: l.shadow_exclude.clone(),
         origin: src.origin(Some(span)),
     })
 }
@@ -1103,6 +1111,8 @@ fn mesh_lights(
             transform: glam::Affine3A::IDENTITY,
             include: l.include.clone(),
             exclude: l.exclude.clone(),
+            shadow_include: l.shadow_include.clone(),
+            shadow_exclude: l.shadow_exclude.clone(),
             origin: origin.clone(),
         })
         .collect())
