@@ -1448,3 +1448,67 @@ shadow_exclude = ["ball"]
     );
     assert_eq!(desc.lights[0].shadow_exclude, ["ball"]);
 }
+
+#[test]
+fn a_shadow_linked_dome_lights_a_floor_under_a_roof_it_passes() {
+    // A uniform dome of radiance 1 over a floor of albedo 0.5 under a wide roof that casts
+    // no shadow from it: the floor's direct diffuse light is 0.5 (the dome's whole
+    // hemisphere), which light sampling alone must give, as BSDF rays stop at the roof.
+    let dir = Scratch::new("usd-shadow-dome");
+    let p = write(
+        &dir,
+        "roof.usda",
+        r#"#usda 1.0
+(
+    metersPerUnit = 1
+)
+def Camera "Cam"
+{
+    float focalLength = 50
+    float horizontalAperture = 10
+    float verticalAperture = 10
+    double3 xformOp:translate = (0, 1, 0)
+    float3 xformOp:rotateXYZ = (-90, 0, 0)
+    uniform token[] xformOpOrder = ["xformOp:translate", "xformOp:rotateXYZ"]
+}
+def Mesh "Floor"
+{
+    int[] faceVertexCounts = [4]
+    int[] faceVertexIndices = [0, 1, 2, 3]
+    point3f[] points = [(-5, 0, 5), (5, 0, 5), (5, 0, -5), (-5, 0, -5)]
+    color3f[] primvars:displayColor = [(0.5, 0.5, 0.5)]
+}
+def Mesh "Roof"
+{
+    int[] faceVertexCounts = [4]
+    int[] faceVertexIndices = [0, 1, 2, 3]
+    point3f[] points = [(-50, 2, 50), (50, 2, 50), (50, 2, -50), (-50, 2, -50)]
+}
+def DomeLight "Sky"
+{
+    float inputs:intensity = 1
+    rel collection:shadowLink:excludes = </Roof>
+}
+"#,
+    );
+    let mut desc = load(&p);
+    let (w, spp) = (16u32, 16u32);
+    desc.render.resolution = [w, w];
+    desc.render.spp = spp;
+    let specs = aov::assemble([aov::AovSpec::new("direct", "C<RD>L")]);
+    let scene = Scene::build(&desc, &specs).unwrap();
+    let (film, _) = render(
+        &scene,
+        &RenderOptions {
+            spp,
+            first_sample: 0,
+        },
+    );
+    let v: Vec<f64> = (0..w * w)
+        .map(|i| film.pixel(1, i % w, i / w).x as f64)
+        .collect();
+    let m = v.iter().sum::<f64>() / v.len() as f64;
+    let var = v.iter().map(|x| (x - m) * (x - m)).sum::<f64>() / (v.len() - 1) as f64;
+    let se = (var / v.len() as f64).sqrt();
+    assert!((m - 0.5).abs() <= 5.0 * se + 1e-4, "{m} ± {se}");
+}
