@@ -425,8 +425,10 @@ pub enum LightKind {
         cone_angle: f32,
         cone_softness: f32,
     },
+    /// `angle`: the angular diameter of its disc, in degrees (0: one direction).
     Distant {
         direction: [f32; 3],
+        angle: f32,
     },
     /// An optional equirectangular EXR (resolved path, and where it was named).
     Dome {

@@ -1512,3 +1512,115 @@ def DomeLight "Sky"
     let se = (var / v.len() as f64).sqrt();
     assert!((m - 0.5).abs() <= 5.0 * se + 1e-4, "{m} ± {se}");
 }
+
+#[test]
+fn a_distant_lights_angle_gives_the_penumbra_of_its_disc() {
+    // A sun of 10° straight down, a half-plane 1 m over the floor with its edge over
+    // x = 0, the camera under it looking down at the penumbra (x within ±0.1 m). Each
+    // pixel's direct diffuse light is compared with the brute-force integral of the
+    // disc's radiance over the directions the half-plane leaves open.
+    let dir = Scratch::new("usd-sun-angle");
+    let p = write(
+        &dir,
+        "sun.usda",
+        r#"#usda 1.0
+(
+    metersPerUnit = 1
+)
+def Camera "Cam"
+{
+    float focalLength = 50
+    float horizontalAperture = 20
+    float verticalAperture = 1.25
+    double3 xformOp:translate = (0, 0.5, 0)
+    float3 xformOp:rotateXYZ = (-90, 0, 0)
+    uniform token[] xformOpOrder = ["xformOp:translate", "xformOp:rotateXYZ"]
+}
+def Mesh "Floor"
+{
+    int[] faceVertexCounts = [4]
+    int[] faceVertexIndices = [0, 1, 2, 3]
+    point3f[] points = [(-10, 0, 10), (10, 0, 10), (10, 0, -10), (-10, 0, -10)]
+    color3f[] primvars:displayColor = [(0.5, 0.5, 0.5)]
+}
+def Mesh "Shade"
+{
+    int[] faceVertexCounts = [4]
+    int[] faceVertexIndices = [0, 1, 2, 3]
+    point3f[] points = [(-10, 1, 10), (0, 1, 10), (0, 1, -10), (-10, 1, -10)]
+}
+def DistantLight "Sun"
+{
+    float inputs:intensity = 2
+    bool inputs:normalize = true
+    float inputs:angle = 10
+    float3 xformOp:rotateXYZ = (-90, 0, 0)
+    uniform token[] xformOpOrder = ["xformOp:rotateXYZ"]
+}
+"#,
+    );
+    let mut desc = load(&p);
+    assert!(matches!(desc.lights[0].kind, LightKind::Distant { angle, .. } if angle == 10.0));
+    let (w, spp) = (32u32, 1024u32);
+    desc.render.resolution = [w, 2];
+    desc.render.spp = spp;
+    let specs = aov::assemble([aov::AovSpec::new("direct", "C<RD>L")]);
+    let scene = Scene::build(&desc, &specs).unwrap();
+    let (film, _) = render(
+        &scene,
+        &RenderOptions {
+            spp,
+            first_sample: 0,
+        },
+    );
+    // Brute force: the disc (radius 5°) on a grid of equal solid angles, the pixel's
+    // footprint on a grid of floor points; radiance E/(π sin²α), albedo 0.5 over π.
+    let (e, albedo, alpha) = (2.0f64, 0.5f64, 5f64.to_radians());
+    let radiance = e / (std::f64::consts::PI * alpha.sin().powi(2));
+    let one_minus_cos = 1.0 - alpha.cos();
+    let (n_theta, n_phi, n_x) = (128, 128, 16);
+    let cell = 2.0 * std::f64::consts::PI * one_minus_cos / (n_theta * n_phi) as f64;
+    let lit_at = |x: f64| -> f64 {
+        let mut sum = 0.0;
+        for i in 0..n_theta {
+            let cos_t = 1.0 - (i as f64 + 0.5) / n_theta as f64 * one_minus_cos;
+            let sin_t = (1.0 - cos_t * cos_t).sqrt();
+            for j in 0..n_phi {
+                let phi = 2.0 * std::f64::consts::PI * (j as f64 + 0.5) / n_phi as f64;
+                // The direction up towards the disc, from the floor at x: where it
+                // crosses the shade's height.
+                if x + sin_t * phi.cos() / cos_t >= 0.0 {
+                    sum += radiance * cos_t * cell;
+                }
+            }
+        }
+        albedo / std::f64::consts::PI * sum
+    };
+    let full = albedo * e / std::f64::consts::PI;
+    let half_width = 0.5 * 0.2;
+    let mut in_penumbra = 0;
+    for px in 0..w {
+        let expected = (0..n_x)
+            .map(|k| {
+                let u = (px as f64 + (k as f64 + 0.5) / n_x as f64) / w as f64;
+                lit_at((2.0 * u - 1.0) * half_width)
+            })
+            .sum::<f64>()
+            / n_x as f64;
+        let got = (0..2).map(|y| film.pixel(1, px, y).x as f64).sum::<f64>() / 2.0;
+        // Each sample is about `full` or 0: a Bernoulli's standard error over the
+        // pixel pair's samples, plus the brute force's grid (1/128 of the disc's
+        // radius per cell: 1 % of `full` at most at the steepest point).
+        let p = (expected / full).clamp(0.0, 1.0);
+        let se = full * (p * (1.0 - p) / (2 * spp) as f64).sqrt();
+        assert!(
+            (got - expected).abs() <= 5.0 * se + 0.01 * full,
+            "pixel {px}: {got} vs {expected} (± {se})"
+        );
+        if p > 0.1 && p < 0.9 {
+            in_penumbra += 1;
+        }
+    }
+    // The penumbra (±tan 5° · 1 m) spans most of the view.
+    assert!(in_penumbra >= w / 2, "{in_penumbra}");
+}

@@ -92,11 +92,8 @@ pub fn light_shape(l: &LightDesc) -> Result<(LightShape, Option<ShapePrims>, Vec
             };
             (shape.into(), None, color)
         }
-        LightKind::Distant { direction } => (
-            Distant {
-                dir: v3(*direction).normalize_or(-Vec3A::Y),
-            }
-            .into(),
+        LightKind::Distant { direction, angle } => (
+            Distant::new(v3(*direction).normalize_or(-Vec3A::Y), *angle).into(),
             None,
             color,
         ),
@@ -152,7 +149,7 @@ fn check_light_numbers(l: &LightDesc) -> Result<(), SceneError> {
             cone_angle,
             cone_softness,
         } => finite(position) && finite(direction) && finite(&[*cone_angle, *cone_softness]),
-        LightKind::Distant { direction } => finite(direction),
+        LightKind::Distant { direction, angle } => finite(direction) && angle.is_finite(),
     };
     if ok {
         Ok(())

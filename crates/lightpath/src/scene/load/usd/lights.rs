@@ -354,7 +354,10 @@ impl Loader {
                     l * PI * (angle.to_radians() * 0.5).sin().powi(2)
                 };
                 (
-                    LightKind::Distant { direction: down },
+                    LightKind::Distant {
+                        direction: down,
+                        angle,
+                    },
                     Affine3A::IDENTITY,
                     e,
                 )
