@@ -671,42 +671,7 @@ impl PreparedRender {
                 .map_err(Error::Output)?;
             output::atomic::commit_pair(exr, png).map_err(Error::Output)?;
         } else {
-            // Every product staged before any is renamed into place: a product that
-            // cannot be written leaves the others' old files too.
-            let mut staged = Vec::new();
-            for plan in &products {
-                let (sub, aovs) = output::products::product_film(&film, &scene.aovs, plan);
-                let to = match interrupted {
-                    Some(_) => output::naming::partial_paths(&plan.paths),
-                    None => plan.paths.clone(),
-                };
-                let beauty = aovs
-                    .iter()
-                    .position(|a| a.name == crate::aov::naming::BEAUTY);
-                let png = match beauty {
-                    Some(k) if plan.beauty => Some(
-                        output::stage_png(&to.png, &sub, k, job.preview_exposure)
-                            .map_err(Error::Output)?,
-                    ),
-                    _ => None,
-                };
-                let derived = output::derived_aovs(&sub, &aovs);
-                let exr = output::stage_film(&to.exr, sub, &aovs, derived, job.exr, header.clone())
-                    .map_err(Error::Output)?;
-                files.push(to.exr);
-                if png.is_some() {
-                    files.push(to.png);
-                }
-                staged.push((exr, png));
-            }
-            drop(film);
-            for (exr, png) in staged {
-                match png {
-                    Some(png) => output::atomic::commit_pair(exr, png),
-                    None => exr.commit(),
-                }
-                .map_err(Error::Output)?;
-            }
+            files = write_products(&products, film, &scene, &job, header, interrupted.is_some())?;
         }
         if interrupted.is_none() {
             remove_checkpoint(&checkpoint_path)?;
@@ -741,6 +706,54 @@ impl PreparedRender {
             denoised,
         })
     }
+}
+
+/// Writes each render product's file, cut from the film (its `.partial` name when the
+/// render was stopped); every product staged before any is renamed into place, so a
+/// product that cannot be written leaves the others' old files too. Returns the files.
+fn write_products(
+    products: &[output::products::ProductPlan],
+    film: Film,
+    scene: &Scene,
+    job: &RenderJob,
+    header: output::ExrHeader,
+    interrupted: bool,
+) -> Result<Vec<PathBuf>, Error> {
+    let mut files = Vec::new();
+    let mut staged = Vec::new();
+    for plan in products {
+        let (sub, aovs) = output::products::product_film(&film, &scene.aovs, plan);
+        let to = match interrupted {
+            true => output::naming::partial_paths(&plan.paths),
+            false => plan.paths.clone(),
+        };
+        let beauty = aovs
+            .iter()
+            .position(|a| a.name == crate::aov::naming::BEAUTY);
+        let png = match beauty {
+            Some(k) if plan.beauty => Some(
+                output::stage_png(&to.png, &sub, k, job.preview_exposure).map_err(Error::Output)?,
+            ),
+            _ => None,
+        };
+        let derived = output::derived_aovs(&sub, &aovs);
+        let exr = output::stage_film(&to.exr, sub, &aovs, derived, job.exr, header.clone())
+            .map_err(Error::Output)?;
+        files.push(to.exr);
+        if png.is_some() {
+            files.push(to.png);
+        }
+        staged.push((exr, png));
+    }
+    drop(film);
+    for (exr, png) in staged {
+        match png {
+            Some(png) => output::atomic::commit_pair(exr, png),
+            None => exr.commit(),
+        }
+        .map_err(Error::Output)?;
+    }
+    Ok(files)
 }
 
 impl Interrupted {
