@@ -655,34 +655,21 @@ impl PreparedRender {
         let header = exr_header(&job, &source, &scene, metadata, &film, interrupted.as_ref());
         // Unfinished rows go beside the output, never over a finished image of that name.
         let partial = output::naming::partial_paths(&paths);
-        let written = if interrupted.is_some() {
-            partial.clone()
-        } else {
-            paths
-        };
+        let written = interrupted.as_ref().map_or(paths, |_| partial.clone());
         let (width, height, spp) = (film.width, film.height, film.spp);
-        let mut files = Vec::new();
-        if products.is_empty() {
-            files.extend([written.exr.clone(), written.png.clone()]);
+        let files = if products.is_empty() {
             let derived = output::derived_aovs(&film, &scene.aovs);
             let png = output::stage_png(&written.png, &film, 0, job.preview_exposure)
                 .map_err(Error::Output)?;
             let exr = output::stage_film(&written.exr, film, &scene.aovs, derived, job.exr, header)
                 .map_err(Error::Output)?;
             output::atomic::commit_pair(exr, png).map_err(Error::Output)?;
+            vec![written.exr.clone(), written.png.clone()]
         } else {
-            files = write_products(&products, film, &scene, &job, header, interrupted.is_some())?;
-        }
+            write_products(&products, film, &scene, &job, header, interrupted.is_some())?
+        };
         if interrupted.is_none() {
-            remove_checkpoint(&checkpoint_path)?;
-            let mut stale = vec![partial.exr.clone(), partial.png.clone()];
-            for plan in &products {
-                let p = output::naming::partial_paths(&plan.paths);
-                stale.extend([p.exr, p.png]);
-            }
-            for stale in &stale {
-                remove_stale(stale)?;
-            }
+            remove_leftovers(&checkpoint_path, &partial, &products)?
         }
         let paths = written;
         // An interrupted render's rows are unfinished: it is denoised once it is resumed.
@@ -706,6 +693,25 @@ impl PreparedRender {
             denoised,
         })
     }
+}
+
+/// A finished render's checkpoint and the interrupted render's partial images (its own
+/// and each product's): out of date, removed.
+fn remove_leftovers(
+    checkpoint: &std::path::Path,
+    partial: &output::naming::OutputPaths,
+    products: &[output::products::ProductPlan],
+) -> Result<(), Error> {
+    remove_checkpoint(checkpoint)?;
+    let mut stale = vec![partial.exr.clone(), partial.png.clone()];
+    for plan in products {
+        let p = output::naming::partial_paths(&plan.paths);
+        stale.extend([p.exr, p.png]);
+    }
+    for stale in &stale {
+        remove_stale(stale)?;
+    }
+    Ok(())
 }
 
 /// Writes each render product's file, cut from the film (its `.partial` name when the
