@@ -26,7 +26,9 @@ mod checks;
 pub struct RenderJob {
     /// A scene file or the name of a built-in scene.
     pub scene: String,
-    /// Output EXR; `None`: `<scene stem>.exr` in the working directory.
+    /// Output EXR; `None`: `<scene stem>.exr` (or the USD stage's products) in the
+    /// working directory. A directory (one that exists and is not named `.exr`, or a
+    /// path ending in `/`): those default names in it. A file, for a stage of several products: all in that file.
     pub output: Option<PathBuf>,
     pub overrides: SettingOverrides,
     pub aovs: AovRequest,
@@ -101,6 +103,10 @@ pub struct PreparedRender {
     pub source: Source,
     pub scene: Scene,
     pub paths: output::naming::OutputPaths,
+    /// A USD stage's render products, each a file of its own (empty: one file, `paths`,
+    /// which is then the first product holding the beauty, beside which the checkpoint
+    /// goes).
+    pub products: Vec<output::products::ProductPlan>,
     pub warnings: Vec<String>,
     /// The window and Cryptomatte layers to render.
     pub frame: FrameRequest,
@@ -127,6 +133,9 @@ pub struct RenderSummary {
     /// sum in 32 bits): those pixels are wrong, and the line says so.
     pub overflowed: u64,
     pub paths: output::naming::OutputPaths,
+    /// Every file written: `paths`' pair, or each render product's EXR and, for those
+    /// holding the beauty, its PNG.
+    pub files: Vec<PathBuf>,
     /// Set when the render was stopped: rows finished of all rows, and the checkpoint
     /// written beside the outputs.
     pub interrupted: Option<Interrupted>,
@@ -165,6 +174,21 @@ pub struct Interrupted {
 }
 
 impl RenderSummary {
+    /// The files written, for `wrote …`: `a.exr and a.png`, `b.exr, b.png and c.exr`.
+    pub fn files_line(&self) -> String {
+        RenderSummary::files_line_of(&self.files)
+    }
+
+    /// [`RenderSummary::files_line`] of a list of files.
+    pub fn files_line_of(files: &[PathBuf]) -> String {
+        let names: Vec<String> = files.iter().map(|f| f.display().to_string()).collect();
+        match names.split_last() {
+            Some((last, rest)) if !rest.is_empty() => format!("{} and {last}", rest.join(", ")),
+            Some((last, _)) => last.clone(),
+            None => String::new(),
+        }
+    }
+
     /// The one line `lightpath render` prints at the end.
     pub fn line(&self) -> String {
         let s = &self.stats;
@@ -253,13 +277,10 @@ impl RenderJob {
             desc.use_camera(name)?;
         }
         self.overrides.apply(&mut desc.render);
-        let paths = output::naming::output_paths(
-            &self.scene,
-            self.output.as_deref().or(desc.output.as_deref()),
-        );
         checks::settings(&desc, self.first_sample)
             .map_err(|e| Error::Setting(format!("{}: {e}", desc.source)))?;
         let mut warnings = desc.warnings.clone();
+        let (paths, product_paths) = self.output_paths(&desc, &mut warnings)?;
         warnings.extend(crate::scene::load::defaults::no_light_warning(&desc));
         let specs = self.plan(&desc, &mut warnings)?;
         crate::limits::Limits::current()
@@ -270,6 +291,13 @@ impl RenderJob {
         let mut inputs: Vec<&std::path::Path> = reads.iter().map(|r| r.path.as_path()).collect();
         inputs.push(std::path::Path::new(&self.scene));
         checks::outputs(&paths, &inputs).map_err(Error::Output)?;
+        for p in &product_paths {
+            checks::outputs(p, &inputs).map_err(Error::Output)?;
+        }
+        let products = match product_paths.is_empty() {
+            true => Vec::new(),
+            false => output::products::assign(&desc.products, &product_paths, &scene.aovs),
+        };
         let identity = Identity::new(
             &source.dir,
             &reads,
@@ -306,12 +334,92 @@ impl RenderJob {
             source,
             scene,
             paths,
+            products,
             warnings,
             frame: FrameRequest { window, mattes },
             metadata,
             identity,
             resume,
         })
+    }
+
+    /// Where the render goes: its file (for several products, the first holding the
+    /// beauty: the checkpoint goes beside it) and each product's (empty: one file).
+    #[allow(clippy::type_complexity)]
+    fn output_paths(
+        &self,
+        desc: &SceneDesc,
+        warnings: &mut Vec<String>,
+    ) -> Result<
+        (
+            output::naming::OutputPaths,
+            Vec<output::naming::OutputPaths>,
+        ),
+        Error,
+    > {
+        let dir = self
+            .output
+            .as_deref()
+            // A directory named like an EXR (`-o shot.exr` where one is) is a mistake,
+            // refused by the output checks.
+            .filter(|p| {
+                p.as_os_str().to_string_lossy().ends_with('/')
+                    || (p.is_dir() && !p.extension().is_some_and(|e| e.eq_ignore_ascii_case("exr")))
+            });
+        let several = desc.products.len() > 1;
+        if several && (dir.is_some() || self.output.is_none()) {
+            let paths = output::products::product_paths(&desc.products, dir);
+            for (i, p) in paths.iter().enumerate() {
+                if let Some(j) = paths[..i].iter().position(|q| q.exr == p.exr) {
+                    return Err(Error::Setting(format!(
+                        "{}: render products {} and {} are both written to {}",
+                        desc.source,
+                        j + 1,
+                        i + 1,
+                        p.exr.display()
+                    )));
+                }
+            }
+            if self.denoise.is_some() {
+                return Err(Error::Setting(format!(
+                    "{}: --denoise with {} render products: render, then denoise the \
+                     products' files with lightpath denoise (or write them as one file \
+                     with -o FILE.exr)",
+                    desc.source,
+                    paths.len()
+                )));
+            }
+            let primary = desc.products.iter().position(|p| p.beauty).unwrap_or(0);
+            return Ok((paths[primary].clone(), paths));
+        }
+        if several {
+            let names: Vec<String> = desc
+                .products
+                .iter()
+                .map(|p| p.output.display().to_string())
+                .collect();
+            warnings.push(format!(
+                "{}: the render products {} are written as one file, -o {} (give -o a \
+                 directory to write each product there)",
+                desc.source,
+                names.join(", "),
+                self.output
+                    .as_deref()
+                    .unwrap_or(std::path::Path::new(""))
+                    .display()
+            ));
+        }
+        let own = match dir {
+            Some(d) => {
+                let name = output::naming::output_paths(&self.scene, desc.output.as_deref()).exr;
+                Some(d.join(name.file_name().unwrap_or(name.as_os_str())))
+            }
+            None => self.output.clone().or(desc.output.clone()),
+        };
+        Ok((
+            output::naming::output_paths(&self.scene, own.as_deref()),
+            Vec::new(),
+        ))
     }
 
     /// The checkpoint `--resume` continues from: refused when it is not of this render,
@@ -472,6 +580,7 @@ impl PreparedRender {
             source,
             scene,
             paths,
+            products,
             frame,
             metadata,
             identity,
@@ -544,25 +653,23 @@ impl PreparedRender {
         }
         let overflowed = non_finite_values(&film);
         let header = exr_header(&job, &source, &scene, metadata, &film, interrupted.as_ref());
-        let derived = output::derived_aovs(&film, &scene.aovs);
         // Unfinished rows go beside the output, never over a finished image of that name.
         let partial = output::naming::partial_paths(&paths);
-        let written = if interrupted.is_some() {
-            partial.clone()
-        } else {
-            paths
-        };
-        let png = output::stage_png(&written.png, &film, 0, job.preview_exposure)
-            .map_err(Error::Output)?;
+        let written = interrupted.as_ref().map_or(paths, |_| partial.clone());
         let (width, height, spp) = (film.width, film.height, film.spp);
-        let exr = output::stage_film(&written.exr, film, &scene.aovs, derived, job.exr, header)
-            .map_err(Error::Output)?;
-        output::atomic::commit_pair(exr, png).map_err(Error::Output)?;
+        let files = if products.is_empty() {
+            let derived = output::derived_aovs(&film, &scene.aovs);
+            let png = output::stage_png(&written.png, &film, 0, job.preview_exposure)
+                .map_err(Error::Output)?;
+            let exr = output::stage_film(&written.exr, film, &scene.aovs, derived, job.exr, header)
+                .map_err(Error::Output)?;
+            output::atomic::commit_pair(exr, png).map_err(Error::Output)?;
+            vec![written.exr.clone(), written.png.clone()]
+        } else {
+            write_products(&products, film, &scene, &job, header, interrupted.is_some())?
+        };
         if interrupted.is_none() {
-            remove_checkpoint(&checkpoint_path)?;
-            for stale in [&partial.exr, &partial.png] {
-                remove_stale(stale)?;
-            }
+            remove_leftovers(&checkpoint_path, &partial, &products)?
         }
         let paths = written;
         // An interrupted render's rows are unfinished: it is denoised once it is resumed.
@@ -581,10 +688,78 @@ impl PreparedRender {
             stats,
             overflowed,
             paths,
+            files,
             interrupted,
             denoised,
         })
     }
+}
+
+/// A finished render's checkpoint and the interrupted render's partial images (its own
+/// and each product's): out of date, removed.
+fn remove_leftovers(
+    checkpoint: &std::path::Path,
+    partial: &output::naming::OutputPaths,
+    products: &[output::products::ProductPlan],
+) -> Result<(), Error> {
+    remove_checkpoint(checkpoint)?;
+    let mut stale = vec![partial.exr.clone(), partial.png.clone()];
+    for plan in products {
+        let p = output::naming::partial_paths(&plan.paths);
+        stale.extend([p.exr, p.png]);
+    }
+    for stale in &stale {
+        remove_stale(stale)?;
+    }
+    Ok(())
+}
+
+/// Writes each render product's file, cut from the film (its `.partial` name when the
+/// render was stopped); every product staged before any is renamed into place, so a
+/// product that cannot be written leaves the others' old files too. Returns the files.
+fn write_products(
+    products: &[output::products::ProductPlan],
+    film: Film,
+    scene: &Scene,
+    job: &RenderJob,
+    header: output::ExrHeader,
+    interrupted: bool,
+) -> Result<Vec<PathBuf>, Error> {
+    let mut files = Vec::new();
+    let mut staged = Vec::new();
+    for plan in products {
+        let (sub, aovs) = output::products::product_film(&film, &scene.aovs, plan);
+        let to = match interrupted {
+            true => output::naming::partial_paths(&plan.paths),
+            false => plan.paths.clone(),
+        };
+        let beauty = aovs
+            .iter()
+            .position(|a| a.name == crate::aov::naming::BEAUTY);
+        let png = match beauty {
+            Some(k) if plan.beauty => Some(
+                output::stage_png(&to.png, &sub, k, job.preview_exposure).map_err(Error::Output)?,
+            ),
+            _ => None,
+        };
+        let derived = output::derived_aovs(&sub, &aovs);
+        let exr = output::stage_film(&to.exr, sub, &aovs, derived, job.exr, header.clone())
+            .map_err(Error::Output)?;
+        files.push(to.exr);
+        if png.is_some() {
+            files.push(to.png);
+        }
+        staged.push((exr, png));
+    }
+    drop(film);
+    for (exr, png) in staged {
+        match png {
+            Some(png) => output::atomic::commit_pair(exr, png),
+            None => exr.commit(),
+        }
+        .map_err(Error::Output)?;
+    }
+    Ok(files)
 }
 
 impl Interrupted {

@@ -75,6 +75,15 @@ impl Tracer<'_> {
                 .contains(&light)
     }
 
+    /// Whether `object` casts no shadow from light `light` (shadow linking).
+    #[inline]
+    pub(super) fn unshadowing(&self, object: u32, light: u32) -> bool {
+        self.scene
+            .objects
+            .get(object as usize)
+            .is_some_and(|o| o.unshadowing.contains(&light))
+    }
+
     /// The MIS weight of a BSDF-sampled ray of `path` that found light `li`
     /// (`light_pdf`: the solid-angle pdf light sampling would have had for it).
     #[inline]
@@ -86,6 +95,10 @@ impl Tracer<'_> {
     ) -> f32 {
         if path.prev_delta {
             1.0
+        } else if self.scene.lights[li as usize].shadow_linked {
+            // Its light samples see past the objects that cast no shadow from it; a BSDF
+            // ray stops at them: light sampling alone estimates it.
+            0.0
         } else {
             let scene = self.scene;
             power_heuristic(
@@ -207,7 +220,7 @@ impl Tracer<'_> {
             if f == Vec3A::ZERO {
                 continue;
             }
-            let w = if ls.delta {
+            let w = if ls.delta || light.shadow_linked {
                 1.0
             } else {
                 power_heuristic(light_pdf, lobe_pdf)
@@ -224,7 +237,13 @@ impl Tracer<'_> {
                     }
                     let stack = self.stack_after(&path.media, v.hit, v.dir, ls.wi);
                     let ray = self.spawn(v.hit, ls.wi, tmax);
-                    self.transmittance(out, &ray, &stack, light.shadow_exempt(), &mut path.rng)
+                    self.transmittance(
+                        out,
+                        &ray,
+                        &stack,
+                        (light.shadow_exempt(), li as u32),
+                        &mut path.rng,
+                    )
                 });
                 let value = f * ls.radiance / estimate_pdf;
                 self.split_by_transmittance(out, s_light, path, value, w, tr, glow, part);
@@ -237,8 +256,7 @@ impl Tracer<'_> {
                 } else {
                     f32::INFINITY
                 };
-                tmax <= 0.0
-                    || !self.occluded(out, &self.spawn(v.hit, ls.wi, tmax), light.shadow_exempt())
+                tmax <= 0.0 || !self.occluded(out, &self.spawn(v.hit, ls.wi, tmax), li as u32)
             });
             let via = match (glow, vis) {
                 // A glow is no light: what cannot reach it is no shadow.
@@ -297,7 +315,7 @@ impl Tracer<'_> {
         }
         let f = cos * FRAC_1_PI;
         let light_pdf = select_pmf * ls.pdf;
-        let w = if ls.delta {
+        let w = if ls.delta || light.shadow_linked {
             1.0
         } else {
             power_heuristic(light_pdf, f)
@@ -308,8 +326,7 @@ impl Tracer<'_> {
         } else {
             f32::INFINITY
         };
-        let visible = tmax <= 0.0
-            || !self.occluded(out, &self.spawn(hit, ls.wi, tmax), light.shadow_exempt());
+        let visible = tmax <= 0.0 || !self.occluded(out, &self.spawn(hit, ls.wi, tmax), li as u32);
         let via = match (light.glow, visible) {
             (true, false) => return,
             (true, true) => Via::Glow,
@@ -416,7 +433,7 @@ impl Tracer<'_> {
         ignore: u32,
     ) -> Vec3A {
         let mut rng = path.rng.clone();
-        self.transmittance(out, ray, &path.media, ignore, &mut rng)
+        self.transmittance(out, ray, &path.media, (ignore, u32::MAX), &mut rng)
     }
 
     /// A lights-only contribution reached with transmittance `tr`: the transmitted part

@@ -106,20 +106,23 @@ impl Tracer<'_> {
         crate::material::presence::passes_through(presence.at(uv), ray, hit)
     }
 
-    /// Whether the shadow ray `ray` (up to `ray.tmax`) is blocked, `ignore` (a light's own
-    /// object) passed: past surfaces that are not there for it (presence), if any.
+    /// Whether the shadow ray `ray` (up to `ray.tmax`) towards light `li` is blocked, the
+    /// light's own object passed: past surfaces that are not there for it (presence) and
+    /// objects that cast no shadow from it (shadow linking), if any.
     #[inline(always)]
     pub(super) fn occluded(
         &self,
         out: &mut super::Sink,
         ray: &crate::geometry::Ray,
-        ignore: u32,
+        li: u32,
     ) -> bool {
         let scene = self.scene;
-        if !scene.has_presence {
+        let light = &scene.lights[li as usize];
+        let ignore = light.shadow_exempt();
+        if !scene.has_presence && !light.shadow_linked {
             return scene.accel.occluded(ray, 0.0, ignore);
         }
-        self.occluded_past_presence(out, ray, ignore)
+        self.occluded_past_presence(out, ray, ignore, li)
     }
 
     fn occluded_past_presence(
@@ -127,6 +130,7 @@ impl Tracer<'_> {
         out: &mut super::Sink,
         ray: &crate::geometry::Ray,
         ignore: u32,
+        li: u32,
     ) -> bool {
         let scene = self.scene;
         let mut ray = *ray;
@@ -138,7 +142,10 @@ impl Tracer<'_> {
             else {
                 return false;
             };
-            if hit.object != ignore && !self.see_through(&hit, &ray) {
+            if hit.object != ignore
+                && !self.unshadowing(hit.object, li)
+                && !self.see_through(&hit, &ray)
+            {
                 return true;
             }
             out.rays += 1;

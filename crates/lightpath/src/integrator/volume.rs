@@ -255,13 +255,14 @@ impl Tracer<'_> {
 
     /// The transmittance of the shadow ray `ray` (up to `ray.tmax`) starting in
     /// `stack`'s medium: through null boundaries and media, zero at any other surface
-    /// (`ignore`: a light's own object, which it passes).
+    /// (`ignore`: a light's own object, which it passes; `li`: the light, whose
+    /// unshadowing objects it passes too, `u32::MAX`: none).
     pub(super) fn transmittance(
         &self,
         out: &mut Sink,
         ray: &Ray,
         stack: &MediumStack,
-        ignore: u32,
+        (ignore, li): (u32, u32),
         rng: &mut Rng,
     ) -> Vec3A {
         let scene = self.scene;
@@ -289,12 +290,14 @@ impl Tracer<'_> {
             let Some(hit) = hit else {
                 return tr;
             };
-            if hit.object != ignore {
+            if hit.object != ignore && !self.unshadowing(hit.object, li) {
                 if self.passes(&stack, &hit) {
                     // As a camera path does (`coincident`): blocked by a surface the
                     // boundary lies on, through a boundary it shares a face with.
                     match self.coincident(&stack, &ray, &hit, Visibility::SHADOW) {
-                        Some(Coincident::Surface(c)) if c.object != ignore => {
+                        Some(Coincident::Surface(c))
+                            if c.object != ignore && !self.unshadowing(c.object, li) =>
+                        {
                             return Vec3A::ZERO;
                         }
                         Some(Coincident::Boundary(c)) => self.cross(&mut stack, &c, ray.dir),
@@ -396,7 +399,7 @@ impl Tracer<'_> {
             Some(pdf_e) if v.pdf > 0.0 => power_heuristic(v.pdf * light_pdf, pdf_e),
             // A grid thin along the flight: equiangular sampling takes it alone.
             Some(pdf_e) if pdf_e > 0.0 && thin_grid(&volume.medium, &v.seg) => return,
-            _ if ls.delta => 1.0,
+            _ if ls.delta || light.shadow_linked => 1.0,
             _ => power_heuristic(light_pdf, f),
         };
         let tmax = if ls.dist.is_finite() {
@@ -416,7 +419,7 @@ impl Tracer<'_> {
                 out,
                 &shadow,
                 &path.media,
-                light.shadow_exempt(),
+                (light.shadow_exempt(), li as u32),
                 &mut path.rng,
             )
         };
@@ -507,7 +510,7 @@ impl Tracer<'_> {
                 out,
                 &shadow,
                 &path.media,
-                light.shadow_exempt(),
+                (light.shadow_exempt(), li as u32),
                 &mut path.rng,
             )
         };

@@ -200,6 +200,10 @@ pub struct Light {
     /// Its part in AOVs split per light group: its first group's, or the default part
     /// after all groups (`scene/build/lights.rs::groups`).
     pub part: u32,
+    /// Shadow linking: some objects cast no shadow from it (their `unshadowing`). Its
+    /// light samples then take the whole weight (a BSDF ray stops at such an object and
+    /// cannot find the light behind it).
+    pub shadow_linked: bool,
 }
 
 impl Light {
@@ -214,6 +218,7 @@ impl Light {
             glow: false,
             classes: LightClasses::default(),
             part: 0,
+            shadow_linked: false,
         }
     }
 

@@ -621,9 +621,7 @@ mod tests {
         ));
         lights.push(light(Dome { map: None }, 0.05));
         lights.push(light(
-            Distant {
-                dir: Vec3A::new(0.3, -1.0, 0.1).normalize(),
-            },
+            Distant::new(Vec3A::new(0.3, -1.0, 0.1).normalize(), 0.0),
             1.0,
         ));
         (lights, prims)

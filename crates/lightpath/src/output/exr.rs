@@ -194,7 +194,12 @@ pub fn stage_film(
         ));
         attributes.push((naming::variance_attribute(&name), aov.name.clone()));
     }
-    channels.push((naming::ALPHA.into(), planes.next().unwrap_or_default()));
+    // Alpha goes with the beauty: a file of other AOVs (a render product without it)
+    // has none.
+    let alpha = planes.next().unwrap_or_default();
+    if aovs.iter().any(|a| a.name == naming::BEAUTY) {
+        channels.push((naming::ALPHA.into(), alpha));
+    }
     if let Some(counts) = counts {
         channels.push((naming::SAMPLE_COUNT_CHANNEL.into(), counts));
     }

@@ -2,12 +2,14 @@
 //! as `<name>.R/.G/.B`, the expressions in the header) and a PNG preview of the beauty.
 //! Both are written beside the target, synced, then renamed into place together
 //! (`atomic`), so a crash never leaves a half-written image, or a mismatched pair, under
-//! the real names.
+//! the real names. A USD stage's several render products are several such files cut
+//! from the one film (`products`).
 
 pub mod atomic;
 mod exr;
 pub mod naming;
 mod png;
+pub mod products;
 mod read;
 pub mod target;
 

@@ -73,9 +73,24 @@ pub struct SceneDesc {
     pub media: MediaDesc,
     /// The output the scene names (a USD render product's `productName`); `-o` wins.
     pub output: Option<PathBuf>,
+    /// A USD stage's render products when it has several: each is a file of its own
+    /// (`output` is the first's). Empty: one file, `output`.
+    pub products: Vec<ProductDesc>,
     /// Whether the standard AOVs are added unless the command line says (None: yes;
     /// a USD stage with render settings: no, its RenderVars are the AOVs).
     pub standard_aovs: Option<bool>,
+}
+
+/// One output file of several (a USD `RenderProduct`): its path and the AOVs it holds.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct ProductDesc {
+    /// The product's file (its `productName`).
+    pub output: PathBuf,
+    /// The AOVs it holds (its vars' names, in order).
+    pub aovs: Vec<String>,
+    /// Whether it holds the beauty (R, G, B, A): one of its vars names it (`Ci`, `C`,
+    /// `color`, …).
+    pub beauty: bool,
 }
 
 /// Participating media (`[media.NAME]`), which objects bound them, and the atmosphere.
@@ -410,8 +425,10 @@ pub enum LightKind {
         cone_angle: f32,
         cone_softness: f32,
     },
+    /// `angle`: the angular diameter of its disc, in degrees (0: one direction).
     Distant {
         direction: [f32; 3],
+        angle: f32,
     },
     /// An optional equirectangular EXR (resolved path, and where it was named).
     Dome {
@@ -460,5 +477,10 @@ pub struct LightDesc {
     pub include: Option<Vec<String>>,
     /// … except objects in these.
     pub exclude: Vec<String>,
+    /// Shadow linking: only objects in these lpegroups cast shadows from this light
+    /// (None: all) …
+    pub shadow_include: Option<Vec<String>>,
+    /// … except objects in these.
+    pub shadow_exclude: Vec<String>,
     pub origin: Origin,
 }

@@ -49,6 +49,8 @@ pub struct Object {
     pub holdout: bool,
     /// Lights that do not illuminate this object (light linking).
     pub unlit_by: Vec<u32>,
+    /// Lights whose shadow rays pass this object (shadow linking).
+    pub unshadowing: Vec<u32>,
     /// Class of each BSDF lobe's event on this object.
     pub lobe_classes: Vec<ClassId>,
     /// Data lobes with their classes.

@@ -1162,3 +1162,465 @@ def DiskLight "Disk" (
         assert_eq!(v.x, 0.0, "pixel {x},10 outside the cone: {v}");
     }
 }
+
+/// `SHOT` with two render products: `aovs.exr` (N, specular) before `beauty.exr` (Ci,
+/// diffuseKey).
+fn two_products() -> String {
+    SHOT.replace(
+        "rel products = </Render/Product>",
+        "rel products = [</Render/Aovs>, </Render/Beauty>]",
+    )
+    .replace(
+        r#"    def RenderProduct "Product"
+    {
+        rel orderedVars = [</Render/Vars/diffuseKey>, </Render/Vars/N>, </Render/Vars/Ci>, </Render/Vars/spec>]
+        token productName = "shot_out.exr""#,
+        r#"    def RenderProduct "Aovs"
+    {
+        rel orderedVars = [</Render/Vars/N>, </Render/Vars/spec>]
+        token productName = "aovs.exr"
+    }
+    def RenderProduct "Beauty"
+    {
+        rel orderedVars = [</Render/Vars/Ci>, </Render/Vars/diffuseKey>]
+        token productName = "beauty.exr""#,
+    )
+}
+
+#[test]
+fn each_render_product_is_a_file_with_exactly_its_vars() {
+    use lightpath::job::RenderJob;
+    use std::sync::atomic::AtomicBool;
+    use std::sync::Arc;
+    let dir = Scratch::new("usd-products");
+    let scene = write(&dir, "shot.usda", &two_products());
+    let desc = load(&scene);
+    let products: Vec<(&str, Vec<&str>, bool)> = desc
+        .products
+        .iter()
+        .map(|p| {
+            (
+                p.output.to_str().unwrap(),
+                p.aovs.iter().map(String::as_str).collect(),
+                p.beauty,
+            )
+        })
+        .collect();
+    assert_eq!(
+        products,
+        [
+            ("aovs.exr", vec!["N", "specular"], false),
+            ("beauty.exr", vec!["diffuseKey"], true)
+        ]
+    );
+    let job = |out: &Path, cancelled: bool| {
+        let mut job = RenderJob::new(scene.to_string_lossy());
+        job.output = Some(out.to_path_buf());
+        job.overrides.spp = Some(2);
+        job.overrides.resolution = Some([16, 12]);
+        job.aovs.light_groups = true;
+        job.cancel = Some(Arc::new(AtomicBool::new(cancelled)));
+        job
+    };
+    let silent = lightpath::progress::Silent;
+    // -o naming a directory: each product there under its own name.
+    let renders = dir.join("renders");
+    std::fs::create_dir(&renders).unwrap();
+    let summary = job(&renders, false)
+        .prepare()
+        .unwrap()
+        .run(&silent)
+        .unwrap();
+    let (beauty, aovs) = (renders.join("beauty.exr"), renders.join("aovs.exr"));
+    assert_eq!(
+        summary.files,
+        [aovs.clone(), beauty.clone(), renders.join("beauty.png")]
+    );
+    assert!(!renders.join("aovs.png").exists());
+    let read = |p: &Path| lightpath::output::read_exr(p).unwrap();
+    let names = |p: &Path| -> Vec<String> {
+        let mut v: Vec<String> = read(p).aovs().into_iter().map(|a| a.0).collect();
+        v.sort();
+        v
+    };
+    assert_eq!(names(&aovs), ["N", "specular"]);
+    assert_eq!(
+        names(&beauty),
+        [
+            "beauty",
+            "beauty__default",
+            "beauty_fill",
+            "beauty_key",
+            "diffuseKey"
+        ]
+    );
+    let a = read(&aovs);
+    assert!(a.channel("R").is_none() && a.channel("A").is_none());
+    assert_eq!(a.channels.len(), 6);
+    assert!(read(&beauty).channel("A").is_some());
+    for p in [&beauty, &aovs] {
+        let (report, ok) = lightpath::post::partitions::report(p, 1e-4).unwrap();
+        assert!(ok, "{report}");
+    }
+    assert!(read(&beauty)
+        .attributes
+        .iter()
+        .any(|(k, v)| k == "lightpath/partition/beauty_key" && v == "lightgroups"));
+
+    // -o naming a file: all in it, with a warning; the same pixels as the products'.
+    let all = dir.join("all.exr");
+    let prepared = job(&all, false).prepare().unwrap();
+    assert!(
+        prepared
+            .warnings
+            .iter()
+            .any(|w| w.contains("aovs.exr, beauty.exr are written as one file")),
+        "{:?}",
+        prepared.warnings
+    );
+    prepared.run(&silent).unwrap();
+    let whole = read(&all);
+    for p in [&beauty, &aovs] {
+        for (name, values) in &read(p).channels {
+            let w = whole.channel(name).unwrap_or_else(|| panic!("{name}"));
+            assert!(
+                w.iter()
+                    .zip(values)
+                    .all(|(x, y)| x.to_bits() == y.to_bits()),
+                "{name}"
+            );
+        }
+    }
+
+    // Interrupted: each product's rows done beside it, one checkpoint beside the beauty;
+    // resumed, the products equal the uninterrupted ones.
+    let again = dir.join("again");
+    std::fs::create_dir(&again).unwrap();
+    let stopped = job(&again, true).prepare().unwrap().run(&silent).unwrap();
+    let checkpoint = stopped.interrupted.expect("stopped").checkpoint;
+    assert_eq!(checkpoint.parent(), Some(again.as_path()));
+    assert!(checkpoint.exists());
+    assert!(again.join("aovs.partial.exr").exists() && again.join("beauty.partial.exr").exists());
+    assert!(!again.join("beauty.exr").exists());
+    let mut resume = job(&again, false);
+    resume.resume = true;
+    let prepared = resume.prepare().unwrap();
+    assert!(prepared.resume.is_some());
+    prepared.run(&silent).unwrap();
+    assert!(!checkpoint.exists() && !again.join("aovs.partial.exr").exists());
+    for name in ["beauty.exr", "aovs.exr"] {
+        let (x, y) = (read(&again.join(name)), read(&renders.join(name)));
+        assert_eq!(x.channels.len(), y.channels.len());
+        for ((n, a), (_, b)) in x.channels.iter().zip(&y.channels) {
+            assert!(
+                a.iter().zip(b).all(|(p, q)| p.to_bits() == q.to_bits()),
+                "{name} {n} differs after the resume"
+            );
+        }
+    }
+}
+
+/// A floor seen from above, a sphere light to the side and a ball between them (out of
+/// the camera's view) whose shadow covers the whole view; `{link}` goes on the light.
+const SHADOW_LINK: &str = r#"#usda 1.0
+(
+    metersPerUnit = 1
+)
+def Camera "Cam"
+{
+    float focalLength = 50
+    float horizontalAperture = 10
+    float verticalAperture = 10
+    double3 xformOp:translate = (0, 5, 0)
+    float3 xformOp:rotateXYZ = (-90, 0, 0)
+    uniform token[] xformOpOrder = ["xformOp:translate", "xformOp:rotateXYZ"]
+}
+def Mesh "Floor"
+{
+    int[] faceVertexCounts = [4]
+    int[] faceVertexIndices = [0, 1, 2, 3]
+    point3f[] points = [(-5, 0, 5), (5, 0, 5), (5, 0, -5), (-5, 0, -5)]
+    color3f[] primvars:displayColor = [(0.5, 0.5, 0.5)]
+}
+def Sphere "Blocker" ({active})
+{
+    double radius = 0.6
+    double3 xformOp:translate = (2, 2, 0)
+    uniform token[] xformOpOrder = ["xformOp:translate"]
+}
+def SphereLight "Lamp"
+{
+    float inputs:intensity = 50
+    float inputs:radius = 0.5
+    {link}
+    double3 xformOp:translate = (4, 4, 0)
+    uniform token[] xformOpOrder = ["xformOp:translate"]
+}
+"#;
+
+#[test]
+fn shadow_linking_lets_light_pass_the_objects_it_excludes() {
+    let dir = Scratch::new("usd-shadow-link");
+    let stage = |name: &str, link: &str, active: bool| {
+        let text = SHADOW_LINK.replace("{link}", link).replace(
+            "{active}",
+            if active {
+                "active = true"
+            } else {
+                "active = false"
+            },
+        );
+        load(&write(&dir, name, &text))
+    };
+    let excludes = "rel collection:shadowLink:excludes = </Blocker>";
+    let linked = stage("linked.usda", excludes, true);
+    assert_eq!(linked.lights[0].shadow_exclude, ["Blocker"]);
+    assert_eq!(linked.lights[0].shadow_include, None);
+    // ShadowAPI's switch: no object shadows the light.
+    let off = stage("off.usda", "bool inputs:shadow:enable = false", true);
+    assert_eq!(off.lights[0].shadow_include, Some(Vec::new()));
+    // Only the floor casts shadows (an include list without the root).
+    let only_floor = stage(
+        "floor.usda",
+        "uniform bool collection:shadowLink:includeRoot = 0\n    rel collection:shadowLink:includes = </Floor>",
+        true,
+    );
+    let plain = stage("plain.usda", "", true);
+    let removed = stage("removed.usda", "", false);
+
+    // Direct diffuse light on the floor (C<RD>L: no light the ball passes on), in the
+    // ball's shadow everywhere in view.
+    let (w, spp) = (24u32, 16u32);
+    let direct = |mut desc: SceneDesc| -> Vec<f32> {
+        desc.render.resolution = [w, w];
+        desc.render.spp = spp;
+        let specs = aov::assemble([aov::AovSpec::new("direct", "C<RD>L")]);
+        let scene = Scene::build(&desc, &specs).unwrap();
+        let (film, _) = render(
+            &scene,
+            &RenderOptions {
+                spp,
+                first_sample: 0,
+            },
+        );
+        (0..w * w).map(|i| film.pixel(1, i % w, i / w).x).collect()
+    };
+    let removed = direct(removed);
+    let mean = |v: &[f32]| v.iter().map(|x| *x as f64).sum::<f64>() / v.len() as f64;
+    // Pixel means differ by the render's noise: their mean difference is within five
+    // standard errors of it.
+    let agree = |a: &[f32], b: &[f32], what: &str| {
+        let d: Vec<f64> = a.iter().zip(b).map(|(x, y)| (*x - *y) as f64).collect();
+        let m = d.iter().sum::<f64>() / d.len() as f64;
+        let var = d.iter().map(|x| (x - m) * (x - m)).sum::<f64>() / (d.len() - 1) as f64;
+        let se = (var / d.len() as f64).sqrt();
+        assert!(m.abs() <= 5.0 * se + 1e-6, "{what}: {m} ± {se}");
+    };
+    let lit = mean(&removed);
+    assert!(lit > 0.01, "{lit}");
+    agree(&direct(linked), &removed, "the ball excluded");
+    agree(&direct(off), &removed, "shadows off");
+    agree(&direct(only_floor), &removed, "only the floor shadows");
+    // Without linking the ball's shadow covers the view: the umbra has no direct light.
+    let shadowed = mean(&direct(plain));
+    assert!(shadowed < 1e-3 * lit, "{shadowed} vs {lit}");
+}
+
+#[test]
+fn toml_lights_take_shadow_linking_keys() {
+    let dir = Scratch::new("toml-shadow-link");
+    let p = write(
+        &dir,
+        "s.toml",
+        r#"
+[[lights]]
+type = "point"
+position = [0, 1, 0]
+intensity = [1, 1, 1]
+shadow_include = ["floor"]
+shadow_exclude = ["ball"]
+"#,
+    );
+    let desc = lightpath::load_scene(p.to_str().unwrap()).unwrap();
+    assert_eq!(
+        desc.lights[0].shadow_include.as_deref(),
+        Some(&["floor".to_string()][..])
+    );
+    assert_eq!(desc.lights[0].shadow_exclude, ["ball"]);
+}
+
+#[test]
+fn a_shadow_linked_dome_lights_a_floor_under_a_roof_it_passes() {
+    // A uniform dome of radiance 1 over a floor of albedo 0.5 under a wide roof that casts
+    // no shadow from it: the floor's direct diffuse light is 0.5 (the dome's whole
+    // hemisphere), which light sampling alone must give, as BSDF rays stop at the roof.
+    let dir = Scratch::new("usd-shadow-dome");
+    let p = write(
+        &dir,
+        "roof.usda",
+        r#"#usda 1.0
+(
+    metersPerUnit = 1
+)
+def Camera "Cam"
+{
+    float focalLength = 50
+    float horizontalAperture = 10
+    float verticalAperture = 10
+    double3 xformOp:translate = (0, 1, 0)
+    float3 xformOp:rotateXYZ = (-90, 0, 0)
+    uniform token[] xformOpOrder = ["xformOp:translate", "xformOp:rotateXYZ"]
+}
+def Mesh "Floor"
+{
+    int[] faceVertexCounts = [4]
+    int[] faceVertexIndices = [0, 1, 2, 3]
+    point3f[] points = [(-5, 0, 5), (5, 0, 5), (5, 0, -5), (-5, 0, -5)]
+    color3f[] primvars:displayColor = [(0.5, 0.5, 0.5)]
+}
+def Mesh "Roof"
+{
+    int[] faceVertexCounts = [4]
+    int[] faceVertexIndices = [0, 1, 2, 3]
+    point3f[] points = [(-50, 2, 50), (50, 2, 50), (50, 2, -50), (-50, 2, -50)]
+}
+def DomeLight "Sky"
+{
+    float inputs:intensity = 1
+    rel collection:shadowLink:excludes = </Roof>
+}
+"#,
+    );
+    let mut desc = load(&p);
+    let (w, spp) = (16u32, 16u32);
+    desc.render.resolution = [w, w];
+    desc.render.spp = spp;
+    let specs = aov::assemble([aov::AovSpec::new("direct", "C<RD>L")]);
+    let scene = Scene::build(&desc, &specs).unwrap();
+    let (film, _) = render(
+        &scene,
+        &RenderOptions {
+            spp,
+            first_sample: 0,
+        },
+    );
+    let v: Vec<f64> = (0..w * w)
+        .map(|i| film.pixel(1, i % w, i / w).x as f64)
+        .collect();
+    let m = v.iter().sum::<f64>() / v.len() as f64;
+    let var = v.iter().map(|x| (x - m) * (x - m)).sum::<f64>() / (v.len() - 1) as f64;
+    let se = (var / v.len() as f64).sqrt();
+    assert!((m - 0.5).abs() <= 5.0 * se + 1e-4, "{m} ± {se}");
+}
+
+#[test]
+fn a_distant_lights_angle_gives_the_penumbra_of_its_disc() {
+    // A sun of 10° straight down, a half-plane 1 m over the floor with its edge over
+    // x = 0, the camera under it looking down at the penumbra (x within ±0.1 m). Each
+    // pixel's direct diffuse light is compared with the brute-force integral of the
+    // disc's radiance over the directions the half-plane leaves open.
+    let dir = Scratch::new("usd-sun-angle");
+    let p = write(
+        &dir,
+        "sun.usda",
+        r#"#usda 1.0
+(
+    metersPerUnit = 1
+)
+def Camera "Cam"
+{
+    float focalLength = 50
+    float horizontalAperture = 20
+    float verticalAperture = 1.25
+    double3 xformOp:translate = (0, 0.5, 0)
+    float3 xformOp:rotateXYZ = (-90, 0, 0)
+    uniform token[] xformOpOrder = ["xformOp:translate", "xformOp:rotateXYZ"]
+}
+def Mesh "Floor"
+{
+    int[] faceVertexCounts = [4]
+    int[] faceVertexIndices = [0, 1, 2, 3]
+    point3f[] points = [(-10, 0, 10), (10, 0, 10), (10, 0, -10), (-10, 0, -10)]
+    color3f[] primvars:displayColor = [(0.5, 0.5, 0.5)]
+}
+def Mesh "Shade"
+{
+    int[] faceVertexCounts = [4]
+    int[] faceVertexIndices = [0, 1, 2, 3]
+    point3f[] points = [(-10, 1, 10), (0, 1, 10), (0, 1, -10), (-10, 1, -10)]
+}
+def DistantLight "Sun"
+{
+    float inputs:intensity = 2
+    bool inputs:normalize = true
+    float inputs:angle = 10
+    float3 xformOp:rotateXYZ = (-90, 0, 0)
+    uniform token[] xformOpOrder = ["xformOp:rotateXYZ"]
+}
+"#,
+    );
+    let mut desc = load(&p);
+    assert!(matches!(desc.lights[0].kind, LightKind::Distant { angle, .. } if angle == 10.0));
+    let (w, spp) = (32u32, 1024u32);
+    desc.render.resolution = [w, 2];
+    desc.render.spp = spp;
+    let specs = aov::assemble([aov::AovSpec::new("direct", "C<RD>L")]);
+    let scene = Scene::build(&desc, &specs).unwrap();
+    let (film, _) = render(
+        &scene,
+        &RenderOptions {
+            spp,
+            first_sample: 0,
+        },
+    );
+    // Brute force: the disc (radius 5°) on a grid of equal solid angles, the pixel's
+    // footprint on a grid of floor points; radiance E/(π sin²α), albedo 0.5 over π.
+    let (e, albedo, alpha) = (2.0f64, 0.5f64, 5f64.to_radians());
+    let radiance = e / (std::f64::consts::PI * alpha.sin().powi(2));
+    let one_minus_cos = 1.0 - alpha.cos();
+    let (n_theta, n_phi, n_x) = (128, 128, 16);
+    let cell = 2.0 * std::f64::consts::PI * one_minus_cos / (n_theta * n_phi) as f64;
+    let lit_at = |x: f64| -> f64 {
+        let mut sum = 0.0;
+        for i in 0..n_theta {
+            let cos_t = 1.0 - (i as f64 + 0.5) / n_theta as f64 * one_minus_cos;
+            let sin_t = (1.0 - cos_t * cos_t).sqrt();
+            for j in 0..n_phi {
+                let phi = 2.0 * std::f64::consts::PI * (j as f64 + 0.5) / n_phi as f64;
+                // The direction up towards the disc, from the floor at x: where it
+                // crosses the shade's height.
+                if x + sin_t * phi.cos() / cos_t >= 0.0 {
+                    sum += radiance * cos_t * cell;
+                }
+            }
+        }
+        albedo / std::f64::consts::PI * sum
+    };
+    let full = albedo * e / std::f64::consts::PI;
+    let half_width = 0.5 * 0.2;
+    let mut in_penumbra = 0;
+    for px in 0..w {
+        let expected = (0..n_x)
+            .map(|k| {
+                let u = (px as f64 + (k as f64 + 0.5) / n_x as f64) / w as f64;
+                lit_at((2.0 * u - 1.0) * half_width)
+            })
+            .sum::<f64>()
+            / n_x as f64;
+        let got = (0..2).map(|y| film.pixel(1, px, y).x as f64).sum::<f64>() / 2.0;
+        // Each sample is about `full` or 0: a Bernoulli's standard error over the
+        // pixel pair's samples, plus the brute force's grid (1/128 of the disc's
+        // radius per cell: 1 % of `full` at most at the steepest point).
+        let p = (expected / full).clamp(0.0, 1.0);
+        let se = full * (p * (1.0 - p) / (2 * spp) as f64).sqrt();
+        assert!(
+            (got - expected).abs() <= 5.0 * se + 0.01 * full,
+            "pixel {px}: {got} vs {expected} (± {se})"
+        );
+        if p > 0.1 && p < 0.9 {
+            in_penumbra += 1;
+        }
+    }
+    // The penumbra (±tan 5° · 1 m) spans most of the view.
+    assert!(in_penumbra >= w / 2, "{in_penumbra}");
+}

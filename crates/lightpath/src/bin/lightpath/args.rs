@@ -167,7 +167,9 @@ pub(crate) struct RenderArgs {
     /// A scene file (TOML, glTF .gltf/.glb) or the name of a built-in scene.
     #[arg(default_value = "cornell")]
     pub(crate) scene: String,
-    /// Output EXR; the PNG preview goes beside it. Default: <scene>.exr in this directory.
+    /// Output EXR; the PNG preview goes beside it. Default: <scene>.exr (a USD stage's
+    /// render products) in this directory. A directory (existing, or ending in /): the
+    /// default names in it. A file, for a stage of several products: all in that file.
     #[arg(short, long)]
     pub(crate) output: Option<PathBuf>,
     #[command(flatten)]

@@ -266,14 +266,14 @@ fn render(args: RenderArgs) -> ExitCode {
     match prepared.run(progress.as_ref()) {
         Ok(lightpath::job::RenderSummary {
             interrupted: Some(i),
-            paths,
+            files,
             ..
         }) => {
+            let summary = lightpath::job::RenderSummary::files_line_of(&files);
             say!(
-                "interrupted after {}: wrote {} and {} with the rows done, and the checkpoint {}; run the same command with --resume to finish",
+                "interrupted after {}: wrote {} with the rows done, and the checkpoint {}; run the same command with --resume to finish",
                 i.rows_line(),
-                paths.exr.display(),
-                paths.png.display(),
+                summary,
                 i.checkpoint.display()
             );
             ExitCode::from(EXIT_INTERRUPTED)
@@ -283,11 +283,7 @@ fn render(args: RenderArgs) -> ExitCode {
             if let Some(d) = &summary.denoised {
                 say!("{d}");
             }
-            say!(
-                "wrote {} and {}",
-                summary.paths.exr.display(),
-                summary.paths.png.display()
-            );
+            say!("wrote {}", summary.files_line());
             ExitCode::SUCCESS
         }
         Err(e) => {

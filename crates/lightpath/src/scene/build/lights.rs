@@ -92,11 +92,8 @@ pub fn light_shape(l: &LightDesc) -> Result<(LightShape, Option<ShapePrims>, Vec
             };
             (shape.into(), None, color)
         }
-        LightKind::Distant { direction } => (
-            Distant {
-                dir: v3(*direction).normalize_or(-Vec3A::Y),
-            }
-            .into(),
+        LightKind::Distant { direction, angle } => (
+            Distant::new(v3(*direction).normalize_or(-Vec3A::Y), *angle).into(),
             None,
             color,
         ),
@@ -152,7 +149,7 @@ fn check_light_numbers(l: &LightDesc) -> Result<(), SceneError> {
             cone_angle,
             cone_softness,
         } => finite(position) && finite(direction) && finite(&[*cone_angle, *cone_softness]),
-        LightKind::Distant { direction } => finite(direction),
+        LightKind::Distant { direction, angle } => finite(direction) && angle.is_finite(),
     };
     if ok {
         Ok(())
@@ -300,17 +297,24 @@ fn load_env(path: &Path, origin: &Origin) -> Result<EnvMap, SceneError> {
     Ok(EnvMap::new(w, h, texels))
 }
 
-/// Light linking, resolved per object once: each object's `unlit_by`.
-pub fn link(descs: &[LightDesc], objects: &mut [Object]) {
+/// Light and shadow linking, resolved per object once: each object's `unlit_by` and
+/// `unshadowing`, and which lights have shadow linking.
+pub fn link(descs: &[LightDesc], objects: &mut [Object], lights: &mut [Light]) {
     for (light_id, l) in descs.iter().enumerate() {
-        let lit = |o: &Object| {
+        let linked = |o: &Object, include: &Option<Vec<String>>, exclude: &[String]| {
             let any = |set: &[String]| o.groups.iter().any(|g| set.contains(g));
-            l.include.as_deref().is_none_or(any) && !any(&l.exclude)
+            include.as_deref().is_none_or(any) && !any(exclude)
         };
         let light_id = light_id as u32;
         for o in objects.iter_mut().filter(|o| o.light != Some(light_id)) {
-            if !lit(o) {
+            if !linked(o, &l.include, &l.exclude) {
                 o.unlit_by.push(light_id);
+            }
+            if !linked(o, &l.shadow_include, &l.shadow_exclude) {
+                o.unshadowing.push(light_id);
+                if let Some(light) = lights.get_mut(light_id as usize) {
+                    light.shadow_linked = true;
+                }
             }
         }
     }

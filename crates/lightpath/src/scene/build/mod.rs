@@ -33,7 +33,7 @@ impl Scene {
         let (accel, surface) = geometry.build();
         lights::locate_prims(&mut lights, &light_prims, &accel);
         let mesh_lights = lights::mesh_surfaces(&mut lights, &desc.lights, &object_prims, &accel)?;
-        lights::link(&desc.lights, &mut objects);
+        lights::link(&desc.lights, &mut objects, &mut lights);
         let first_glow_light = lights.len();
         glows::add(
             &mut lights,
@@ -119,6 +119,7 @@ fn new_object(name: String, groups: Vec<String>) -> Object {
         light: None,
         holdout: false,
         unlit_by: Vec::new(),
+        unshadowing: Vec::new(),
         lobe_classes: Vec::new(),
         data_lobes: Vec::new(),
         glow_class: None,

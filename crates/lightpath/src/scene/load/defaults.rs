@@ -112,6 +112,8 @@ pub fn dome(source: &str) -> LightDesc {
         transform: Affine3A::IDENTITY,
         include: None,
         exclude: Vec::new(),
+        shadow_include: None,
+        shadow_exclude: Vec::new(),
         origin: Origin::file(source),
     }
 }
@@ -170,6 +172,8 @@ pub fn mesh_light(object: usize, name: &str, radiance: [f32; 3], origin: Origin)
         transform: Affine3A::IDENTITY,
         include: None,
         exclude: Vec::new(),
+        shadow_include: None,
+        shadow_exclude: Vec::new(),
         origin,
     }
 }

@@ -1148,7 +1148,13 @@ impl Loader {
                     point_intensity(intensity),
                 )
             }
-            Kind::Directional => (LightKind::Distant { direction }, sun_irradiance(intensity)),
+            Kind::Directional => (
+                LightKind::Distant {
+                    direction,
+                    angle: 0.0,
+                },
+                sun_irradiance(intensity),
+            ),
         };
         if !(strength.is_finite() && strength >= 0.0) {
             return Err(self.error(
@@ -1173,6 +1179,8 @@ impl Loader {
             transform: Affine3A::IDENTITY,
             include: None,
             exclude: Vec::new(),
+            shadow_include: None,
+            shadow_exclude: Vec::new(),
             origin: Origin::file(&self.file),
         });
         Ok(())

@@ -123,7 +123,7 @@ fn place_light(l: &mut LightDesc, xf: &Affine3A) {
             point(position);
             vector(direction);
         }
-        LightKind::Distant { direction } => vector(direction),
+        LightKind::Distant { direction, .. } => vector(direction),
         LightKind::Rectangle
         | LightKind::Disk { .. }
         | LightKind::Sphere { .. }

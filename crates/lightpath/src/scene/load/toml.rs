@@ -351,6 +351,8 @@ struct LightDesc {
     direction: Option<[f32; 3]>,
     /// Spot: full cone angle and the width of its soft edge, in degrees.
     cone_angle: Option<f32>,
+    /// Distant: the angular diameter of its disc, in degrees (default 0: one direction).
+    angle: Option<f32>,
     cone_softness: Option<f32>,
     /// Dome: an equirectangular EXR, relative to the scene file.
     map: Option<Spanned<String>>,
@@ -362,6 +364,12 @@ struct LightDesc {
     /// … except objects in these.
     #[serde(default)]
     exclude: Vec<String>,
+    /// Shadow linking: only objects in these lpegroups cast shadows from this light
+    /// (default: all) …
+    shadow_include: Option<Vec<String>>,
+    /// … except objects in these.
+    #[serde(default)]
+    shadow_exclude: Vec<String>,
 }
 
 fn one() -> f32 {
@@ -473,6 +481,7 @@ pub fn load(src: &Source) -> Result<d::SceneDesc, SceneError> {
         variance: file.variance,
         media,
         output: None,
+        products: Vec::new(),
         standard_aovs: None,
     })
 }
@@ -975,7 +984,11 @@ fn light(src: &Source, l: &Spanned<LightDesc>) -> Result<d::LightDesc, SceneErro
         }
         "distant" => {
             let direction = need(l.direction, "direction")?;
-            (d::LightKind::Distant { direction }, color(l.irradiance, "irradiance")?)
+            let angle = l.angle.unwrap_or(0.0);
+            if !(0.0..=180.0).contains(&angle) {
+                return Err(src.error(Some(span.clone()), format!("distant light angle {angle}: expected 0 to 180 degrees")));
+            }
+            (d::LightKind::Distant { direction, angle }, color(l.irradiance, "irradiance")?)
         }
         "dome" => {
             let map = l.map.as_ref().map(|f| (src.dir.join(f.get_ref()), src.origin(Some(f.span()))));
@@ -1008,6 +1021,8 @@ fn light(src: &Source, l: &Spanned<LightDesc>) -> Result<d::LightDesc, SceneErro
         transform: placement(l.translate, l.rotate, l.scale, l.matrix),
         include: l.include.clone(),
         exclude: l.exclude.clone(),
+        shadow_include: l.shadow_include.clone(),
+        shadow_exclude: l.shadow_exclude.clone(),
         origin: src.origin(Some(span)),
     })
 }
@@ -1102,6 +1117,8 @@ fn mesh_lights(
             transform: glam::Affine3A::IDENTITY,
             include: l.include.clone(),
             exclude: l.exclude.clone(),
+            shadow_include: l.shadow_include.clone(),
+            shadow_exclude: l.shadow_exclude.clone(),
             origin: origin.clone(),
         })
         .collect())

@@ -115,9 +115,10 @@ impl Loader {
         vec![stage::name_of(prim.path())]
     }
 
-    /// Light linking: the lightLink collection's includes (when it does not include the
-    /// root) and excludes, as the LPE groups of the prims they name.
-    fn linking(&mut self, prim: &Prim) -> (Option<Vec<String>>, Vec<String>) {
+    /// Light and shadow linking: the `lightLink` and `shadowLink` collections' includes
+    /// (when they do not include the root) and excludes, as the LPE groups of the prims
+    /// they name.
+    fn linking(&mut self, prim: &Prim) -> Linking {
         let targets = |rel: &str| -> Vec<String> {
             prim.relationship(rel)
                 .targets()
@@ -126,22 +127,32 @@ impl Loader {
                 .map(stage::name_of)
                 .collect()
         };
-        let include_root = stage::value(prim, "collection:lightLink:includeRoot", self.time)
+        let collection = |name: &str| {
+            let include_root =
+                stage::value(prim, &format!("collection:{name}:includeRoot"), self.time)
+                    .and_then(|v| stage::bool_of(&v))
+                    .unwrap_or(true);
+            let includes = targets(&format!("collection:{name}:includes"));
+            let excludes = targets(&format!("collection:{name}:excludes"));
+            ((!include_root).then_some(includes), excludes)
+        };
+        let (include, exclude) = collection("lightLink");
+        let (shadow_include, shadow_exclude) = collection("shadowLink");
+        // The root not included and nothing listed: read as all, as before.
+        let mut shadow_include = shadow_include.filter(|i| !i.is_empty());
+        // ShadowAPI's `inputs:shadow:enable` off: no object shadows the light.
+        let shadows = stage::value_of(prim, &["inputs:shadow:enable", "shadow:enable"], self.time)
             .and_then(|v| stage::bool_of(&v))
             .unwrap_or(true);
-        let includes = targets("collection:lightLink:includes");
-        let excludes = targets("collection:lightLink:excludes");
-        let include = (!include_root && !includes.is_empty()).then_some(includes);
-        if !targets("collection:shadowLink:includes").is_empty()
-            || !targets("collection:shadowLink:excludes").is_empty()
-        {
-            self.warn_once(
-                &format!("shadowlink {}", prim.path()),
-                prim,
-                "shadow linking is not read: every object casts shadows from this light",
-            );
+        if !shadows {
+            shadow_include = Some(Vec::new());
         }
-        (include, excludes)
+        Linking {
+            include: include.filter(|i| !i.is_empty()),
+            exclude,
+            shadow_include,
+            shadow_exclude,
+        }
     }
 
     pub(super) fn light(
@@ -209,7 +220,12 @@ impl Loader {
                 format!("the light's emission is {strength}: its size or intensity is not usable"),
             ));
         }
-        let (include, exclude) = self.linking(prim);
+        let Linking {
+            include,
+            exclude,
+            shadow_include,
+            shadow_exclude,
+        } = self.linking(prim);
         let camera_visible = self.light_bool_default(prim, "karma:light:renderlightgeo", true)
             && !matches!(kind, LightKind::Distant { .. });
         self.desc.lights.push(LightDesc {
@@ -226,6 +242,8 @@ impl Loader {
             transform,
             include,
             exclude,
+            shadow_include,
+            shadow_exclude,
             origin: self.origin(prim),
         });
         Ok(())
@@ -336,7 +354,10 @@ impl Loader {
                     l * PI * (angle.to_radians() * 0.5).sin().powi(2)
                 };
                 (
-                    LightKind::Distant { direction: down },
+                    LightKind::Distant {
+                        direction: down,
+                        angle,
+                    },
                     Affine3A::IDENTITY,
                     e,
                 )
@@ -445,7 +466,7 @@ impl Loader {
             .sum();
         let radiance = if normalize && area > 0.0 { l / area } else { l };
         let groups = self.light_groups(prim);
-        let (include, exclude) = self.linking(prim);
+        let link = self.linking(prim);
         let base = self.desc.objects.len();
         for k in range {
             out[k].emission = None;
@@ -461,8 +482,10 @@ impl Loader {
                 two_sided: false,
                 material: None,
                 transform: Affine3A::IDENTITY,
-                include: include.clone(),
-                exclude: exclude.clone(),
+                include: link.include.clone(),
+                exclude: link.exclude.clone(),
+                shadow_include: link.shadow_include.clone(),
+                shadow_exclude: link.shadow_exclude.clone(),
                 origin: self.origin(prim),
             });
         }
@@ -518,4 +541,12 @@ pub fn blackbody_rgb(kelvin: f32) -> [f32; 3] {
     } else {
         [1.0; 3]
     }
+}
+
+/// A light's linking collections, as LPE groups.
+struct Linking {
+    include: Option<Vec<String>>,
+    exclude: Vec<String>,
+    shadow_include: Option<Vec<String>>,
+    shadow_exclude: Vec<String>,
 }

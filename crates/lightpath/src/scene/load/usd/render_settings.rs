@@ -3,8 +3,9 @@
 //! The settings used are `--render-settings /Path`, else the stage's
 //! `renderSettingsPrimPath`, else the first `RenderSettings` prim. Its first product
 //! gives the resolution, the camera and the output file (`productName`; `-o` overrides
-//! it); its vars become the AOVs, named by `driver:parameters:aov:name` or else the
-//! var's prim name:
+//! it); with several products each is a file of its own holding its vars
+//! (`SceneDesc::products`; job.rs writes them). The vars become the AOVs, named by
+//! `driver:parameters:aov:name` or else the var's prim name:
 //!
 //! - `sourceType = "lpe"`: an AOV of that expression (`lpe:` before an expression is
 //!   dropped; `lpe:<standard name>` is the standard AOV).
@@ -17,7 +18,7 @@
 
 use super::{stage, Loader, UsdOptions};
 use crate::camera::FovAxis;
-use crate::scene::desc::{AovDesc, CameraDesc, NamedCamera, Origin};
+use crate::scene::desc::{AovDesc, CameraDesc, NamedCamera, Origin, ProductDesc};
 use crate::scene::SceneError;
 use glam::{Affine3A, Vec3A};
 use openusd::schemas::render::{compute_render_spec, SourceType};
@@ -99,17 +100,8 @@ impl Loader {
                 self.desc.output = Some(product.name.clone().into());
             }
         }
-        if spec.products.len() > 1 {
-            self.warn(
-                &settings,
-                format!(
-                    "{} render products: only the first is written ({}); the others' vars are \
-                     AOVs of the same file",
-                    spec.products.len(),
-                    spec.products[0].name
-                ),
-            );
-        }
+        // Each var's AOV: Some(name), the beauty (None), or skipped (not in the map).
+        let mut var_aov: Vec<Option<Option<String>>> = Vec::with_capacity(spec.render_vars.len());
         for var in &spec.render_vars {
             let prim = self.stage.prim(var.render_var_path.as_str());
             let name = var
@@ -134,22 +126,90 @@ impl Loader {
                                 var.source_type
                             ),
                         );
+                        var_aov.push(None);
                         continue;
                     }
                 },
             };
             let Some(definition) = definition else {
+                var_aov.push(Some(None));
                 continue;
             };
             self.desc.aovs.insert(
-                name,
+                name.clone(),
                 AovDesc {
                     definition,
                     origin: self.origin(&prim),
                 },
             );
+            var_aov.push(Some(Some(name)));
+        }
+        if spec.products.len() > 1 {
+            self.products(&spec.products, &var_aov);
         }
         Ok(())
+    }
+
+    /// Several products: each its own file with its own vars. They share one film, so
+    /// the first product's resolution and camera are every product's (a warning names
+    /// a product that asks for others).
+    fn products(
+        &mut self,
+        products: &[openusd::schemas::render::spec::Product],
+        var_aov: &[Option<Option<String>>],
+    ) {
+        let first = &products[0];
+        for p in products {
+            let mut out = ProductDesc {
+                output: p.name.clone().into(),
+                aovs: Vec::new(),
+                beauty: false,
+            };
+            for &k in &p.render_var_indices {
+                match var_aov.get(k) {
+                    Some(Some(Some(name))) if !out.aovs.contains(name) => {
+                        out.aovs.push(name.clone())
+                    }
+                    Some(Some(None)) => out.beauty = true,
+                    _ => {}
+                }
+            }
+            let prim = self.stage.prim(p.render_product_path.as_str());
+            if p.resolution != first.resolution || p.camera_path != first.camera_path {
+                self.warn(
+                    &prim,
+                    format!(
+                        "a product's resolution and camera are the first product's ({}): \
+                         the products share one render",
+                        first.render_product_path
+                    ),
+                );
+            }
+            if p.name.is_empty() {
+                self.warn(&prim, "a RenderProduct without productName is not written");
+                continue;
+            }
+            if out.aovs.is_empty() && !out.beauty {
+                self.warn(
+                    &prim,
+                    format!(
+                        "RenderProduct {}: none of its vars is rendered; it is not written",
+                        p.name
+                    ),
+                );
+                continue;
+            }
+            self.desc.products.push(out);
+        }
+        // Always one file holds the beauty (and the AOVs the command line adds).
+        if !self.desc.products.iter().any(|p| p.beauty) {
+            if let Some(p) = self.desc.products.first_mut() {
+                p.beauty = true;
+            }
+        }
+        if self.desc.products.len() < 2 {
+            self.desc.products.clear();
+        }
     }
 
     /// A `UsdGeomCamera`, named by its path (for `--camera`).
