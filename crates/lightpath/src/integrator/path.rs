@@ -230,6 +230,7 @@ impl Tracer<'_> {
     /// boundary, and another boundary lying on that one (crossed with it). A surface a
     /// passed null boundary lies on (a fog box resting on a floor) is found instead, and
     /// the boundary is not crossed (volume.rs, `coincident`).
+    #[inline(always)]
     fn find(
         &self,
         media: &MediumStack,
@@ -256,6 +257,7 @@ impl Tracer<'_> {
     /// Whether the ray goes on through `found` without an event, and whether that is a
     /// null surface (a medium boundary, crossed) rather than an absent one (presence:
     /// the medium does not change).
+    #[inline(always)]
     fn passing(&self, media: &MediumStack, found: Option<&Hit>, ray: &Ray) -> (bool, bool) {
         let Some(h) = found else {
             return (false, false);
