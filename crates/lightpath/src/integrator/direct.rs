@@ -256,7 +256,8 @@ impl Tracer<'_> {
                 } else {
                     f32::INFINITY
                 };
-                tmax <= 0.0 || !self.occluded(out, &self.spawn(v.hit, ls.wi, tmax), li as u32)
+                tmax <= 0.0
+                    || !self.occluded(out, &self.spawn(v.hit, ls.wi, tmax), light, li as u32)
             });
             let via = match (glow, vis) {
                 // A glow is no light: what cannot reach it is no shadow.
@@ -326,7 +327,8 @@ impl Tracer<'_> {
         } else {
             f32::INFINITY
         };
-        let visible = tmax <= 0.0 || !self.occluded(out, &self.spawn(hit, ls.wi, tmax), li as u32);
+        let visible =
+            tmax <= 0.0 || !self.occluded(out, &self.spawn(hit, ls.wi, tmax), light, li as u32);
         let via = match (light.glow, visible) {
             (true, false) => return,
             (true, true) => Via::Glow,

@@ -106,7 +106,7 @@ impl Tracer<'_> {
         crate::material::presence::passes_through(presence.at(uv), ray, hit)
     }
 
-    /// Whether the shadow ray `ray` (up to `ray.tmax`) towards light `li` is blocked, the
+    /// Whether the shadow ray `ray` (up to `ray.tmax`) towards `light` (index `li`) is blocked, the
     /// light's own object passed: past surfaces that are not there for it (presence) and
     /// objects that cast no shadow from it (shadow linking), if any.
     #[inline(always)]
@@ -114,10 +114,10 @@ impl Tracer<'_> {
         &self,
         out: &mut super::Sink,
         ray: &crate::geometry::Ray,
+        light: &crate::light::Light,
         li: u32,
     ) -> bool {
         let scene = self.scene;
-        let light = &scene.lights[li as usize];
         let ignore = light.shadow_exempt();
         if !scene.has_presence && !light.shadow_linked {
             return scene.accel.occluded(ray, 0.0, ignore);
