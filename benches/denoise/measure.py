@@ -10,25 +10,24 @@ LIGHTPATH is a binary built with `--features denoise`. Needs numpy and OpenEXR."
 import argparse
 import os
 import subprocess
+import sys
 import time
 
 import numpy as np
-import OpenEXR
+
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), ".."))
+from benchlib.exr import channels, rgb  # noqa: E402
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 MITSUBA = os.path.join(HERE, "..", "peer", "ref", "cornell_ref.exr")
 
 
-def load(path):
-    with OpenEXR.File(path, separate_channels=True) as f:
-        return {k: np.asarray(v.pixels, dtype=np.float64) for k, v in f.channels().items()}
-
-
-def rgb(img, aov):
-    names = ["R", "G", "B"] if aov == "beauty" else [f"{aov}.{c}" for c in "RGB"]
-    if not all(n in img for n in names):
+def aov_rgb(img, aov):
+    """AOV `aov`'s RGB ("beauty": the beauty), or None if the file has no such AOV."""
+    try:
+        return rgb(img, "" if aov == "beauty" else aov + ".")
+    except KeyError:
         return None
-    return np.stack([img[n] for n in names], axis=-1)
 
 
 def rmse(a, b, mask=None):
@@ -67,34 +66,34 @@ def main():
     print(f"denoise: {t:.2f} s wall")
     subprocess.run([lp, "aovs", den], check=True, stdout=subprocess.DEVNULL)
     print("lightpath aovs on the denoised file: ok")
-    n, d, o, m = load(noisy), load(den), load(own), load(MITSUBA)
-    mref = rgb(m, "beauty")
+    n, d, o, m = channels(noisy), channels(den), channels(own), channels(MITSUBA)
+    mref = aov_rgb(m, "beauty")
     # Pixel classes from the own reference: light (emission seen in every sample), its
     # edge (partly), the rest.
-    em = rgb(o, "emission").max(-1)
+    em = aov_rgb(o, "emission").max(-1)
     full = em.max()
     light = em >= 0.999 * full
     edge = (em > 0) & ~light
     rest = em == 0
     print(f"pixels: light {light.sum()}, light edge {edge.sum()}, other {rest.sum()}")
-    floor = rmse(rgb(o, "beauty"), mref)
+    floor = rmse(aov_rgb(o, "beauty"), mref)
     print(f"\nbias floor: own {a.ref_spp}-spp render vs Mitsuba 65536 spp: RMSE {floor:.5f}")
     for name, cls in (("all", None), ("light edge", edge), ("light", light), ("other", rest)):
-        print(f"  {name:>10}: {rmse(rgb(o, 'beauty'), mref, cls):.5f}")
+        print(f"  {name:>10}: {rmse(aov_rgb(o, 'beauty'), mref, cls):.5f}")
     print(f"\nbeauty, {a.spp} spp, RMSE          noisy   denoised  ratio")
-    for refname, ref in (("Mitsuba 65536 spp", mref), (f"own {a.ref_spp} spp", rgb(o, "beauty"))):
+    for refname, ref in (("Mitsuba 65536 spp", mref), (f"own {a.ref_spp} spp", aov_rgb(o, "beauty"))):
         for name, cls in (("all", None), ("light edge", edge), ("light", light), ("other", rest)):
-            x, y = rmse(rgb(n, "beauty"), ref, cls), rmse(rgb(d, "beauty"), ref, cls)
+            x, y = rmse(aov_rgb(n, "beauty"), ref, cls), rmse(aov_rgb(d, "beauty"), ref, cls)
             print(f"  vs {refname:>17} {name:>10}: {x:.5f}  {y:.5f}  {y / x if x else 0:.3f}")
     # Squared-error shares of the noisy beauty against the own reference.
-    tot = ((rgb(n, "beauty") - rgb(o, "beauty")) ** 2).sum()
+    tot = ((aov_rgb(n, "beauty") - aov_rgb(o, "beauty")) ** 2).sum()
     for name, cls in (("light edge", edge), ("light", light), ("other", rest)):
-        s = ((rgb(n, "beauty") - rgb(o, "beauty")) ** 2)[cls].sum()
+        s = ((aov_rgb(n, "beauty") - aov_rgb(o, "beauty")) ** 2)[cls].sum()
         print(f"  share of the noisy squared error, {name}: {s / tot:.2f}")
     print(f"\nper AOV, RMSE against own {a.ref_spp} spp:      noisy   denoised  ratio")
     aovs = sorted({k.rsplit(".", 1)[0] for k in n if "." in k})
     for aov in ["beauty"] + aovs:
-        x, y, r = rgb(n, aov), rgb(d, aov), rgb(o, aov)
+        x, y, r = aov_rgb(n, aov), aov_rgb(d, aov), aov_rgb(o, aov)
         if x is None or r is None or y is None:
             continue
         e0, e1 = rmse(x, r), rmse(y, r)

@@ -9,30 +9,19 @@ Needs numpy and OpenEXR (pip install OpenEXR numpy); not a CI dependency.
 """
 
 import json
+import os
 import subprocess
 import sys
 
 import numpy as np
-import OpenEXR
+
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), ".."))
+from benchlib.exr import channels, luminance, rgb  # noqa: E402
 
 out_dir = sys.argv[1]
 binary = sys.argv[2]
 spp = sys.argv[3] if len(sys.argv) > 3 else "256"
 GROUPS = ["key", "spot", "sun"]
-
-
-def channels(path):
-    """Every channel of every part, by name ('<part>.<channel>' for multi-part files)."""
-    out = {}
-    with OpenEXR.File(path, separate_channels=True) as f:
-        for part in f.parts:
-            for name, ch in part.channels.items():
-                out[name] = np.asarray(ch.pixels, dtype=np.float64)
-    return out
-
-
-def rgb(ch, prefix):
-    return np.stack([ch[prefix + c] for c in "RGB"], axis=-1)
 
 
 subprocess.run(
@@ -65,9 +54,8 @@ result["beauty_lightpath_over_cycles"] = float(tot_lp / tot_cy)
 # The textured crate: where its LPE group has light in Lightpath, the two renders'
 # luminance should correlate (the checker pattern) and agree in scale.
 crate = rgb(lp, "crate.").sum(axis=-1) > 0
-lum = lambda im: im @ np.array([0.2126, 0.7152, 0.0722])
-c_lp = lum(rgb(lp, ""))[crate]
-c_cy = lum(rgb(cy, "ViewLayer.Combined."))[crate]
+c_lp = luminance(rgb(lp, ""))[crate]
+c_cy = luminance(rgb(cy, "ViewLayer.Combined."))[crate]
 result["crate_pixels"] = int(crate.sum())
 result["crate_correlation"] = float(np.corrcoef(c_lp, c_cy)[0, 1])
 result["crate_mean_ratio"] = float(c_lp.mean() / c_cy.mean())

@@ -7,19 +7,13 @@ Objects are numbered as cycles_file.py numbers them (meshes by name, the floor i
 mask is the object's Object Index pixels eroded by one pixel (the two pixel filters differ at
 silhouettes). Errors are (Lightpath / Cycles - 1) per channel, in %."""
 
+import os
 import sys
 
 import numpy as np
-import OpenEXR
 
-
-def channels(path):
-    out = {}
-    with OpenEXR.File(path, separate_channels=True) as f:
-        for part in f.parts:
-            for name, ch in part.channels.items():
-                out[name] = np.asarray(ch.pixels, dtype=np.float64)
-    return out
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), ".."))
+from benchlib.exr import channels, erode  # noqa: E402
 
 
 def find(ch, *cands):
@@ -46,15 +40,6 @@ c_img = np.stack([find(cy, f"ViewLayer.Combined.{c}") for c in "RGB"], -1)
 l_img = np.stack([find(lp, c, f"beauty.{c}") for c in "RGB"], -1)
 index = np.rint(find(cy, "ViewLayer.Object Index.X", "ViewLayer.IndexOB.X")).astype(int)
 order = sorted(names + ["floor"])
-
-
-def erode(m):
-    e = m.copy()
-    e[1:, :] &= m[:-1, :]
-    e[:-1, :] &= m[1:, :]
-    e[:, 1:] &= m[:, :-1]
-    e[:, :-1] &= m[:, 1:]
-    return e
 
 
 rows = []

@@ -17,7 +17,9 @@ import sys
 
 import bpy
 import numpy as np
-import OpenEXR
+
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), ".."))
+from benchlib.exr import channels  # noqa: E402
 
 out_dir = os.path.abspath(sys.argv[1])
 binary = sys.argv[2]
@@ -36,15 +38,6 @@ CASES = [
     ("coat_over_diffuse", {"Roughness": 0.5, "Specular IOR Level": 0.0, "Coat Weight": 1.0,
                            "Coat Roughness": 0.1}),
 ]
-
-
-def channels(path):
-    out = {}
-    with OpenEXR.File(path, separate_channels=True) as f:
-        for part in f.parts:
-            for name, ch in part.channels.items():
-                out[name] = np.asarray(ch.pixels, dtype=np.float64)
-    return out
 
 
 rows = []

@@ -22,36 +22,13 @@ import zlib
 import struct
 
 import numpy as np
-import OpenEXR
+
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), ".."))
+from benchlib.exr import channels, erode, rgb  # noqa: E402
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 ROOT = os.path.normpath(os.path.join(HERE, "..", ".."))
 OUT = os.path.join(HERE, "out")
-
-
-def channels(path):
-    """Every channel of every part, by name ('<part>.<channel>' for multi-part files)."""
-    out = {}
-    with OpenEXR.File(path, separate_channels=True) as f:
-        for part in f.parts:
-            for name, ch in part.channels.items():
-                out[name] = np.asarray(ch.pixels, dtype=np.float64)
-    return out
-
-
-def rgb(ch, prefix):
-    return np.stack([ch[prefix + c] for c in "RGB"], axis=-1)
-
-
-def erode(mask, n):
-    for _ in range(n):
-        m = mask.copy()
-        m[1:, :] &= mask[:-1, :]
-        m[:-1, :] &= mask[1:, :]
-        m[:, 1:] &= mask[:, :-1]
-        m[:, :-1] &= mask[:, 1:]
-        mask = m
-    return mask
 
 
 def ratio(a, b, mask, block=8):

@@ -9,25 +9,21 @@ neighbours' median that the AOV NAME holds (where the fireflies come from).
 Usage: fireflies.py [--factor 3] [--aov NAME ...] FILE.exr ...
 Reads the beauty as R, G, B (and an AOV as NAME.R/G/B) with the OpenEXR module."""
 import argparse
+import os
 import sys
 
 import numpy as np
-import OpenEXR
+
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), ".."))
+from benchlib.exr import channels, luminance, rgb  # noqa: E402
 
 
 def read_rgb(path, name=None):
-    """The beauty's RGB (name None) or AOV `name`'s, as float64 (h, w, 3). The OpenEXR
-    module groups `R,G,B,A` as 'RGBA' and `name.R/G/B` as 'name'."""
-    with OpenEXR.File(path, separate_channels=False) as f:
-        ch = f.channels()
-        key = name if name is not None else ("RGBA" if "RGBA" in ch else "RGB")
-        if key not in ch:
-            sys.exit(f"{path}: no layer {key} (has {sorted(ch)})")
-        return np.asarray(ch[key].pixels, dtype=np.float64)[..., :3]
-
-
-def luminance(rgb):
-    return rgb @ np.array([0.2126, 0.7152, 0.0722])
+    """The beauty's RGB (name None) or AOV `name`'s, as float64 (h, w, 3)."""
+    try:
+        return rgb(channels(path), "" if name is None else name + ".")
+    except KeyError as e:
+        sys.exit(f"{path}: {e}")
 
 
 def neighbour_median(lum):

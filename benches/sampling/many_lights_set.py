@@ -30,7 +30,9 @@ import subprocess
 import sys
 
 import numpy as np
-import OpenEXR
+
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), ".."))
+from benchlib.exr import channels, rgb  # noqa: E402
 
 binary, out = sys.argv[1], sys.argv[2]
 spp = int(sys.argv[3]) if len(sys.argv) > 3 else 16
@@ -178,12 +180,6 @@ if os.environ.get("RECIPES"):
     RECIPES = [r for r in RECIPES if r.__name__ in os.environ["RECIPES"].split(",")]
 
 
-def beauty(path):
-    with OpenEXR.File(path, separate_channels=True) as f:
-        ch = f.parts[0].channels
-        return np.stack([np.asarray(ch[c].pixels, dtype=np.float64) for c in "RGB"], -1)
-
-
 def render(scene, img, variant, n, seed):
     variant, _, sampler = variant.partition("/")
     selection, _, candidates = variant.partition(":")
@@ -209,7 +205,7 @@ for recipe in RECIPES:
     ref = os.path.join(out, recipe.__name__ + "_ref.exr")
     if not os.path.exists(ref):
         render(scene, ref, "tree", 64 * spp, 99)
-    r = beauty(ref)
+    r = rgb(channels(ref))
     res = {}
     for sel in variants:
         mses, secs = [], []
@@ -217,7 +213,7 @@ for recipe in RECIPES:
             tag = sel.replace(":", "_").replace("/", "_")
             img = os.path.join(out, f"{recipe.__name__}_{tag}_{seed}.exr")
             secs.append(render(scene, img, sel, spp, seed))
-            mses.append(float(((beauty(img) - r) ** 2).mean()))
+            mses.append(float(((rgb(channels(img)) - r) ** 2).mean()))
         res[sel] = (float(np.median(mses)), float(np.median(secs)))
     rows.append((recipe.__name__, res))
     u, ut = res["uniform"]

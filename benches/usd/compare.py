@@ -21,27 +21,13 @@ done-when of issue 28:
 
 import argparse
 import json
+import os
+import sys
 
 import numpy as np
-import OpenEXR
 
-
-def read(path):
-    chans, header = {}, {}
-    with OpenEXR.File(path, separate_channels=True) as f:
-        for part in f.parts:
-            header.update(part.header)
-            for name, ch in part.channels.items():
-                chans[name] = np.asarray(ch.pixels, dtype=np.float64)
-    return chans, header
-
-
-def rgb(ch, prefix):
-    return np.stack([ch[prefix + c] for c in "RGB"], axis=-1)
-
-
-def lum(x):
-    return x @ np.array([0.2126, 0.7152, 0.0722])
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), ".."))
+from benchlib.exr import channels, luminance, rgb  # noqa: E402
 
 
 def crypto_coverage(ch, header, layer, names):
@@ -78,16 +64,17 @@ ap.add_argument("--group", action="append", default=[], help="AOV=OBJECT,OBJECT 
 ap.add_argument("--texture", default=None, help="the textured object (Cycles name)")
 args = ap.parse_args()
 
-cy, cy_h = read(args.cycles)
-lp, lp_h = read(args.lightpath)
+cy_h, lp_h = {}, {}
+cy = channels(args.cycles, cy_h)
+lp = channels(args.lightpath, lp_h)
 cyp = next(k for k in cy if k.endswith("Combined.R"))[: -len("Combined.R")]
 b_cy, b_lp = rgb(cy, cyp + "Combined."), rgb(lp, "")
-print(f"frame: beauty mean Lightpath / Cycles {lum(b_lp).mean() / lum(b_cy).mean():.3f}")
+print(f"frame: beauty mean Lightpath / Cycles {luminance(b_lp).mean() / luminance(b_cy).mean():.3f}")
 
 for spec in args.light:
     ours, theirs = spec.split("=")
     l_lp, l_cy = rgb(lp, f"beauty_{ours}."), rgb(cy, f"{cyp}Combined_{theirs}.")
-    s_lp, s_cy = lum(l_lp).mean() / lum(b_lp).mean(), lum(l_cy).mean() / lum(b_cy).mean()
+    s_lp, s_cy = luminance(l_lp).mean() / luminance(b_lp).mean(), luminance(l_cy).mean() / luminance(b_cy).mean()
     ratio = l_lp.mean(axis=(0, 1)) / np.maximum(l_cy.mean(axis=(0, 1)), 1e-12)
     print(f"light {ours} / {theirs}: share Lightpath {s_lp:.3f}, Cycles {s_cy:.3f}, "
           f"ratio {s_lp / s_cy:.3f}; mean R G B Lightpath / Cycles "
@@ -104,16 +91,16 @@ for name in sorted(cy_manifest):
     inside = (c_cy >= 0.99) & (c_lp >= 0.99)
     if inside.sum() < 20:
         continue
-    r = lum(b_lp)[inside].mean() / lum(b_cy)[inside].mean()
+    r = luminance(b_lp)[inside].mean() / luminance(b_cy)[inside].mean()
     print(f"object {name}: {inside.sum()} pixels, beauty Lightpath / Cycles {r:.3f}")
 
 for spec in args.group:
     aov, objs = spec.split("=")
     objs = objs.split(",")
     m_cy = crypto_coverage(cy, cy_h, "CryptoObject", objs) >= 0.5
-    g = lum(rgb(lp, aov + "."))
-    m_aov = g >= 0.5 * np.maximum(lum(b_lp), 1e-12)
-    m_aov &= lum(b_lp) > 0
+    g = luminance(rgb(lp, aov + "."))
+    m_aov = g >= 0.5 * np.maximum(luminance(b_lp), 1e-12)
+    m_aov &= luminance(b_lp) > 0
     m_lpc = crypto_coverage(lp, lp_h, "CryptoObject", objs) >= 0.5
 
     def iou(a, b):
