@@ -139,7 +139,8 @@ pub struct RenderSummary {
     /// Set when the render was stopped: rows finished of all rows, and the checkpoint
     /// written beside the outputs.
     pub interrupted: Option<Interrupted>,
-    /// `render --denoise`: what the denoiser did (its summary line).
+    /// `render --denoise`: what the denoiser did (its summary line; one line per render
+    /// product, naming its file, when there are several).
     pub denoised: Option<String>,
 }
 
@@ -379,15 +380,6 @@ impl RenderJob {
                         p.exr.display()
                     )));
                 }
-            }
-            if self.denoise.is_some() {
-                return Err(Error::Setting(format!(
-                    "{}: --denoise with {} render products: render, then denoise the \
-                     products' files with lightpath denoise (or write them as one file \
-                     with -o FILE.exr)",
-                    desc.source,
-                    paths.len()
-                )));
             }
             let primary = desc.products.iter().position(|p| p.beauty).unwrap_or(0);
             return Ok((paths[primary].clone(), paths));
@@ -673,9 +665,20 @@ impl PreparedRender {
         }
         let paths = written;
         // An interrupted render's rows are unfinished: it is denoised once it is resumed.
+        // Each product's file is denoised as a render of that product alone would be:
+        // its beauty at the beauty's quality, its AOVs at theirs, its own partitions
+        // reconciled.
         let denoised = match job.denoise {
-            Some(d) if interrupted.is_none() => {
+            Some(d) if interrupted.is_none() && products.is_empty() => {
                 Some(denoise_in_place(&paths, d, job.preview_exposure, progress)?)
+            }
+            Some(d) if interrupted.is_none() => {
+                let mut lines = Vec::new();
+                for plan in &products {
+                    let line = denoise_in_place(&plan.paths, d, job.preview_exposure, progress)?;
+                    lines.push(format!("{}: {line}", plan.paths.exr.display()));
+                }
+                Some(lines.join("\n"))
             }
             _ => None,
         };

@@ -1411,6 +1411,135 @@ fn each_render_product_is_a_file_with_exactly_its_vars() {
     }
 }
 
+/// Every channel of `a` in `b`, bit for bit (`exact`) or to float rounding.
+fn same_channels(a: &Path, b: &Path, exact: bool) {
+    let (x, y) = (
+        lightpath::output::read_exr(a).unwrap(),
+        lightpath::output::read_exr(b).unwrap(),
+    );
+    let mut names: Vec<&String> = x.channels.iter().map(|c| &c.0).collect();
+    let mut others: Vec<&String> = y.channels.iter().map(|c| &c.0).collect();
+    names.sort();
+    others.sort();
+    assert_eq!(names, others, "{} against {}", a.display(), b.display());
+    for (name, values) in &x.channels {
+        let other = y.channel(name).unwrap();
+        for (p, q) in values.iter().zip(other) {
+            let ok = match exact {
+                true => p.to_bits() == q.to_bits(),
+                false => (p - q).abs() <= 1e-6 * p.abs().max(1.0),
+            };
+            assert!(ok, "{} {name}: {p} against {q}", a.display());
+        }
+    }
+}
+
+#[test]
+fn a_farm_merges_each_render_product_into_its_own_file() {
+    use std::process::Command;
+    let dir = Scratch::new("usd-farm");
+    let scene = write(&dir, "shot.usda", &two_products());
+    let path = crate::farm::fake_sbatch(&dir);
+    let bin = env!("CARGO_BIN_EXE_lightpath");
+    let args = ["--spp", "4", "--resolution", "16x12", "--light-groups"];
+    let run = |cmd: &mut Command| {
+        let out = cmd.output().unwrap();
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        String::from_utf8(out.stdout).unwrap()
+    };
+    let single = dir.join("single");
+    std::fs::create_dir(&single).unwrap();
+    run(Command::new(bin)
+        .arg("render")
+        .arg(&scene)
+        .args(args)
+        .args(["--quiet", "-o"])
+        .arg(&single));
+    for by in ["tiles", "samples"] {
+        // `-o DIR/`: every product's file there, each merged from its own parts.
+        let out = format!("{}/", dir.join(by).display());
+        let script = run(Command::new(bin)
+            .args(["farm", "slurm"])
+            .arg(&scene)
+            .args(["--tasks", "2", "--by", by, "-o", &out])
+            .args(args));
+        let submit = dir.join(&format!("{by}.sh"));
+        std::fs::write(&submit, &script).unwrap();
+        run(Command::new("bash")
+            .arg(&submit)
+            .env("PATH", &path)
+            .env("SBATCH_STATE", dir.join(&format!("{by}.state"))));
+        for name in ["aovs.exr", "beauty.exr"] {
+            let merged = dir.join(by).join(name);
+            // Tiles are the single render's pixels exactly; sample ranges to rounding.
+            same_channels(&single.join(name), &merged, by == "tiles");
+            let (report, ok) = lightpath::post::partitions::report(&merged, 1e-4).unwrap();
+            assert!(ok, "{report}");
+        }
+    }
+}
+
+#[cfg(feature = "denoise")]
+#[test]
+fn denoise_filters_each_render_products_file() {
+    use lightpath::job::{DenoiseRequest, RenderJob};
+    let dir = Scratch::new("usd-denoise-products");
+    let scene = write(&dir, "shot.usda", &two_products());
+    let render = |out: &Path, denoise: bool| {
+        std::fs::create_dir(out).unwrap();
+        let mut job = RenderJob::new(scene.to_string_lossy());
+        job.output = Some(out.to_path_buf());
+        job.overrides.spp = Some(4);
+        job.overrides.resolution = Some([24, 18]);
+        job.aovs.light_groups = true;
+        job.denoise = denoise.then(DenoiseRequest::default);
+        job.prepare()
+            .unwrap()
+            .run(&lightpath::progress::Silent)
+            .unwrap()
+    };
+    let (noisy, clean) = (dir.join("noisy"), dir.join("clean"));
+    render(&noisy, false);
+    let summary = render(&clean, true);
+    let said = summary.denoised.expect("denoised");
+    for name in ["aovs.exr", "beauty.exr"] {
+        let p = clean.join(name);
+        assert!(said.contains(&p.display().to_string()), "{said}");
+        let exr = lightpath::output::read_exr(&p).unwrap();
+        assert!(
+            exr.attributes
+                .iter()
+                .any(|(k, _)| k == lightpath::aov::naming::DENOISED_ATTRIBUTE),
+            "{name} is not marked denoised"
+        );
+        let (report, ok) = lightpath::post::partitions::report(&p, 1e-4).unwrap();
+        assert!(ok, "{name}: {report}");
+        // Each file is what `lightpath denoise` makes of the noisy render's.
+        let again = dir.join(&format!("again-{name}"));
+        lightpath::post::denoise::run(&lightpath::post::denoise::DenoiseJob {
+            input: noisy.join(name),
+            output: again.clone(),
+            keep_noisy: false,
+            quality: Default::default(),
+            preview_exposure: 0.0,
+        })
+        .unwrap();
+        same_channels(&p, &again, true);
+    }
+    // The beauty's product has its preview; the AOVs' has none.
+    assert!(clean.join("beauty.png").exists() && !clean.join("aovs.png").exists());
+    // The specular AOV was filtered: it differs from the noisy render's.
+    let (a, b) = (
+        lightpath::output::read_exr(&noisy.join("aovs.exr")).unwrap(),
+        lightpath::output::read_exr(&clean.join("aovs.exr")).unwrap(),
+    );
+    assert_ne!(a.channel("specular.G"), b.channel("specular.G"));
+}
+
 /// A floor seen from above, a sphere light to the side and a ball between them (out of
 /// the camera's view) whose shadow covers the whole view; `{link}` goes on the light.
 const SHADOW_LINK: &str = r#"#usda 1.0
