@@ -469,7 +469,7 @@ mod tests {
         assert_eq!((rest, none), (job.render_args.clone(), None));
         let plain = FarmJob {
             denoise: None,
-            ..job
+            ..job.clone()
         };
         assert!(plain.parallel_script(2).ends_with("-o /out/shot.exr\n"));
 
