@@ -665,23 +665,10 @@ impl PreparedRender {
         }
         let paths = written;
         // An interrupted render's rows are unfinished: it is denoised once it is resumed.
-        // Each product's file is denoised as a render of that product alone would be:
-        // its beauty at the beauty's quality, its AOVs at theirs, its own partitions
-        // reconciled.
-        let denoised = match job.denoise {
-            Some(d) if interrupted.is_none() && products.is_empty() => {
-                Some(denoise_in_place(&paths, d, job.preview_exposure, progress)?)
-            }
-            Some(d) if interrupted.is_none() => {
-                let mut lines = Vec::new();
-                for plan in &products {
-                    let line = denoise_in_place(&plan.paths, d, job.preview_exposure, progress)?;
-                    lines.push(format!("{}: {line}", plan.paths.exr.display()));
-                }
-                Some(lines.join("\n"))
-            }
-            _ => None,
-        };
+        let denoised = (job.denoise)
+            .filter(|_| interrupted.is_none())
+            .map(|d| denoise_outputs(&paths, &products, d, job.preview_exposure, progress))
+            .transpose()?;
         Ok(RenderSummary {
             width,
             height,
@@ -894,6 +881,27 @@ fn fingerprint(scene: &Scene, first_sample: u32, window: PixelWindow) -> u64 {
         .map(|a| format!("{}={}\n", a.name, a.definition))
         .collect();
     checkpoint::fingerprint(&[settings.as_bytes(), aovs.as_bytes()])
+}
+
+/// Denoises a finished render's EXR, or each render product's file as a render of that
+/// product alone would be (its beauty at the beauty's quality, its AOVs at theirs, its
+/// own partitions reconciled): the summary line, one per product naming its file.
+fn denoise_outputs(
+    paths: &output::naming::OutputPaths,
+    products: &[output::products::ProductPlan],
+    request: DenoiseRequest,
+    exposure: f32,
+    progress: &dyn Progress,
+) -> Result<String, Error> {
+    if products.is_empty() {
+        return denoise_in_place(paths, request, exposure, progress);
+    }
+    let mut lines = Vec::new();
+    for plan in products {
+        let line = denoise_in_place(&plan.paths, request, exposure, progress)?;
+        lines.push(format!("{}: {line}", plan.paths.exr.display()));
+    }
+    Ok(lines.join("\n"))
 }
 
 /// Replaces a render's EXR by its denoised version and its preview by the denoised beauty.
