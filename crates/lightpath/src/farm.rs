@@ -121,6 +121,11 @@ pub struct FarmJob {
     /// options' `--denoise`, `--keep-noisy`, `--denoise-quality`): the parts are rendered
     /// noisy, merged into `<parts>/merged.exr`, and that is denoised into the output.
     pub denoise: Option<Vec<String>>,
+    /// A USD stage's render products' file names when there are several and `output` is
+    /// a directory: each part renders them into a directory of its own
+    /// (`<parts>/part-NNNN/`), and each product is merged (and denoised) on its own into
+    /// `output/<name>`. Empty: one file per part and one merged file, `output`.
+    pub products: Vec<PathBuf>,
 }
 
 /// Quotes a word for POSIX shells.
@@ -155,11 +160,42 @@ impl FarmJob {
         self.output.with_file_name(name)
     }
 
+    /// Part `i`'s output: its EXR, or with several products the directory (named with a
+    /// trailing `/`, so the render reads it as one) they go into.
     fn part_path(&self, i: usize) -> PathBuf {
-        self.parts_dir().join(format!("part-{i:04}.exr"))
+        match self.products.is_empty() {
+            true => self.parts_dir().join(format!("part-{i:04}.exr")),
+            false => self.parts_dir().join(format!("part-{i:04}/")),
+        }
     }
 
-    /// The command rendering part `i`.
+    /// The files merged into one output: `(part files, merged file, final file)` per
+    /// product (one entry without products). The merged file is the final one unless it
+    /// is to be denoised.
+    fn merges(&self) -> Vec<(Vec<PathBuf>, PathBuf, PathBuf)> {
+        let merged = |name: &Path| match self.denoise {
+            Some(_) => self.parts_dir().join("merged").join(name),
+            None => self.output.join(name),
+        };
+        if self.products.is_empty() {
+            let parts = (0..self.parts.len()).map(|i| self.part_path(i)).collect();
+            let merged = match self.denoise {
+                Some(_) => self.parts_dir().join("merged.exr"),
+                None => self.output.clone(),
+            };
+            return vec![(parts, merged, self.output.clone())];
+        }
+        self.products
+            .iter()
+            .map(|name| {
+                let parts = (0..self.parts.len())
+                    .map(|i| self.part_path(i).join(name))
+                    .collect();
+                (parts, merged(name), self.output.join(name))
+            })
+            .collect()
+    }
+
     pub fn render_command(&self, i: usize) -> Vec<String> {
         let mut cmd = vec![
             self.lightpath.display().to_string(),
@@ -176,52 +212,76 @@ impl FarmJob {
         cmd
     }
 
-    /// The command merging every part into the output (into `<parts>/merged.exr` when
-    /// the frame is then denoised).
-    pub fn merge_command(&self) -> Vec<String> {
-        let mut cmd = vec![self.lightpath.display().to_string(), "merge".into()];
-        cmd.extend((0..self.parts.len()).map(|i| self.part_path(i).display().to_string()));
-        let merged = match self.denoise {
-            Some(_) => self.parts_dir().join("merged.exr"),
-            None => self.output.clone(),
+    /// `lightpath merge` of the parts: one command, or one per render product.
+    pub fn merge_commands(&self) -> Vec<Vec<String>> {
+        self.merges()
+            .into_iter()
+            .map(|(parts, merged, _)| {
+                let mut cmd = vec![self.lightpath.display().to_string(), "merge".into()];
+                cmd.extend(parts.iter().map(|p| p.display().to_string()));
+                cmd.extend(["-o".into(), merged.display().to_string()]);
+                cmd
+            })
+            .collect()
+    }
+
+    /// `lightpath denoise` of the merged frame (of each product's file), when asked.
+    pub fn denoise_commands(&self) -> Vec<Vec<String>> {
+        let Some(options) = self.denoise.as_ref() else {
+            return Vec::new();
         };
-        cmd.extend(["-o".into(), merged.display().to_string()]);
-        cmd
+        self.merges()
+            .into_iter()
+            .map(|(_, merged, out)| {
+                let mut cmd = vec![
+                    self.lightpath.display().to_string(),
+                    "denoise".into(),
+                    merged.display().to_string(),
+                ];
+                cmd.extend(options.iter().cloned());
+                cmd.extend(["-o".into(), out.display().to_string()]);
+                cmd
+            })
+            .collect()
     }
 
-    /// The command denoising the merged frame into the output, if asked for.
-    pub fn denoise_command(&self) -> Option<Vec<String>> {
-        let options = self.denoise.as_ref()?;
-        let mut cmd = vec![
-            self.lightpath.display().to_string(),
-            "denoise".into(),
-            self.parts_dir().join("merged.exr").display().to_string(),
-        ];
-        cmd.extend(options.iter().cloned());
-        cmd.extend(["-o".into(), self.output.display().to_string()]);
-        Some(cmd)
-    }
-
-    /// The shell lines that finish the frame: the merge, then the denoise if asked for.
     fn finish_lines(&self) -> String {
-        let mut s = quote_all(&self.merge_command());
-        if let Some(d) = self.denoise_command() {
-            s.push('\n');
-            s.push_str(&quote_all(&d));
-        }
-        s
+        let lines: Vec<String> = self
+            .merge_commands()
+            .iter()
+            .chain(&self.denoise_commands())
+            .map(|c| quote_all(c))
+            .collect();
+        lines.join("\n")
     }
 
     fn preamble(&self, what: &str) -> String {
         format!(
-            "#!/usr/bin/env bash\n# {} {}: {} as {} parts -> {}\nset -euo pipefail\nparts={}\nmkdir -p \"$parts\"\n",
+            "#!/usr/bin/env bash\n# {} {}: {} as {} parts -> {}\nset -euo pipefail\nparts={}\nmkdir -p \"$parts\"\n{}",
             crate::output::software(),
             what,
             self.scene,
             self.parts.len(),
             self.output.display(),
             shell_quote(&self.parts_dir().display().to_string()),
+            self.product_dirs(),
         )
+    }
+
+    /// With several products: the directories the parts, the merges and the output
+    /// write into, made before any part runs.
+    fn product_dirs(&self) -> String {
+        if self.products.is_empty() {
+            return String::new();
+        }
+        let mut dirs: Vec<String> = (0..self.parts.len())
+            .map(|i| self.part_path(i).display().to_string())
+            .collect();
+        if self.denoise.is_some() {
+            dirs.push(self.parts_dir().join("merged").display().to_string());
+        }
+        dirs.push(self.output.display().to_string());
+        format!("mkdir -p {}\n", quote_all(&dirs))
     }
 
     /// A script that submits a job array of the parts and a merge job depending on it
@@ -396,6 +456,7 @@ mod tests {
             output: "/out/shot.exr".into(),
             sbatch_args: Vec::new(),
             denoise: Some(denoise),
+            products: Vec::new(),
         };
         for script in [job.slurm_script(), job.parallel_script(2)] {
             // No part denoises; the merge writes merged.exr, which is denoised into the
@@ -408,9 +469,27 @@ mod tests {
         assert_eq!((rest, none), (job.render_args.clone(), None));
         let plain = FarmJob {
             denoise: None,
-            ..job
+            ..job.clone()
         };
         assert!(plain.parallel_script(2).ends_with("-o /out/shot.exr\n"));
+
+        // Several render products: each part renders them into a directory of its own,
+        // and each product is merged, then denoised, on its own into the output directory.
+        let products = FarmJob {
+            output: "/out/shots".into(),
+            products: vec!["aovs.exr".into(), "beauty.exr".into()],
+            ..job
+        };
+        let script = products.parallel_script(2);
+        assert!(script.contains("mkdir -p /out/shots.parts/part-0000/ /out/shots.parts/part-0001/ /out/shots.parts/merged /out/shots\n"), "{script}");
+        assert!(
+            script.contains("--quiet -o /out/shots.parts/part-0001/"),
+            "{script}"
+        );
+        for name in ["aovs", "beauty"] {
+            assert!(script.contains(&format!("merge /out/shots.parts/part-0000/{name}.exr /out/shots.parts/part-0001/{name}.exr -o /out/shots.parts/merged/{name}.exr\n")), "{script}");
+            assert!(script.contains(&format!("denoise /out/shots.parts/merged/{name}.exr --keep-noisy --quality fast -o /out/shots/{name}.exr")), "{script}");
+        }
     }
 
     #[test]

@@ -139,7 +139,8 @@ pub struct RenderSummary {
     /// Set when the render was stopped: rows finished of all rows, and the checkpoint
     /// written beside the outputs.
     pub interrupted: Option<Interrupted>,
-    /// `render --denoise`: what the denoiser did (its summary line).
+    /// `render --denoise`: what the denoiser did (its summary line; one line per render
+    /// product, naming its file, when there are several).
     pub denoised: Option<String>,
 }
 
@@ -379,15 +380,6 @@ impl RenderJob {
                         p.exr.display()
                     )));
                 }
-            }
-            if self.denoise.is_some() {
-                return Err(Error::Setting(format!(
-                    "{}: --denoise with {} render products: render, then denoise the \
-                     products' files with lightpath denoise (or write them as one file \
-                     with -o FILE.exr)",
-                    desc.source,
-                    paths.len()
-                )));
             }
             let primary = desc.products.iter().position(|p| p.beauty).unwrap_or(0);
             return Ok((paths[primary].clone(), paths));
@@ -673,12 +665,10 @@ impl PreparedRender {
         }
         let paths = written;
         // An interrupted render's rows are unfinished: it is denoised once it is resumed.
-        let denoised = match job.denoise {
-            Some(d) if interrupted.is_none() => {
-                Some(denoise_in_place(&paths, d, job.preview_exposure, progress)?)
-            }
-            _ => None,
-        };
+        let denoised = (job.denoise)
+            .filter(|_| interrupted.is_none())
+            .map(|d| denoise_outputs(&paths, &products, d, job.preview_exposure, progress))
+            .transpose()?;
         Ok(RenderSummary {
             width,
             height,
@@ -891,6 +881,27 @@ fn fingerprint(scene: &Scene, first_sample: u32, window: PixelWindow) -> u64 {
         .map(|a| format!("{}={}\n", a.name, a.definition))
         .collect();
     checkpoint::fingerprint(&[settings.as_bytes(), aovs.as_bytes()])
+}
+
+/// Denoises a finished render's EXR, or each render product's file as a render of that
+/// product alone would be (its beauty at the beauty's quality, its AOVs at theirs, its
+/// own partitions reconciled): the summary line, one per product naming its file.
+fn denoise_outputs(
+    paths: &output::naming::OutputPaths,
+    products: &[output::products::ProductPlan],
+    request: DenoiseRequest,
+    exposure: f32,
+    progress: &dyn Progress,
+) -> Result<String, Error> {
+    if products.is_empty() {
+        return denoise_in_place(paths, request, exposure, progress);
+    }
+    let mut lines = Vec::new();
+    for plan in products {
+        let line = denoise_in_place(&plan.paths, request, exposure, progress)?;
+        lines.push(format!("{}: {line}", plan.paths.exr.display()));
+    }
+    Ok(lines.join("\n"))
 }
 
 /// Replaces a render's EXR by its denoised version and its preview by the denoised beauty.

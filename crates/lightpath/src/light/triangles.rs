@@ -35,9 +35,12 @@ pub struct Triangles {
     pub shaping: Option<Shaping>,
 }
 
-/// UsdLux ShapingAPI's emission profile about the normal (the schema's `shaping:focus`
-/// and `shaping:cone:*` formulas, focusTint black): at θ off the normal, emission times
-/// |cos θ|^focus · (1 − smoothstep(θ; start, cutoff)), zero beyond `cutoff`.
+/// UsdLux ShapingAPI's emission profile about the normal (the schema's `shaping:focus`,
+/// `shaping:focusTint` and `shaping:cone:*` formulas): at θ off the normal, with
+/// focusFactor = |cos θ|^focus, emission times
+/// lerp(focusFactor, focusTint, white) · (1 − smoothstep(θ; start, cutoff)), zero beyond
+/// `cutoff`. A black tint (the schema's default) makes the focus a plain cosine power; a
+/// white one disables it.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Shaping {
     /// Cutoff angle in radians.
@@ -45,15 +48,17 @@ pub struct Shaping {
     /// Where the fade to the cutoff starts, in radians (at most `cutoff`).
     pub start: f32,
     pub focus: f32,
+    /// The colour emission fades to off the axis, per channel.
+    pub tint: Vec3A,
 }
 
 impl Shaping {
-    /// The factor at cosine `cos` off the normal.
-    pub fn factor(&self, cos: f32) -> f32 {
+    /// The factor, per channel, at cosine `cos` off the normal.
+    pub fn factor(&self, cos: f32) -> Vec3A {
         let c = cos.abs().min(1.0);
         let theta = c.acos();
         if theta > self.cutoff {
-            return 0.0;
+            return Vec3A::ZERO;
         }
         let cone = if self.start < self.cutoff && theta > self.start {
             let t = (theta - self.start) / (self.cutoff - self.start);
@@ -61,12 +66,13 @@ impl Shaping {
         } else {
             1.0
         };
-        let focus = if self.focus > 0.0 {
-            c.powf(self.focus)
+        // The schema ignores a focus below zero; at zero the factor is 1 (no tint).
+        if self.focus > 0.0 {
+            let f = c.powf(self.focus);
+            (self.tint + (Vec3A::ONE - self.tint) * f) * cone
         } else {
-            1.0
-        };
-        cone * focus
+            Vec3A::splat(cone)
+        }
     }
 }
 
@@ -96,9 +102,9 @@ impl LightModel for Triangles {
         }
         let shaped = match &self.shaping {
             Some(s) => s.factor(cos_l),
-            None => 1.0,
+            None => Vec3A::ONE,
         };
-        if shaped <= 0.0 {
+        if shaped.max_element() <= 0.0 {
             return None;
         }
         Some(LightSample {
@@ -173,5 +179,119 @@ impl LightModel for Triangles {
             }
         }
         nearest
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The UsdLux schema's ShapingAPI formulas, written out separately in f64:
+    /// focusFactor = |cos θ|^focus, focusColor = lerp(focusFactor, focusTint, white),
+    /// times 1 − smoothstep(θ; lerp(softness, cutoff, 0), cutoff), zero past the cutoff.
+    fn schema(theta: f64, focus: f64, tint: [f64; 3], cone: f64, softness: f64) -> [f64; 3] {
+        let cutoff = cone.to_radians();
+        let smooth_start = cutoff + softness * (0.0 - cutoff);
+        let scalar = if theta > cutoff {
+            0.0
+        } else if theta <= smooth_start {
+            1.0
+        } else {
+            let t = (theta - smooth_start) / (cutoff - smooth_start);
+            1.0 - t * t * (3.0 - 2.0 * t)
+        };
+        let ff = if focus > 0.0 {
+            theta.cos().abs().powf(focus)
+        } else {
+            1.0
+        };
+        tint.map(|t| (t + ff * (1.0 - t)) * scalar)
+    }
+
+    /// A one-sided unit square facing +z with the given shaping.
+    fn panel(shaping: Shaping) -> Triangles {
+        Triangles {
+            prims: Vec::new(),
+            normals: vec![Vec3A::Z],
+            parallelogram: Some([Vec3A::new(-0.5, -0.5, 0.0), Vec3A::X, Vec3A::Y]),
+            by_area: Distribution1D::new(&[1.0]),
+            area: 1.0,
+            two_sided: false,
+            shaping: Some(shaping),
+        }
+    }
+
+    #[test]
+    fn emitted_radiance_against_angle_is_the_schemas_focus_tint_and_cone() {
+        let color = Vec3A::new(2.0, 3.0, 5.0);
+        let cases: [(f32, [f32; 3], f32, f32); 5] = [
+            (3.0, [0.0; 3], 90.0, 0.0),
+            (3.0, [0.9, 0.2, 0.0], 90.0, 0.0),
+            (8.0, [0.1, 0.5, 1.0], 60.0, 0.4),
+            (1.5, [1.0; 3], 45.0, 1.0),
+            (0.0, [0.3, 0.6, 0.9], 70.0, 0.25),
+        ];
+        for (focus, tint, cone, softness) in cases {
+            let cutoff = cone.to_radians();
+            let light = panel(Shaping {
+                cutoff,
+                start: cutoff * (1.0 - softness),
+                focus,
+                tint: Vec3A::from(tint),
+            });
+            for deg in (0..90).step_by(3) {
+                let theta = (deg as f32).to_radians();
+                // A ray arriving at the light from θ off its normal.
+                let dir = -Vec3A::new(theta.sin(), 0.0, theta.cos());
+                let got = light.emitted(color, Vec3A::Z, dir);
+                let want = schema(
+                    theta as f64,
+                    focus as f64,
+                    tint.map(f64::from),
+                    cone as f64,
+                    softness as f64,
+                );
+                for k in 0..3 {
+                    let w = want[k] * color[k] as f64;
+                    assert!(
+                        (got[k] as f64 - w).abs() <= 1e-5 * (1.0 + w),
+                        "focus {focus} tint {tint:?} cone {cone}/{softness} at {deg}°: \
+                         {got} against {want:?}"
+                    );
+                }
+                // Sampled from a point along that direction: the same radiance.
+                let p = -dir * 10.0;
+                if let Some(s) = light.sample(color, p, Vec2::splat(0.5), &[]) {
+                    let cos = (-s.wi).dot(Vec3A::Z);
+                    let again = schema(
+                        cos.acos() as f64,
+                        focus as f64,
+                        tint.map(f64::from),
+                        cone as f64,
+                        softness as f64,
+                    );
+                    for k in 0..3 {
+                        let w = again[k] * color[k] as f64;
+                        assert!((s.radiance[k] as f64 - w).abs() <= 1e-5 * (1.0 + w));
+                    }
+                } else {
+                    assert!(want.iter().all(|&w| w == 0.0), "{deg}°: {want:?}");
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn a_white_tint_disables_the_focus_and_a_negative_focus_is_none() {
+        let s = |focus: f32, tint: f32| Shaping {
+            cutoff: PI / 2.0,
+            start: PI / 2.0,
+            focus,
+            tint: Vec3A::splat(tint),
+        };
+        for cos in [1.0, 0.7, 0.2, 0.01] {
+            assert_eq!(s(20.0, 1.0).factor(cos), Vec3A::ONE);
+            assert_eq!(s(-2.0, 0.0).factor(cos), Vec3A::ONE);
+        }
     }
 }

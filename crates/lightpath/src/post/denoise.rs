@@ -916,15 +916,19 @@ pub fn run_with_progress(
         channels
             .iter()
             .find(|(n, _)| *n == c)
-            .map_or_else(Vec::new, |(_, v)| v.clone())
+            .map(|(_, v)| v.clone())
     });
-    let png = crate::output::stage_png_rgb(
-        &png_path,
-        exr.width as u32,
-        exr.height as u32,
-        &beauty,
-        job.preview_exposure,
-    )?;
+    // A file without the beauty (a render product of AOVs alone) has no preview.
+    let png = match beauty {
+        [Some(r), Some(g), Some(b)] => Some(crate::output::stage_png_rgb(
+            &png_path,
+            exr.width as u32,
+            exr.height as u32,
+            &[r, g, b],
+            job.preview_exposure,
+        )?),
+        _ => None,
+    };
     let image = stage_image(
         &job.output,
         exr.width,
@@ -933,7 +937,10 @@ pub fn run_with_progress(
         &header,
         ExrOptions::default(),
     )?;
-    crate::output::atomic::commit_pair(image, png)?;
+    match png {
+        Some(png) => crate::output::atomic::commit_pair(image, png)?,
+        None => image.commit()?,
+    }
     summary.seconds = start.elapsed().as_secs_f64();
     Ok(summary)
 }

@@ -442,8 +442,8 @@ pub enum LightKind {
 }
 
 /// An area light's emission profile, as UsdLux's ShapingAPI defines it: off its normal by
-/// θ, emission is scaled by |cos θ|^focus and by 1 − smoothstep(θ; (1 − softness)·angle,
-/// angle), zero beyond `cone_angle`.
+/// θ, emission is scaled by lerp(|cos θ|^focus, focus_tint, white) and by
+/// 1 − smoothstep(θ; (1 − softness)·angle, angle), zero beyond `cone_angle`.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct AreaShaping {
     /// The cutoff angle off the normal, in degrees (90: none).
@@ -452,6 +452,8 @@ pub struct AreaShaping {
     pub cone_softness: f32,
     /// The exponent of the cosine falloff (0: none).
     pub focus: f32,
+    /// The colour the focus fades emission to off the axis (black: to nothing).
+    pub focus_tint: [f32; 3],
 }
 
 #[derive(Clone, Debug)]

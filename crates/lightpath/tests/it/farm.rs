@@ -581,12 +581,10 @@ fn merges_that_should_fail_fail_naming_the_reason() {
     assert!(why.contains("crop 4,4,9,8"), "{why}");
 }
 
-#[test]
-fn the_slurm_script_runs_the_parts_and_the_merge_through_sbatch() {
-    // A stand-in `sbatch` that runs each submitted script at once, as every array task,
-    // checking the merge's dependency names the array: the script's own logic is tested,
-    // the real Slurm run is benches/farm/slurm-local.sh.
-    let dir = Scratch::new("farm-slurm");
+/// A stand-in `sbatch` in `dir/bin` that runs each submitted script at once, as every
+/// array task, checking the merge's dependency names the array (the number it prints
+/// counts up from 100 in `$SBATCH_STATE`). Returns the `PATH` to run a script with.
+pub(crate) fn fake_sbatch(dir: &Scratch) -> String {
     let bin = dir.join("bin");
     std::fs::create_dir_all(&bin).unwrap();
     let fake = r#"#!/usr/bin/env bash
@@ -613,11 +611,20 @@ echo "$n"
     std::fs::write(&sbatch, fake).unwrap();
     use std::os::unix::fs::PermissionsExt;
     std::fs::set_permissions(&sbatch, std::fs::Permissions::from_mode(0o755)).unwrap();
-    let path = format!(
+    format!(
         "{}:{}",
         bin.display(),
         std::env::var("PATH").unwrap_or_default()
-    );
+    )
+}
+
+#[test]
+fn the_slurm_script_runs_the_parts_and_the_merge_through_sbatch() {
+    // A stand-in `sbatch` that runs each submitted script at once, as every array task,
+    // checking the merge's dependency names the array: the script's own logic is tested,
+    // the real Slurm run is benches/farm/slurm-local.sh.
+    let dir = Scratch::new("farm-slurm");
+    let path = fake_sbatch(&dir);
     for by in ["samples", "tiles"] {
         let out = dir.join(&format!("{by}.exr"));
         let script = succeed(

@@ -1053,18 +1053,20 @@ fn shaping_narrows_rect_and_disk_lights() {
         cutoff: 30f32.to_radians(),
         start: 30f32.to_radians(),
         focus: 0.0,
+        tint: glam::Vec3A::ZERO,
     };
-    assert_eq!(hard.factor(1.0), 1.0);
-    assert_eq!(hard.factor(29f32.to_radians().cos()), 1.0);
-    assert_eq!(hard.factor(31f32.to_radians().cos()), 0.0);
+    assert_eq!(hard.factor(1.0).x, 1.0);
+    assert_eq!(hard.factor(29f32.to_radians().cos()).x, 1.0);
+    assert_eq!(hard.factor(31f32.to_radians().cos()).x, 0.0);
     let soft = Shaping {
         cutoff: 40f32.to_radians(),
         start: 20f32.to_radians(),
         focus: 2.0,
+        tint: glam::Vec3A::ZERO,
     };
     let c = 30f32.to_radians().cos();
     assert!(
-        (soft.factor(c) - 0.5 * c * c).abs() < 1e-5,
+        (soft.factor(c).x - 0.5 * c * c).abs() < 1e-5,
         "{}",
         soft.factor(c)
     );
@@ -1161,6 +1163,95 @@ def DiskLight "Disk" (
         let v = film.pixel(0, x, 10);
         assert_eq!(v.x, 0.0, "pixel {x},10 outside the cone: {v}");
     }
+}
+
+#[test]
+fn a_tinted_focus_fades_a_rect_light_to_its_tint_off_axis() {
+    // focusColor = lerp(|cos θ|^focus, focusTint, white): with a tint (1, 0.25, 0) a
+    // white light stays white on its axis and turns to orange-red off it, G/R =
+    // 0.25 + 0.75·ff and B/R = ff, ff = cos⁴θ.
+    let dir = Scratch::new("usd-focus-tint");
+    let p = write(
+        &dir,
+        "tinted.usda",
+        r#"#usda 1.0
+(
+    metersPerUnit = 1
+)
+def Camera "Cam"
+{
+    float focalLength = 20
+    float horizontalAperture = 6
+    float verticalAperture = 6
+    double3 xformOp:translate = (0, 0, 10)
+    uniform token[] xformOpOrder = ["xformOp:translate"]
+}
+def Mesh "Card"
+{
+    int[] faceVertexCounts = [4]
+    int[] faceVertexIndices = [0, 1, 2, 3]
+    point3f[] points = [(-20, -20, 0), (20, -20, 0), (20, 20, 0), (-20, 20, 0)]
+    color3f[] primvars:displayColor = [(0.5, 0.5, 0.5)]
+}
+def RectLight "Tinted" (
+    prepend apiSchemas = ["ShapingAPI"]
+)
+{
+    float inputs:intensity = 5000
+    float inputs:width = 0.02
+    float inputs:height = 0.02
+    float inputs:shaping:focus = 4
+    color3f inputs:shaping:focusTint = (1, 0.25, 0)
+    bool karma:light:renderlightgeo = false
+    double3 xformOp:translate = (0, 0, 1)
+    uniform token[] xformOpOrder = ["xformOp:translate"]
+}
+"#,
+    );
+    let mut desc = load(&p);
+    let shaping = desc.lights[0].shaping.unwrap();
+    assert_eq!((shaping.focus, shaping.focus_tint), (4.0, [1.0, 0.25, 0.0]));
+    // 61 pixels over x in [-1.5, 1.5] m of the card (tan of the half view 3/20).
+    let n = 61;
+    desc.render.resolution = [n, n];
+    desc.render.spp = 16;
+    desc.render.max_depth = 2;
+    let scene = Scene::build(&desc, &aov::assemble(Vec::new())).unwrap();
+    let (film, _) = render(
+        &scene,
+        &RenderOptions {
+            spp: 16,
+            first_sample: 0,
+        },
+    );
+    // Each sample's B/R is ff at its angle, so a pixel's ratio (of sums of samples that
+    // are all positive in R) lies between the least and the greatest ff over the pixel's
+    // footprint on the card and the light's 2 cm square.
+    let ff = |tan: f64| (1.0 / (1.0 + tan * tan)).sqrt().powi(4);
+    let pixel = 3.0 / n as f64;
+    let half_light = 0.01;
+    for x in [30u32, 40, 50, 58] {
+        let x0 = x as f64 * pixel - 1.5;
+        let (near, far) = (
+            (x0 - half_light).max(0.0),
+            (x0 + pixel + half_light).hypot(pixel / 2.0 + half_light),
+        );
+        let (lo, hi) = (ff(far), ff(near));
+        let v = film.pixel(0, x, 30);
+        assert!(v.x > 0.0, "pixel {x}: {v}");
+        let (g, b) = ((v.y / v.x) as f64, (v.z / v.x) as f64);
+        assert!(
+            lo * 0.9999 <= b && b <= hi * 1.0001,
+            "pixel {x}: B/R {b} outside [{lo}, {hi}]"
+        );
+        assert!(
+            (g - (0.25 + 0.75 * b)).abs() < 1e-4,
+            "pixel {x}: G/R {g}, B/R {b}"
+        );
+    }
+    // On the axis the light is white; 1.5 m aside (56° off) it is orange-red.
+    let far = film.pixel(0, 58, 30);
+    assert!(far.z / far.x < 0.15 && far.y / far.x < 0.37, "{far}");
 }
 
 /// `SHOT` with two render products: `aovs.exr` (N, specular) before `beauty.exr` (Ci,
@@ -1318,6 +1409,135 @@ fn each_render_product_is_a_file_with_exactly_its_vars() {
             );
         }
     }
+}
+
+/// Every channel of `a` in `b`, bit for bit (`exact`) or to float rounding.
+fn same_channels(a: &Path, b: &Path, exact: bool) {
+    let (x, y) = (
+        lightpath::output::read_exr(a).unwrap(),
+        lightpath::output::read_exr(b).unwrap(),
+    );
+    let mut names: Vec<&String> = x.channels.iter().map(|c| &c.0).collect();
+    let mut others: Vec<&String> = y.channels.iter().map(|c| &c.0).collect();
+    names.sort();
+    others.sort();
+    assert_eq!(names, others, "{} against {}", a.display(), b.display());
+    for (name, values) in &x.channels {
+        let other = y.channel(name).unwrap();
+        for (p, q) in values.iter().zip(other) {
+            let ok = match exact {
+                true => p.to_bits() == q.to_bits(),
+                false => (p - q).abs() <= 1e-6 * p.abs().max(1.0),
+            };
+            assert!(ok, "{} {name}: {p} against {q}", a.display());
+        }
+    }
+}
+
+#[test]
+fn a_farm_merges_each_render_product_into_its_own_file() {
+    use std::process::Command;
+    let dir = Scratch::new("usd-farm");
+    let scene = write(&dir, "shot.usda", &two_products());
+    let path = crate::farm::fake_sbatch(&dir);
+    let bin = env!("CARGO_BIN_EXE_lightpath");
+    let args = ["--spp", "4", "--resolution", "16x12", "--light-groups"];
+    let run = |cmd: &mut Command| {
+        let out = cmd.output().unwrap();
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        String::from_utf8(out.stdout).unwrap()
+    };
+    let single = dir.join("single");
+    std::fs::create_dir(&single).unwrap();
+    run(Command::new(bin)
+        .arg("render")
+        .arg(&scene)
+        .args(args)
+        .args(["--quiet", "-o"])
+        .arg(&single));
+    for by in ["tiles", "samples"] {
+        // `-o DIR/`: every product's file there, each merged from its own parts.
+        let out = format!("{}/", dir.join(by).display());
+        let script = run(Command::new(bin)
+            .args(["farm", "slurm"])
+            .arg(&scene)
+            .args(["--tasks", "2", "--by", by, "-o", &out])
+            .args(args));
+        let submit = dir.join(&format!("{by}.sh"));
+        std::fs::write(&submit, &script).unwrap();
+        run(Command::new("bash")
+            .arg(&submit)
+            .env("PATH", &path)
+            .env("SBATCH_STATE", dir.join(&format!("{by}.state"))));
+        for name in ["aovs.exr", "beauty.exr"] {
+            let merged = dir.join(by).join(name);
+            // Tiles are the single render's pixels exactly; sample ranges to rounding.
+            same_channels(&single.join(name), &merged, by == "tiles");
+            let (report, ok) = lightpath::post::partitions::report(&merged, 1e-4).unwrap();
+            assert!(ok, "{report}");
+        }
+    }
+}
+
+#[cfg(feature = "denoise")]
+#[test]
+fn denoise_filters_each_render_products_file() {
+    use lightpath::job::{DenoiseRequest, RenderJob};
+    let dir = Scratch::new("usd-denoise-products");
+    let scene = write(&dir, "shot.usda", &two_products());
+    let render = |out: &Path, denoise: bool| {
+        std::fs::create_dir(out).unwrap();
+        let mut job = RenderJob::new(scene.to_string_lossy());
+        job.output = Some(out.to_path_buf());
+        job.overrides.spp = Some(4);
+        job.overrides.resolution = Some([24, 18]);
+        job.aovs.light_groups = true;
+        job.denoise = denoise.then(DenoiseRequest::default);
+        job.prepare()
+            .unwrap()
+            .run(&lightpath::progress::Silent)
+            .unwrap()
+    };
+    let (noisy, clean) = (dir.join("noisy"), dir.join("clean"));
+    render(&noisy, false);
+    let summary = render(&clean, true);
+    let said = summary.denoised.expect("denoised");
+    for name in ["aovs.exr", "beauty.exr"] {
+        let p = clean.join(name);
+        assert!(said.contains(&p.display().to_string()), "{said}");
+        let exr = lightpath::output::read_exr(&p).unwrap();
+        assert!(
+            exr.attributes
+                .iter()
+                .any(|(k, _)| k == lightpath::aov::naming::DENOISED_ATTRIBUTE),
+            "{name} is not marked denoised"
+        );
+        let (report, ok) = lightpath::post::partitions::report(&p, 1e-4).unwrap();
+        assert!(ok, "{name}: {report}");
+        // Each file is what `lightpath denoise` makes of the noisy render's.
+        let again = dir.join(&format!("again-{name}"));
+        lightpath::post::denoise::run(&lightpath::post::denoise::DenoiseJob {
+            input: noisy.join(name),
+            output: again.clone(),
+            keep_noisy: false,
+            quality: Default::default(),
+            preview_exposure: 0.0,
+        })
+        .unwrap();
+        same_channels(&p, &again, true);
+    }
+    // The beauty's product has its preview; the AOVs' has none.
+    assert!(clean.join("beauty.png").exists() && !clean.join("aovs.png").exists());
+    // The specular AOV was filtered: it differs from the noisy render's.
+    let (a, b) = (
+        lightpath::output::read_exr(&noisy.join("aovs.exr")).unwrap(),
+        lightpath::output::read_exr(&clean.join("aovs.exr")).unwrap(),
+    );
+    assert_ne!(a.channel("specular.G"), b.channel("specular.G"));
 }
 
 /// A floor seen from above, a sphere light to the side and a ball between them (out of

@@ -127,7 +127,9 @@ pub(crate) struct FarmArgs {
     /// Split by sample ranges or by tiles (strips of rows).
     #[arg(long, default_value = "samples", value_parser = lightpath::farm::SplitBy::parse)]
     pub(crate) by: lightpath::farm::SplitBy,
-    /// The merged EXR; the parts and logs go in <OUT stem>.parts/ beside it.
+    /// The merged EXR; the parts and logs go in <OUT stem>.parts/ beside it. A directory
+    /// (existing, or ending in /) for a USD stage of several render products: each
+    /// product's merged file in it.
     #[arg(short, long)]
     pub(crate) output: PathBuf,
 }

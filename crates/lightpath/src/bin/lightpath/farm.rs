@@ -44,6 +44,21 @@ pub(crate) fn farm_command(cmd: FarmCommand) -> Result<String, String> {
         );
     }
     let desc = lightpath::load_scene(&farm.scene).map_err(|e| e.to_string())?;
+    // Several render products and -o a directory: every product's file there, as
+    // `lightpath render -o DIR/` writes them (-o FILE.exr: all in that one file).
+    let to_dir = {
+        let o = &farm.output;
+        o.as_os_str().to_string_lossy().ends_with('/')
+            || (o.is_dir() && !o.extension().is_some_and(|e| e.eq_ignore_ascii_case("exr")))
+    };
+    let products: Vec<std::path::PathBuf> = if desc.products.len() > 1 && to_dir {
+        lightpath::output::products::product_paths(&desc.products, Some(std::path::Path::new("")))
+            .into_iter()
+            .map(|p| p.exr)
+            .collect()
+    } else {
+        Vec::new()
+    };
     let mut settings = desc.render;
     parsed.settings.0.apply(&mut settings);
     let (spp, resolution) = (settings.spp, settings.resolution);
@@ -77,6 +92,7 @@ pub(crate) fn farm_command(cmd: FarmCommand) -> Result<String, String> {
         output: absolute(&farm.output),
         sbatch_args: Vec::new(),
         denoise,
+        products,
     };
     Ok(script(&job))
 }

@@ -39,6 +39,7 @@ pub fn light_shape(l: &LightDesc) -> Result<(LightShape, Option<ShapePrims>, Vec
                     cutoff,
                     start: cutoff * (1.0 - s.cone_softness.clamp(0.0, 1.0)),
                     focus: s.focus.max(0.0),
+                    tint: Vec3A::from(s.focus_tint).max(Vec3A::ZERO),
                 }
             }),
         };
@@ -150,13 +151,15 @@ fn check_light_numbers(l: &LightDesc) -> Result<(), SceneError> {
             cone_softness,
         } => finite(position) && finite(direction) && finite(&[*cone_angle, *cone_softness]),
         LightKind::Distant { direction, angle } => finite(direction) && angle.is_finite(),
-    };
+    } && l
+        .shaping
+        .is_none_or(|s| finite(&[s.cone_angle, s.cone_softness, s.focus]) && finite(&s.focus_tint));
     if ok {
         Ok(())
     } else {
         Err(l.origin.error(
-            "the light has a position, direction, corner or angle that is NaN, infinite or \
-             too large for 32-bit floats",
+            "the light has a position, direction, corner, angle or shaping number that is NaN, \
+             infinite or too large for 32-bit floats",
         ))
     }
 }

@@ -15,9 +15,9 @@
 //! - A dome light emits radiance L (times its `latlong` EXR).
 //! - `ShapingAPI`'s cone on a sphere light makes it a spot (full angle 2·`cone:angle`, soft
 //!   edge as Blender reads `cone:softness`: its spot blend). On rect and disk lights the
-//!   cone (`cone:angle`, `cone:softness`) and `focus` shape the emission about the normal
-//!   by the schema's formulas (`light/triangles.rs`); on other kinds they are warned about
-//!   and ignored.
+//!   cone (`cone:angle`, `cone:softness`), `focus` and `focusTint` shape the emission about
+//!   the normal by the schema's formulas (`light/triangles.rs`); on other kinds they are
+//!   warned about and ignored.
 //!
 //! A light's group is the first authored of Karma's `karma:light:lpetag`, RenderMan's
 //! `ri:light:lightGroup`, Cycles' `cycles:lightgroup` and Arnold's `primvars:arnold:aov`,
@@ -180,7 +180,17 @@ impl Loader {
                     .clamp(0.0, 1.0),
             ));
         }
+        // The schema ignores a negative focus.
         let focus = self.light_number(prim, "shaping:focus", 0.0).max(0.0);
+        let focus_tint = stage::value_of(
+            prim,
+            &["inputs:shaping:focusTint", "shaping:focusTint"],
+            self.time,
+        )
+        .and_then(|v| stage::vec3_of(&v))
+        .filter(|c| c.iter().all(|x| x.is_finite()))
+        .unwrap_or([0.0; 3])
+        .map(|x| x.max(0.0));
         // Rect and disk lights take the cone and the focus as their emission profile.
         let area_shaping =
             if matches!(ty, "RectLight" | "DiskLight") && (shaping.is_some() || focus > 0.0) {
@@ -189,6 +199,7 @@ impl Loader {
                     cone_angle,
                     cone_softness,
                     focus,
+                    focus_tint,
                 })
             } else {
                 None
