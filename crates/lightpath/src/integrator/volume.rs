@@ -90,7 +90,7 @@ pub(super) struct Aim {
 
 /// Per light of `scene`, what equiangular sampling aims at: point and spot lights, and
 /// sphere, rect, quad and disk lights by their bounding sphere (whether a flight takes
-/// one is [`Equiangular::towards`]'s test: it keeps outside that sphere). Empty, so no
+/// one is [`Equiangular::towards`]'s test: it keeps two radii from the centre). Empty, so no
 /// equiangular sampling, without media or such lights or with `volume_sampling =
 /// "distance"`. Mesh lights and glows, of any shape and size, are left to the vertices.
 pub(super) fn aims(scene: &Scene) -> Vec<Option<Aim>> {
@@ -661,5 +661,64 @@ impl Tracer<'_> {
         };
         let le = volume.emitted(seg, &mut path.rng);
         self.contribute(out, s, path.throughput, le, 1.0, origin);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::aov;
+    use crate::scene::Source;
+
+    fn scene(render: &str) -> Scene {
+        let text = format!(
+            "[render]\n{render}\n[media.fog]\nsigma_s = [0.1, 0.1, 0.1]\n\
+             [[objects]]\nname = \"box\"\nshape = \"cube\"\nscale = 3\nmaterial = \"null\"\n\
+             interior = \"fog\"\n\
+             [[lights]]\ntype = \"disk\"\nscale = [0.08, 0.08, 1]\nrotate = [180, 0, 0]\n\
+             translate = [-0.2, 0, 1.9]\nradiance = [5, 5, 5]\n\
+             [[lights]]\ntype = \"rect\"\nscale = [0.1, 0.2, 1]\nrotate = [30, 0, 0]\n\
+             translate = [1, 1, 0]\nradiance = [5, 5, 5]\n\
+             [[lights]]\ntype = \"sphere\"\ncenter = [0, 0.5, 0]\nradius = 0.1\n\
+             radiance = [5, 5, 5]\n\
+             [[lights]]\ntype = \"point\"\nposition = [0, 0, 1]\nintensity = [1, 1, 1]\n\
+             [[lights]]\ntype = \"distant\"\ndirection = [0, 0, -1]\nirradiance = [1, 1, 1]\n"
+        );
+        let desc = Source {
+            name: "aims.toml".into(),
+            text,
+            dir: Default::default(),
+        }
+        .parse()
+        .unwrap();
+        Scene::build(&desc, &aov::assemble(vec![])).unwrap()
+    }
+
+    /// Disk, rect, sphere and point lights are aimed at by their bounding spheres (the
+    /// disk's and rect's from their triangles), a distant light not; `distance` sampling
+    /// aims at none.
+    #[test]
+    fn lights_are_aimed_at_by_their_bounding_spheres() {
+        let s = scene("");
+        let aims = aims(&s);
+        let want = [
+            Some((Vec3A::new(-0.2, 0.0, 1.9), 0.08)),
+            Some((Vec3A::new(1.0, 1.0, 0.0), (0.1f32 * 0.1 + 0.2 * 0.2).sqrt())),
+            Some((Vec3A::new(0.0, 0.5, 0.0), 0.1)),
+            Some((Vec3A::new(0.0, 0.0, 1.0), 0.0)),
+            None,
+        ];
+        assert_eq!(aims.len(), want.len());
+        for (k, (got, want)) in aims.iter().zip(want).enumerate() {
+            match (got, want) {
+                (Some(a), Some((c, r))) => assert!(
+                    a.centre.distance(c) < 1e-5 && (a.radius - r).abs() < 1e-5,
+                    "light {k}: {a:?}, want {c} {r}"
+                ),
+                (None, None) => {}
+                _ => panic!("light {k}: {got:?}, want {want:?}"),
+            }
+        }
+        assert!(super::aims(&scene("volume_sampling = \"distance\"")).is_empty());
     }
 }

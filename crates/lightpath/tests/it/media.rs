@@ -735,11 +735,13 @@ fn grid_media_errors_name_the_file_and_line() {
 /// density 1: the majorants' optical depth along every ray stays below 1) from a point
 /// light beside it, whose light is then sampled equiangularly along the flights only,
 /// against the same light as a sphere of radius 0.002 of the same intensity, which the
-/// free-flight vertices sample. A uniformly emitting sphere's irradiance outside it is
-/// the point's, and the phase function changes by O((r/d)²) over its disc: the two
+/// free-flight vertices sample (`volume_sampling = "distance"`: flights would aim at a
+/// sphere this small too). A uniformly emitting sphere's irradiance outside it is the
+/// point's, and the phase function changes by O((r/d)²) over its disc: the two
 /// estimators agree within noise (five standard errors of the pixels' differences). At
 /// 4096 spp they agree to 0.1 % since the sphere light's solid angle is computed without
-/// cancellation (light/sphere.rs); before, the sphere was 0.85 % brighter.
+/// cancellation (light/sphere.rs); before, the sphere was 0.85 % brighter. The sphere
+/// aimed at (equiangular distances, then its area sampled) agrees with it as well.
 #[test]
 fn equiangular_sampling_in_a_thin_grid_matches_vertex_light_sampling() {
     let point = r#"
@@ -776,9 +778,16 @@ intensity = [2, 2, 2]
              radiance = [{radiance}, {radiance}, {radiance}]"
         ),
     );
-    assert_ne!(sphere, point);
+    let vertices = sphere.replace(
+        "max_depth = 2",
+        "max_depth = 2\nvolume_sampling = \"distance\"",
+    );
+    assert!(sphere != point && vertices != sphere);
     let (scene, a) = render_in_vdb_dir(point, 256, vec![]);
-    let (_, b) = render_in_vdb_dir(&sphere, 256, vec![]);
+    let (_, b) = render_in_vdb_dir(&vertices, 256, vec![]);
+    // Its own seed: the two sphere renders are independent.
+    let aimed = sphere.replace("max_depth = 2", "max_depth = 2\nseed = 3");
+    let (_, c) = render_in_vdb_dir(&aimed, 256, vec![]);
     // Thin (integrator/volume.rs: below 1) along the densest line, the camera's axis
     // through the whole cube, so the equiangular estimator is the one measured.
     let lightpath::media::Medium::Heterogeneous(h) = &scene.volumes[0].medium else {
@@ -795,6 +804,8 @@ intensity = [2, 2, 2]
     let (diff, mean_b) = (difference(&a, &b, k), mean_se(&b, k).0);
     assert!(mean_b.min_element() > 1e-3, "the puff scatters: {mean_b}");
     assert_close("equiangular − vertex", diff, DVec3::ZERO, mean_b * 1e-3);
+    let diff = difference(&c, &b, k);
+    assert_close("aimed sphere − vertex", diff, DVec3::ZERO, mean_b * 1e-3);
 }
 
 /// Mean and standard error over the pixels of AOV `k`'s difference `a` − `b` (each pixel
