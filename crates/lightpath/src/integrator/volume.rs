@@ -90,7 +90,7 @@ pub(super) struct Aim {
 
 /// Per light of `scene`, what equiangular sampling aims at: point and spot lights, and
 /// sphere, rect, quad and disk lights by their bounding sphere (whether a flight takes
-/// one is [`Equiangular::towards`]'s test: it keeps two radii from the centre). Empty, so no
+/// one is [`Equiangular::towards`]'s test: it stays outside that sphere). Empty, so no
 /// equiangular sampling, without media or such lights or with `volume_sampling =
 /// "distance"`. Mesh lights and glows, of any shape and size, are left to the vertices.
 pub(super) fn aims(scene: &Scene) -> Vec<Option<Aim>> {

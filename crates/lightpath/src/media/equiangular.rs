@@ -4,14 +4,12 @@
 //! irradiance, so single scattering near a point or spot light is sampled where it is
 //! bright instead of where the medium is dense. An area light is aimed at by its centre
 //! (the paper picks a point on the light first; one centre for every flight keeps the
-//! density a function of the flight alone, which MIS needs), while the flight keeps away
-//! from the sphere holding the light ([`Equiangular::towards`]).
+//! density a function of the flight alone, which MIS needs), while the flight keeps out
+//! of the sphere holding the light ([`Equiangular::towards`]). Weighed against free
+//! flights by the power heuristic, aiming adds no variance where it fits badly (the
+//! weighted second moment is at most the free flights' alone): it costs a sample.
 
 use crate::geometry::Ray;
-
-/// How many of its bounding sphere's radii a segment must keep from a light's centre for
-/// the light to be small to it ([`Equiangular::towards`]).
-pub const SMALL: f32 = 2.0;
 
 /// The distances of `ray` in `[0, ray.tmax)` as angles seen from a point.
 #[derive(Clone, Copy, Debug)]
@@ -42,22 +40,17 @@ impl Equiangular {
     }
 
     /// Sampling along `ray` towards a light held in the sphere of `radius` about `centre`
-    /// (0: a point light), or `None` where the segment comes nearer the centre than
-    /// [`SMALL`] radii: the light is small for the segment when that sphere subtends a
-    /// half-angle of at most 30° from all of it. Then at distance r from the centre every
-    /// point of the light is at least r/2 away, so its radiance arrives with at most 4×
-    /// the inverse square falloff the density follows, for an area light sampled by area
-    /// (rect, quad, disk: cos/d²) as for one sampled by solid angle (sphere), and each
-    /// sample's weight is bounded. Nearer, the area sampling's 1/d² grows without bound
-    /// at the light's rim, and the density keeps peaking at the foot where it does (fog
-    /// grazing a quad light: fireflies): free flights alone sample there. The test
-    /// depends on the segment and the light alone (no scene scale), the same for every
-    /// technique that asks.
+    /// (0: a point light), or `None` where the segment enters that sphere: the light is
+    /// small for the segment when it lies to one side of all of it. Then from distance r
+    /// the light lies in the sphere's cone, of solid angle 2π(1 − √(1 − R²/r²)) ≤
+    /// 2πR²/r², the inverse square the density follows (within 2× for a sphere light).
+    /// Inside the sphere a light's solid angle stops growing as 1/r² while the density
+    /// keeps peaking at the foot. The test depends on the segment and the light alone
+    /// (no scene scale), the same for every technique that asks.
     pub fn towards(ray: &Ray, centre: glam::Vec3A, radius: f32) -> Option<Equiangular> {
         let e = Equiangular::new(ray, centre)?;
         let x = e.foot.clamp(0.0, ray.tmax) - e.foot;
-        let near = SMALL * radius;
-        (e.dist * e.dist + x * x >= near * near).then_some(e)
+        (e.dist * e.dist + x * x >= radius * radius).then_some(e)
     }
 
     /// A distance for `u` in [0, 1), and its density.
@@ -79,11 +72,11 @@ mod tests {
     use super::*;
     use glam::Vec3A;
 
-    /// A flight takes a light while it keeps two radii of its bounding sphere from its
-    /// centre: a segment passing 0.5 from the centre takes a light of radius 0.2, not
-    /// one of 0.3, unless it ends before coming that near; a point light is always taken.
+    /// A flight takes a light by its bounding sphere only while it stays outside it: a
+    /// segment passing 0.5 from the centre takes a light of radius 0.4, not one of 0.6,
+    /// unless it ends before coming that near; a point light is always taken.
     #[test]
-    fn area_lights_are_aimed_at_from_twice_their_radius() {
+    fn area_lights_are_aimed_at_from_outside_their_sphere() {
         let centre = Vec3A::new(2.0, 0.5, 0.0);
         let ray = |tmax| Ray {
             origin: Vec3A::ZERO,
@@ -91,12 +84,12 @@ mod tests {
             tmax,
         };
         assert!(Equiangular::towards(&ray(5.0), centre, 0.0).is_some());
-        assert!(Equiangular::towards(&ray(5.0), centre, 0.2).is_some());
-        assert!(Equiangular::towards(&ray(5.0), centre, 0.3).is_none());
-        assert!(Equiangular::towards(&ray(f32::INFINITY), centre, 0.3).is_none());
+        assert!(Equiangular::towards(&ray(5.0), centre, 0.4).is_some());
+        assert!(Equiangular::towards(&ray(5.0), centre, 0.6).is_none());
+        assert!(Equiangular::towards(&ray(f32::INFINITY), centre, 0.6).is_none());
         // Ending at x = 1.5, 0.707 from the centre.
-        assert!(Equiangular::towards(&ray(1.5), centre, 0.3).is_some());
-        assert!(Equiangular::towards(&ray(1.5), centre, 0.4).is_none());
+        assert!(Equiangular::towards(&ray(1.5), centre, 0.6).is_some());
+        assert!(Equiangular::towards(&ray(1.5), centre, 0.8).is_none());
     }
 
     /// The density integrates to one over the segment, and samples fall inside it with

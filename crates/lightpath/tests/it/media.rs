@@ -902,41 +902,6 @@ fn equiangular_sampling_of_small_area_lights_is_unbiased() {
     }
 }
 
-/// The per-pixel error of a render of `text` at `spp`, estimated without a reference
-/// from two renders of independent seeds (both unbiased: E[(a − b)²] = 2σ²), as the root
-/// mean square over pixels and channels.
-fn rms_error(text: &str, spp: u32) -> f64 {
-    let (scene, a) = render_aovs(&text.replace("SEED", "11"), spp, vec![]);
-    let (_, b) = render_aovs(&text.replace("SEED", "12"), spp, vec![]);
-    let k = index(&scene, "beauty");
-    let mut s2 = 0.0;
-    for y in 0..a.height {
-        for x in 0..a.width {
-            let d = (a.pixel(k, x, y) - b.pixel(k, x, y)).as_dvec3();
-            s2 += d.length_squared();
-        }
-    }
-    (s2 / (6.0 * f64::from(a.width * a.height))).sqrt()
-}
-
-/// Equal samples, the error with equiangular sampling of the small lights against free
-/// flights alone, reported (docs/performance.md has the equal-time measurements).
-#[test]
-fn equiangular_sampling_of_small_area_lights_lowers_the_error() {
-    for (name, light) in [("sphere", SMALL_SPHERE), ("quad", SMALL_QUAD)] {
-        let mis = rms_error(&thin_fog(light, "seed = SEED"), 64);
-        let distance = rms_error(
-            &thin_fog(light, "seed = SEED\nvolume_sampling = \"distance\""),
-            64,
-        );
-        eprintln!(
-            "{name}: RMSE mis {mis:.3e}, distance {distance:.3e}, ratio {:.3}",
-            mis / distance
-        );
-        assert!(mis > 0.0 && distance > 0.0);
-    }
-}
-
 /// The standard partition, the bounce AOVs and `volume` = direct + indirect sum to
 /// beauty with equiangular light samples of a small sphere light among the `V` events.
 #[test]
