@@ -232,6 +232,7 @@ fn the_header_keeps_its_attribute_names_and_values() {
         ("lightpath/setting/resolution", "256x256"),
         ("lightpath/setting/rr_depth", "5"),
         ("lightpath/setting/sampler", "sobol"),
+        ("lightpath/setting/volume_sampling", "mis"),
         ("lightpath/spp", "16"),
     ];
     let owned = |list: &[(&str, &str)]| -> Vec<(String, String)> {
