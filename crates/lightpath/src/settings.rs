@@ -11,6 +11,7 @@ use crate::camera::FilterKind;
 use crate::error::SettingError;
 use crate::guiding::GuidingMode;
 use crate::light::select::LightSelection;
+use crate::media::VolumeSampling;
 use crate::sampler::SamplerKind;
 
 /// Samples a pixel takes before adaptive sampling may stop it, unless `min_spp` says
@@ -183,6 +184,16 @@ settings! {
         help: "Direct light: candidates drawn per shading point, one kept by resampled \
                importance sampling on its unshadowed contribution (1: the light \
                selection's choice alone; a few help with many lights).",
+    }
+    volume_sampling: VolumeSampling = VolumeSampling::Mis, {
+        section: Render,
+        flag: "volume-sampling",
+        range: Range::Any,
+        role: Shared,
+        header: Header::Setting,
+        help: "Single scattering in media: mis (free-flight distances, and equiangular ones \
+               towards point, spot and small area lights, weighed by MIS) or distance \
+               (free-flight distances alone).",
     }
     noise_threshold: f32 = 0.0, {
         section: Render,
@@ -734,6 +745,7 @@ choice!(SamplerKind);
 choice!(LightSelection);
 choice!(FilterKind);
 choice!(GuidingMode);
+choice!(VolumeSampling);
 
 #[cfg(test)]
 mod tests;

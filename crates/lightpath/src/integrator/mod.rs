@@ -54,9 +54,9 @@ struct Tracer<'a> {
     routes: Vec<Route>,
     /// Split part of glowing objects and of lights without a group.
     default_part: u32,
-    /// Whether flights through media also sample distances towards point and spot
-    /// lights (volume.rs).
-    equiangular: bool,
+    /// Per light, what flights through media aim equiangular distances at (volume.rs);
+    /// empty: none.
+    aims: Vec<Option<volume::Aim>>,
     /// The SD-tree paths sample from (guided.rs), if the render guides.
     guide: Option<&'a crate::guiding::SdTree>,
     /// Whether paths record into the guide (training passes).
@@ -107,8 +107,7 @@ impl<'a> Tracer<'a> {
                 .map(|a| Route::for_aov(a, scene))
                 .collect(),
             default_part: scene.light_groups.len() as u32,
-            equiangular: scene.has_media
-                && scene.lights.iter().any(|l| volume::point_of(l).is_some()),
+            aims: volume::aims(scene),
             guide: None,
             learn: false,
             seed: scene.settings.seed,

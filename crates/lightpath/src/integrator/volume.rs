@@ -1,11 +1,20 @@
 //! Paths through participating media (media/): the medium a path is in, free flights
 //! that end at a scattering vertex (a `V` event, light sampled there with MIS against
 //! the phase function, the next direction from the phase function), single scattering
-//! towards point and spot lights at equiangularly sampled distances (MIS against the
-//! free-flight vertices in a homogeneous medium; in a grid thin along the flight, which
-//! has no free-flight density to weigh against, instead of those vertices' light
-//! samples), and the transmittance of shadow rays, which pass null boundaries and media
-//! and stop at any other surface.
+//! towards point, spot and small area lights at equiangularly sampled distances (Kulla &
+//! Fajardo 2012, "Importance Sampling Techniques for Path Tracing in Participating
+//! Media"; media/equiangular.rs), and the transmittance of shadow rays, which pass null
+//! boundaries and media and stop at any other surface.
+//!
+//! Single scattering towards a light along one flight has up to three techniques: a
+//! free-flight vertex's light sample (A), an equiangular distance's light sample (B, the
+//! same light sampling from its point), and a free-flight vertex's phase-sampled ray that
+//! finds the light (C, path.rs). Light sampling takes the share λ = power heuristic of
+//! (light pdf, phase pdf) against C, as at any vertex ([`light_share`]); within it, A and
+//! B split by the power heuristic of their distance densities, the light sample's pdf
+//! being common to both. So A weighs λ·μ_A, B λ·μ_B, C 1 − λ, summing to one for every
+//! path. In a grid thin along the flight, which has no free-flight density to weigh by,
+//! B takes λ whole and A gives its light samples of those lights up (`thin_grid`).
 //!
 //! A `V` vertex is a bounce like a surface's: it takes the same sampler dimensions of
 //! its depth (light choice and point, direction, roulette), counts toward `max_depth`
@@ -18,13 +27,13 @@ use super::direct::power_heuristic;
 use super::path::PathState;
 use super::routing::{Origin, Via};
 use super::{Sink, Tracer};
-use crate::geometry::{Hit, Ray, Visibility};
-use crate::light::{Light, LightShape};
+use crate::geometry::{Hit, Prim, Ray, Visibility};
+use crate::light::{Light, LightSample, LightShape};
 use crate::media::equiangular::Equiangular;
-use crate::media::{Collision, Medium, MediumStack};
+use crate::media::{Collision, Medium, MediumStack, VolumeSampling};
 use crate::sampler::{dim, Sampler};
 use crate::sampling::{splitmix64, Rng};
-use crate::scene::MediumUse;
+use crate::scene::{MediumUse, Scene};
 use glam::{Vec2, Vec3A};
 use lpe::StateId;
 
@@ -33,8 +42,8 @@ use lpe::StateId;
 /// sampled towards a light waste little on light the medium has already absorbed.
 const THIN: f32 = 1.0;
 
-/// Whether single scattering towards point and spot lights along the flight `seg` in
-/// `medium` is left to equiangular sampling alone: a grid medium, thin along it. A grid
+/// Whether single scattering towards the lights equiangular sampling aims at along the
+/// flight `seg` in `medium` is left to it alone: a grid medium, thin along it. A grid
 /// has no free-flight density to weigh equiangular distances against (its tracking only
 /// samples one), so the two techniques split the lights instead of weighing each sample:
 /// by this test of the segment, which both sides make alike, so each light's single
@@ -71,12 +80,68 @@ pub(super) struct MediumVertex {
     pub pdf: f32,
 }
 
-/// Where a point or spot light is: equiangular sampling aims at it.
-pub(super) fn point_of(light: &Light) -> Option<Vec3A> {
-    match &light.shape {
-        LightShape::Point(p) => Some(p.position),
-        LightShape::Spot(s) => Some(s.position),
-        _ => None,
+/// What equiangular sampling aims at for one light: its centre, and the radius of a
+/// sphere about it that holds the whole light (0 for a point or spot light).
+#[derive(Clone, Copy, Debug)]
+pub(super) struct Aim {
+    centre: Vec3A,
+    radius: f32,
+}
+
+/// Per light of `scene`, what equiangular sampling aims at: point and spot lights, and
+/// sphere, rect, quad and disk lights by their bounding sphere (whether a flight takes
+/// one is [`Equiangular::towards`]'s test: it stays outside that sphere). Empty, so no
+/// equiangular sampling, without media or such lights or with `volume_sampling =
+/// "distance"`. Mesh lights and glows, of any shape and size, are left to the vertices.
+pub(super) fn aims(scene: &Scene) -> Vec<Option<Aim>> {
+    if !scene.has_media || scene.settings.volume_sampling != VolumeSampling::Mis {
+        return Vec::new();
+    }
+    let prims = scene.accel.prims();
+    let aims: Vec<_> = scene.lights.iter().map(|l| aim_of(l, prims)).collect();
+    if aims.iter().any(Option::is_some) {
+        aims
+    } else {
+        Vec::new()
+    }
+}
+
+fn aim_of(light: &Light, prims: &[Prim]) -> Option<Aim> {
+    let (centre, radius) = match &light.shape {
+        LightShape::Point(p) => (p.position, 0.0),
+        LightShape::Spot(s) => (s.position, 0.0),
+        LightShape::Sphere(s) => (s.center, s.radius),
+        LightShape::Triangles(t) => {
+            let corners = || {
+                t.prims
+                    .iter()
+                    .filter_map(|&i| match prims.get(i as usize) {
+                        Some(&Prim::Triangle { p0, e1, e2, .. }) => Some([p0, p0 + e1, p0 + e2]),
+                        _ => None,
+                    })
+                    .flatten()
+            };
+            let (lo, hi) = corners().fold((Vec3A::INFINITY, Vec3A::NEG_INFINITY), |b, q| {
+                (b.0.min(q), b.1.max(q))
+            });
+            let centre = (lo + hi) * 0.5;
+            let radius = corners().map(|q| q.distance(centre)).fold(0.0, f32::max);
+            (centre, radius)
+        }
+        _ => return None,
+    };
+    (centre.is_finite() && radius.is_finite()).then_some(Aim { centre, radius })
+}
+
+/// The share of a light sample at a medium vertex against phase sampling finding the
+/// light (`light_pdf`: its pdf with the light's choice; `f`: the phase function's value,
+/// its sampling pdf), as path.rs weighs the other side: all of it for delta lights,
+/// which no ray finds, and shadow-linked ones (a ray stops at what casts them no shadow).
+fn light_share(light: &Light, ls: &LightSample, light_pdf: f32, f: f32) -> f32 {
+    if ls.delta || light.shadow_linked {
+        1.0
+    } else {
+        power_heuristic(light_pdf, f)
     }
 }
 
@@ -120,7 +185,7 @@ impl Tracer<'_> {
             ..*ray
         };
         self.medium_emission(out, path, m, &seg);
-        if self.equiangular {
+        if self.equiangular() {
             self.equiangular_light(out, path, m, object, &seg);
         }
         let volume = &scene.volumes[m.volume as usize];
@@ -147,7 +212,7 @@ impl Tracer<'_> {
                     medium: m,
                     object,
                     seg,
-                    pdf: match self.equiangular {
+                    pdf: match self.equiangular() {
                         true => volume
                             .medium
                             .collision_terms(t, throughput)
@@ -161,6 +226,20 @@ impl Tracer<'_> {
                 }
             }
         }
+    }
+
+    /// Whether flights sample distances equiangularly towards some light.
+    #[inline]
+    fn equiangular(&self) -> bool {
+        !self.aims.is_empty()
+    }
+
+    /// Equiangular sampling of the flight `seg` towards light `li`, if the flight takes
+    /// that light: the one test both techniques make.
+    #[inline]
+    fn aim(&self, seg: &Ray, li: usize) -> Option<Equiangular> {
+        let aim = self.aims.get(li)?.as_ref()?;
+        Equiangular::towards(seg, aim.centre, aim.radius)
     }
 
     /// The medium of `stack` and the object that bounds it (`u32::MAX` for the
@@ -394,13 +473,14 @@ impl Tracer<'_> {
             return;
         }
         let light_pdf = select_pmf * ls.pdf;
-        let w = match self.equiangular_pdf(&v.seg, li, light, v.p) {
-            // A point or spot light: weighed against equiangular sampling of the flight.
-            Some(pdf_e) if v.pdf > 0.0 => power_heuristic(v.pdf * light_pdf, pdf_e),
+        let share = light_share(light, &ls, light_pdf, f);
+        let w = match self.equiangular_pdf(&v.seg, li, v.p) {
+            // The flight also aims at this light: the free-flight and equiangular
+            // distances split light sampling's share (its pdf the same for both).
+            Some(pdf_e) if v.pdf > 0.0 => share * power_heuristic(v.pdf * select_pmf, pdf_e),
             // A grid thin along the flight: equiangular sampling takes it alone.
             Some(pdf_e) if pdf_e > 0.0 && thin_grid(&volume.medium, &v.seg) => return,
-            _ if ls.delta || light.shadow_linked => 1.0,
-            _ => power_heuristic(light_pdf, f),
+            _ => share,
         };
         let tmax = if ls.dist.is_finite() {
             ls.dist - 2.0 * scene.epsilon
@@ -429,21 +509,18 @@ impl Tracer<'_> {
 
     /// The density with which [`equiangular_light`](Self::equiangular_light) picks light
     /// `li` and the distance of `p` along `seg` (`None`: it never aims at that light).
-    fn equiangular_pdf(&self, seg: &Ray, li: usize, light: &Light, p: Vec3A) -> Option<f32> {
-        if !self.equiangular {
-            return None;
-        }
-        let c = point_of(light)?;
-        let e = Equiangular::new(seg, c)?;
+    fn equiangular_pdf(&self, seg: &Ray, li: usize, p: Vec3A) -> Option<f32> {
+        let e = self.aim(seg, li)?;
         let pmf = self.scene.light_select.pmf(li, seg.origin, Vec3A::ZERO);
         Some(pmf * e.pdf((p - seg.origin).dot(seg.dir)))
     }
 
-    /// Single scattering towards a point or spot light along a flight's segment `seg`,
-    /// the distance sampled equiangularly (media/equiangular.rs) and weighed against the
-    /// free-flight distance and light sampling at its vertex (power heuristic): the
+    /// Single scattering towards a light along a flight's segment `seg`, the distance
+    /// sampled equiangularly towards its centre (media/equiangular.rs), the light then
+    /// sampled from there as a vertex samples it, weighed as the module doc says: the
     /// same `V` then `L` events as a medium vertex's light sample. The light is chosen
-    /// from the segment's origin; other lights are left to the vertices.
+    /// from the segment's origin; lights the flight does not aim at are left to the
+    /// vertices.
     fn equiangular_light(
         &self,
         out: &mut Sink,
@@ -464,11 +541,11 @@ impl Tracer<'_> {
         };
         let light = &scene.lights[li];
         let s_light = a.step(s_v, light.classes.light);
-        let (Some(c), false) = (point_of(light), a.accepting(s_light).is_empty()) else {
+        if a.accepting(s_light).is_empty() || !self.lit(object, li as u32) {
             return;
-        };
+        }
         let volume = &scene.volumes[m.volume as usize];
-        let Some(e) = Equiangular::new(seg, c).filter(|_| self.lit(object, li as u32)) else {
+        let Some(e) = self.aim(seg, li) else {
             return;
         };
         let (t, pdf_t) = e.sample(u_t);
@@ -486,7 +563,13 @@ impl Tracer<'_> {
                 None => return,
             },
         };
-        let Some(ls) = light.sample(p, Vec2::ZERO, scene.accel.prims()) else {
+        // An area light's point takes two numbers (a delta light's none, which keeps
+        // their streams as they were).
+        let u_point = match light.is_delta() {
+            true => Vec2::ZERO,
+            false => Vec2::new(path.rng.next_f32(), path.rng.next_f32()),
+        };
+        let Some(ls) = light.sample(p, u_point, scene.accel.prims()) else {
             return;
         };
         let f = volume.phase.eval(seg.dir, ls.wi);
@@ -494,10 +577,9 @@ impl Tracer<'_> {
         if f <= 0.0 || pdf_e.is_nan() || pdf_e <= 0.0 {
             return;
         }
-        let w = pdf_d.map_or(1.0, |pdf_d| {
-            let light_pdf = scene.light_select.pmf(li, p, Vec3A::ZERO) * ls.pdf;
-            power_heuristic(pdf_e, pdf_d * light_pdf)
-        });
+        let pmf_p = scene.light_select.pmf(li, p, Vec3A::ZERO);
+        let share = light_share(light, &ls, pmf_p * ls.pdf, f);
+        let w = share * pdf_d.map_or(1.0, |pdf_d| power_heuristic(pdf_e, pdf_d * pmf_p));
         let shadow = Ray {
             origin: p,
             dir: ls.wi,
@@ -579,5 +661,64 @@ impl Tracer<'_> {
         };
         let le = volume.emitted(seg, &mut path.rng);
         self.contribute(out, s, path.throughput, le, 1.0, origin);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::aov;
+    use crate::scene::Source;
+
+    fn scene(render: &str) -> Scene {
+        let text = format!(
+            "[render]\n{render}\n[media.fog]\nsigma_s = [0.1, 0.1, 0.1]\n\
+             [[objects]]\nname = \"box\"\nshape = \"cube\"\nscale = 3\nmaterial = \"null\"\n\
+             interior = \"fog\"\n\
+             [[lights]]\ntype = \"disk\"\nscale = [0.08, 0.08, 1]\nrotate = [180, 0, 0]\n\
+             translate = [-0.2, 0, 1.9]\nradiance = [5, 5, 5]\n\
+             [[lights]]\ntype = \"rect\"\nscale = [0.1, 0.2, 1]\nrotate = [30, 0, 0]\n\
+             translate = [1, 1, 0]\nradiance = [5, 5, 5]\n\
+             [[lights]]\ntype = \"sphere\"\ncenter = [0, 0.5, 0]\nradius = 0.1\n\
+             radiance = [5, 5, 5]\n\
+             [[lights]]\ntype = \"point\"\nposition = [0, 0, 1]\nintensity = [1, 1, 1]\n\
+             [[lights]]\ntype = \"distant\"\ndirection = [0, 0, -1]\nirradiance = [1, 1, 1]\n"
+        );
+        let desc = Source {
+            name: "aims.toml".into(),
+            text,
+            dir: Default::default(),
+        }
+        .parse()
+        .unwrap();
+        Scene::build(&desc, &aov::assemble(vec![])).unwrap()
+    }
+
+    /// Disk, rect, sphere and point lights are aimed at by their bounding spheres (the
+    /// disk's and rect's from their triangles), a distant light not; `distance` sampling
+    /// aims at none.
+    #[test]
+    fn lights_are_aimed_at_by_their_bounding_spheres() {
+        let s = scene("");
+        let aims = aims(&s);
+        let want = [
+            Some((Vec3A::new(-0.2, 0.0, 1.9), 0.08)),
+            Some((Vec3A::new(1.0, 1.0, 0.0), (0.1f32 * 0.1 + 0.2 * 0.2).sqrt())),
+            Some((Vec3A::new(0.0, 0.5, 0.0), 0.1)),
+            Some((Vec3A::new(0.0, 0.0, 1.0), 0.0)),
+            None,
+        ];
+        assert_eq!(aims.len(), want.len());
+        for (k, (got, want)) in aims.iter().zip(want).enumerate() {
+            match (got, want) {
+                (Some(a), Some((c, r))) => assert!(
+                    a.centre.distance(c) < 1e-5 && (a.radius - r).abs() < 1e-5,
+                    "light {k}: {a:?}, want {c} {r}"
+                ),
+                (None, None) => {}
+                _ => panic!("light {k}: {got:?}, want {want:?}"),
+            }
+        }
+        assert!(super::aims(&scene("volume_sampling = \"distance\"")).is_empty());
     }
 }

@@ -96,6 +96,36 @@ impl Medium {
     }
 }
 
+/// How flights through media pick the distances of single scattering towards lights
+/// (`[render] volume_sampling`): `mis`, free-flight distances and, towards point, spot
+/// and small area lights, equiangular ones weighed together (integrator/volume.rs);
+/// `distance`, free-flight distances alone (the plain estimator, to compare against).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum VolumeSampling {
+    #[default]
+    Mis,
+    Distance,
+}
+
+impl VolumeSampling {
+    pub const NAMES: [&'static str; 2] = ["mis", "distance"];
+
+    pub fn parse(s: &str) -> Option<VolumeSampling> {
+        match s {
+            "mis" => Some(VolumeSampling::Mis),
+            "distance" => Some(VolumeSampling::Distance),
+            _ => None,
+        }
+    }
+
+    pub fn name(self) -> &'static str {
+        match self {
+            VolumeSampling::Mis => "mis",
+            VolumeSampling::Distance => "distance",
+        }
+    }
+}
+
 /// A medium as a scene uses it: coefficients, phase function and emission.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Volume {

@@ -42,6 +42,11 @@ const EXAMPLES: &[Example] = &[
         ("random", "\"random\""),
     ),
     ex("light_candidates", ("4", "4"), ("65", "65")),
+    ex(
+        "volume_sampling",
+        ("distance", "\"distance\""),
+        ("equiangular", "\"equiangular\""),
+    ),
     ex("noise_threshold", ("0.1", "0.1"), ("-1", "-1")),
     ex("min_spp", ("8", "8"), ("0", "0")),
     ex("regularize", ("0.3", "0.3"), ("5", "5")),
@@ -227,6 +232,7 @@ fn the_header_keeps_its_attribute_names_and_values() {
         ("lightpath/setting/resolution", "256x256"),
         ("lightpath/setting/rr_depth", "5"),
         ("lightpath/setting/sampler", "sobol"),
+        ("lightpath/setting/volume_sampling", "mis"),
         ("lightpath/spp", "16"),
     ];
     let owned = |list: &[(&str, &str)]| -> Vec<(String, String)> {
