@@ -192,8 +192,9 @@ settings! {
         role: Shared,
         header: Header::Setting,
         help: "Single scattering in media: mis (free-flight distances, and equiangular ones \
-               towards point, spot and small area lights, weighed by MIS) or distance \
-               (free-flight distances alone).",
+               towards point, spot and small sphere lights, weighed by MIS), mis-area \
+               (also towards small rect, quad and disk lights) or distance (free-flight \
+               distances alone).",
     }
     noise_threshold: f32 = 0.0, {
         section: Render,

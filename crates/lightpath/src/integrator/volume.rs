@@ -1,7 +1,8 @@
 //! Paths through participating media (media/): the medium a path is in, free flights
 //! that end at a scattering vertex (a `V` event, light sampled there with MIS against
 //! the phase function, the next direction from the phase function), single scattering
-//! towards point, spot and small area lights at equiangularly sampled distances (Kulla &
+//! towards point, spot and small sphere lights (rect, quad and disk lights too with
+//! `volume_sampling = "mis-area"`) at equiangularly sampled distances (Kulla &
 //! Fajardo 2012, "Importance Sampling Techniques for Path Tracing in Participating
 //! Media"; media/equiangular.rs), and the transmittance of shadow rays, which pass null
 //! boundaries and media and stop at any other surface.
@@ -89,16 +90,24 @@ pub(super) struct Aim {
 }
 
 /// Per light of `scene`, what equiangular sampling aims at: point and spot lights, and
-/// sphere, rect, quad and disk lights by their bounding sphere (whether a flight takes
-/// one is [`Equiangular::towards`]'s test: it stays outside that sphere). Empty, so no
-/// equiangular sampling, without media or such lights or with `volume_sampling =
-/// "distance"`. Mesh lights and glows, of any shape and size, are left to the vertices.
+/// sphere lights by their bounding sphere, and with `volume_sampling = "mis-area"` rect,
+/// quad and disk lights too (whether a flight takes one is [`Equiangular::towards`]'s
+/// test: it stays outside that sphere). Empty, so no equiangular sampling, without
+/// media or such lights or with `volume_sampling = "distance"`. Mesh lights and glows,
+/// of any shape and size, are left to the vertices.
 pub(super) fn aims(scene: &Scene) -> Vec<Option<Aim>> {
-    if !scene.has_media || scene.settings.volume_sampling != VolumeSampling::Mis {
-        return Vec::new();
-    }
+    let one_sided = match scene.settings.volume_sampling {
+        _ if !scene.has_media => return Vec::new(),
+        VolumeSampling::Distance => return Vec::new(),
+        VolumeSampling::Mis => false,
+        VolumeSampling::MisArea => true,
+    };
     let prims = scene.accel.prims();
-    let aims: Vec<_> = scene.lights.iter().map(|l| aim_of(l, prims)).collect();
+    let aims: Vec<_> = scene
+        .lights
+        .iter()
+        .map(|l| aim_of(l, prims, one_sided))
+        .collect();
     if aims.iter().any(Option::is_some) {
         aims
     } else {
@@ -106,12 +115,15 @@ pub(super) fn aims(scene: &Scene) -> Vec<Option<Aim>> {
     }
 }
 
-fn aim_of(light: &Light, prims: &[Prim]) -> Option<Aim> {
+/// One light's aim; rect, quad and disk lights (`LightShape::Triangles`) only if
+/// `one_sided`: half of the distances sampled towards them fall behind them, and at equal
+/// time they lost to free flights alone (benches/media/README.md).
+fn aim_of(light: &Light, prims: &[Prim], one_sided: bool) -> Option<Aim> {
     let (centre, radius) = match &light.shape {
         LightShape::Point(p) => (p.position, 0.0),
         LightShape::Spot(s) => (s.position, 0.0),
         LightShape::Sphere(s) => (s.center, s.radius),
-        LightShape::Triangles(t) => {
+        LightShape::Triangles(t) if one_sided => {
             let corners = || {
                 t.prims
                     .iter()
@@ -694,12 +706,12 @@ mod tests {
         Scene::build(&desc, &aov::assemble(vec![])).unwrap()
     }
 
-    /// Disk, rect, sphere and point lights are aimed at by their bounding spheres (the
-    /// disk's and rect's from their triangles), a distant light not; `distance` sampling
-    /// aims at none.
+    /// With `mis-area`, disk, rect, sphere and point lights are aimed at by their
+    /// bounding spheres (the disk's and rect's from their triangles), a distant light
+    /// not; `mis` (the default) leaves the disk and rect out; `distance` aims at none.
     #[test]
     fn lights_are_aimed_at_by_their_bounding_spheres() {
-        let s = scene("");
+        let s = scene("volume_sampling = \"mis-area\"");
         let aims = aims(&s);
         let want = [
             Some((Vec3A::new(-0.2, 0.0, 1.9), 0.08)),
@@ -719,6 +731,11 @@ mod tests {
                 _ => panic!("light {k}: {got:?}, want {want:?}"),
             }
         }
+        let default: Vec<_> = super::aims(&scene(""))
+            .iter()
+            .map(Option::is_some)
+            .collect();
+        assert_eq!(default, [false, false, true, true, false]);
         assert!(super::aims(&scene("volume_sampling = \"distance\"")).is_empty());
     }
 }

@@ -98,21 +98,25 @@ impl Medium {
 
 /// How flights through media pick the distances of single scattering towards lights
 /// (`[render] volume_sampling`): `mis`, free-flight distances and, towards point, spot
-/// and small area lights, equiangular ones weighed together (integrator/volume.rs);
-/// `distance`, free-flight distances alone (the plain estimator, to compare against).
+/// and small sphere lights, equiangular ones weighed together (integrator/volume.rs);
+/// `mis-area`, the same also towards small one-sided rect, quad and disk lights (it
+/// lost at equal time in the scenes of benches/media/README.md, so it is not the
+/// default); `distance`, free-flight distances alone (the plain estimator).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum VolumeSampling {
     #[default]
     Mis,
+    MisArea,
     Distance,
 }
 
 impl VolumeSampling {
-    pub const NAMES: [&'static str; 2] = ["mis", "distance"];
+    pub const NAMES: [&'static str; 3] = ["mis", "mis-area", "distance"];
 
     pub fn parse(s: &str) -> Option<VolumeSampling> {
         match s {
             "mis" => Some(VolumeSampling::Mis),
+            "mis-area" => Some(VolumeSampling::MisArea),
             "distance" => Some(VolumeSampling::Distance),
             _ => None,
         }
@@ -121,6 +125,7 @@ impl VolumeSampling {
     pub fn name(self) -> &'static str {
         match self {
             VolumeSampling::Mis => "mis",
+            VolumeSampling::MisArea => "mis-area",
             VolumeSampling::Distance => "distance",
         }
     }

@@ -886,7 +886,7 @@ fn thin_fog(light: &str, settings: &str) -> String {
 #[test]
 fn equiangular_sampling_of_small_area_lights_is_unbiased() {
     for (name, light) in [("sphere", SMALL_SPHERE), ("quad", SMALL_QUAD)] {
-        let mis = thin_fog(light, "seed = 1");
+        let mis = thin_fog(light, "seed = 1\nvolume_sampling = \"mis-area\"");
         let distance = thin_fog(light, "seed = 2\nvolume_sampling = \"distance\"");
         let (scene, a) = render_aovs(&mis, 256, vec![]);
         let (_, b) = render_aovs(&distance, 256, vec![]);
