@@ -1239,14 +1239,8 @@ mod tests {
                 u32::MAX,
                 &mut Stack::<(u32, f32), STACK>::new(),
             );
-            let heap = accel.closest::<L, false>(
-                tree,
-                &ray,
-                0.0,
-                7,
-                u32::MAX,
-                &mut vec![(0, 0.0); need],
-            );
+            let heap =
+                accel.closest::<L, false>(tree, &ray, 0.0, 7, u32::MAX, &mut vec![(0, 0.0); need]);
             assert_eq!(fixed, heap);
             let fixed = accel.any_hit(tree, &ray, 0.0, 2, &mut Stack::<u32, STACK>::new());
             let heap = accel.any_hit(tree, &ray, 0.0, 2, &mut vec![0; need]);
