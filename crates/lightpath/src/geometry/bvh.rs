@@ -409,7 +409,8 @@ impl Accel {
         ignore: u32,
     ) -> (u32, f32, u32) {
         // The test for an ignored object compiled in only where one is given: the
-        // traversal of every other ray is the one without it (~18 instructions a ray on cornell-classic).
+        // traversal of every other ray is the one without it (~18 instructions a ray on
+        // cornell-classic).
         if ignore == u32::MAX {
             self.nearest::<false>(ray, tmin, mask, ignore, &DEEP_CLOSEST)
         } else {
