@@ -186,28 +186,7 @@ impl Prim {
                 }
             }
             Prim::Sphere { center, radius } => {
-                let oc = origin - center;
-                let a = dir.length_squared();
-                let half_b = oc.dot(dir);
-                let c = oc.length_squared() - radius * radius;
-                let disc = half_b * half_b - a * c;
-                if disc < 0.0 {
-                    return f32::INFINITY;
-                }
-                let sq = disc.sqrt();
-                // The numerically stable pair of roots.
-                let q = -(half_b + sq.copysign(half_b));
-                let (mut t0, mut t1) = (q / a, c / q);
-                if t0 > t1 {
-                    std::mem::swap(&mut t0, &mut t1);
-                }
-                if t0 > tmin && t0 < tmax {
-                    t0
-                } else if t1 > tmin && t1 < tmax {
-                    t1
-                } else {
-                    f32::INFINITY
-                }
+                sphere_intersect(center, radius, origin, dir, tmin, tmax)
             }
             Prim::Cylinder { .. } => self.cylinder_intersect(origin, dir, tmin, tmax),
             Prim::Instance { .. } => f32::INFINITY,
@@ -284,6 +263,42 @@ impl Prim {
                 return t;
             }
         }
+        f32::INFINITY
+    }
+}
+
+/// Distance along the ray to the nearest hit in (tmin, tmax) on the sphere, or infinity.
+/// On its own so that sphere lights, which know their shape, call it without going
+/// through [`Prim::intersect`]'s match (which is too large to inline there).
+#[inline]
+pub fn sphere_intersect(
+    center: Vec3A,
+    radius: f32,
+    origin: Vec3A,
+    dir: Vec3A,
+    tmin: f32,
+    tmax: f32,
+) -> f32 {
+    let oc = origin - center;
+    let a = dir.length_squared();
+    let half_b = oc.dot(dir);
+    let c = oc.length_squared() - radius * radius;
+    let disc = half_b * half_b - a * c;
+    if disc < 0.0 {
+        return f32::INFINITY;
+    }
+    let sq = disc.sqrt();
+    // The numerically stable pair of roots.
+    let q = -(half_b + sq.copysign(half_b));
+    let (mut t0, mut t1) = (q / a, c / q);
+    if t0 > t1 {
+        std::mem::swap(&mut t0, &mut t1);
+    }
+    if t0 > tmin && t0 < tmax {
+        t0
+    } else if t1 > tmin && t1 < tmax {
+        t1
+    } else {
         f32::INFINITY
     }
 }

@@ -170,10 +170,16 @@ impl LobeValues {
 }
 
 impl Tracer<'_> {
-    /// Guiding at vertex `v`, if the render guides and its Bsdf is guided.
-    #[inline]
+    /// Guiding at vertex `v`, if the render guides and its Bsdf is guided. Inlined, so
+    /// that a render that does not guide pays one test per vertex, not a call.
+    #[inline(always)]
     pub(super) fn guide_at(&self, bsdf: &Bsdf, p: Vec3A) -> Option<GuideAt> {
         let tree = self.guide?;
+        self.guide_in(tree, bsdf, p)
+    }
+
+    /// `guide_at` in a render that guides with `tree`.
+    fn guide_in(&self, tree: &SdTree, bsdf: &Bsdf, p: Vec3A) -> Option<GuideAt> {
         if !guidable(bsdf) {
             return None;
         }

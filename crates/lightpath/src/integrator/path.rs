@@ -67,6 +67,8 @@ pub(super) struct Vertex<'a> {
 impl PathState {
     /// A path at the camera, about to trace `ray`.
     /// `seeded`: whether the path draws from its own stream (`Tracer::path_rng`).
+    /// Inlined: built in place, not returned through a copy.
+    #[inline(always)]
     fn start(scene: &crate::scene::Scene, ray: &Ray, seeded: bool) -> PathState {
         let a = &scene.automaton;
         PathState {

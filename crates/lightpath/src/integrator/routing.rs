@@ -198,14 +198,18 @@ impl Tracer<'_> {
         mis: f32,
         origin: Origin,
     ) {
-        if self.learn
-            && !out.record.is_empty()
-            && matches!(
-                origin.via,
-                Via::Hit { .. } | Via::LightSample { visible: true } | Via::Glow
-            )
-        {
-            out.record.add(throughput * local * mis);
+        if self.learn {
+            // A training pass keeps only what its path records for the guide; its film
+            // is thrown away (guided.rs, `train`), so nothing is routed to AOVs.
+            if !out.record.is_empty()
+                && matches!(
+                    origin.via,
+                    Via::Hit { .. } | Via::LightSample { visible: true } | Via::Glow
+                )
+            {
+                out.record.add(throughput * local * mis);
+            }
+            return;
         }
         let rules = self.scene.automaton.accepting(state);
         if rules.is_empty() {

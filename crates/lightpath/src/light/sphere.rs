@@ -11,7 +11,7 @@
 
 use super::select::{Cone, LightBounds, Reach};
 use super::{LightModel, LightSample};
-use crate::geometry::{Prim, Ray};
+use crate::geometry::{sphere_intersect, Prim, Ray};
 use crate::sampling::{uniform_cone, Frame};
 use glam::{Vec2, Vec3A};
 use std::f32::consts::PI;
@@ -34,15 +34,6 @@ pub struct Sphere {
     pub radius: f32,
 }
 
-impl Sphere {
-    fn prim(&self) -> Prim {
-        Prim::Sphere {
-            center: self.center,
-            radius: self.radius,
-        }
-    }
-}
-
 impl LightModel for Sphere {
     /// A direction in the cone the sphere subtends from `p`, uniformly.
     fn sample(&self, color: Vec3A, p: Vec3A, u: Vec2, _: &[Prim]) -> Option<LightSample> {
@@ -56,9 +47,7 @@ impl LightModel for Sphere {
         let cos_max = 1.0 - one_minus_cos;
         let frame = Frame::new(to_c / d2.sqrt());
         let wi = frame.to_world(uniform_cone(u, cos_max));
-        let dist = self
-            .prim()
-            .intersect(p, wi, 0.0, f32::INFINITY)
+        let dist = sphere_intersect(center, radius, p, wi, 0.0, f32::INFINITY)
             // A grazing direction may miss in floating point: use its closest approach.
             .min(to_c.dot(wi));
         Some(LightSample {
@@ -100,7 +89,7 @@ impl LightModel for Sphere {
         })
     }
     fn intersect(&self, ray: &Ray, tmax: f32, _: &[Prim]) -> Option<(f32, Vec3A)> {
-        let t = self.prim().intersect(ray.origin, ray.dir, 0.0, tmax);
+        let t = sphere_intersect(self.center, self.radius, ray.origin, ray.dir, 0.0, tmax);
         t.is_finite()
             .then(|| (t, (ray.origin + ray.dir * t - self.center) / self.radius))
     }
