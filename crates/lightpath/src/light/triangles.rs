@@ -279,12 +279,13 @@ mod tests {
     }
 
     /// Shading points: on the ceiling right above the lamp, beside it at a grazing
-    /// angle, below it (two-sided only), and far enough to be sampled by area.
-    const POINTS: [Vec3A; 5] = [
+    /// angle, below it (two-sided only), and two far enough to be sampled by area.
+    const POINTS: [Vec3A; 6] = [
         Vec3A::new(0.0, 1.0, 0.0),
         Vec3A::new(0.4, 0.98, -0.3),
-        Vec3A::new(0.6, 0.81, 0.1),
+        Vec3A::new(0.5, 0.81, 0.1),
         Vec3A::new(0.1, 0.5, 0.2),
+        Vec3A::new(0.5, 1.0, 0.6),
         Vec3A::new(1.5, 4.0, 2.0),
     ];
 
