@@ -15,10 +15,10 @@
 //!   [`NEAR`] = ½ of its distance), and the spherical rectangle subtends at least
 //!   [`MIN_SOLID_ANGLE`]. Farther, area sampling's pdf varies over the light by at most
 //!   ((1+κ)/(1−κ))³ edge-on and (1+κ²)^{3/2} ≈ 1.4 face-on, while a solid-angle sample
-//!   costs ~80 ns more (three atan2, a sin_cos and the square roots, in f64). κ was
+//!   costs far more (three atan2, a sin_cos and the square roots, in f64). κ was
 //!   measured (docs/performance.md, "Solid-angle sampling of rect lights"): at κ = 0.1
 //!   cornell-classic's small lamp was sampled in solid angle from everywhere, 3–5 % less
-//!   error for 40 % more time; at 0.5 the indirect box keeps nearly all of its gain;
+//!   error for 40–60 % more time; at 0.5 the indirect box keeps nearly all of its gain;
 //! - **area** otherwise: far away, and where the spherical rectangle degenerates to an
 //!   arc (the point nearly in the light's plane, where the parametrization's divisions
 //!   lose their precision and the light delivers almost nothing anyway).
