@@ -158,7 +158,7 @@ impl Rect {
 }
 
 impl Seen {
-    /// The point of the rectangle that `u` maps to (the paper's §4, uniform in solid
+    /// The point of the rectangle that `u` maps to (the paper's inversion, uniform in solid
     /// angle).
     #[inline]
     pub fn point(&self, u: Vec2) -> Vec3A {
