@@ -2,7 +2,8 @@
 //! closed set of kinds a [`Light`] stores inline (dispatch by `match`, no allocation, as
 //! the material lobes are). Area lights: `triangles` (rectangle, quad, disk), `mesh` (an
 //! object's own triangles), `sphere`, `cylinder`; delta lights: `point`, `spot`,
-//! `distant`; at infinity: `dome`. `select` chooses which light a shading point samples.
+//! `distant`; at infinity: `dome`. `select` chooses which light a shading point samples;
+//! `spherical_rect` samples rectangles in solid angle.
 //!
 //! A [`Light`] carries what is the same for every kind: its colour, its light groups, the
 //! classes of its `L` and `O` events and its part in split AOVs, so that the integrator
@@ -26,6 +27,7 @@ pub mod mesh;
 pub mod point;
 pub mod select;
 pub mod sphere;
+pub mod spherical_rect;
 pub mod spot;
 pub mod triangles;
 

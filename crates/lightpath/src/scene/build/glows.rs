@@ -89,6 +89,7 @@ fn shape(range: &Range<u32>, accel: &Accel) -> Option<LightShape> {
             prims: slots,
             normals,
             parallelogram: None,
+            rect: None,
             by_area: Distribution1D::new(&areas),
             area,
             two_sided: true,

@@ -3,6 +3,7 @@
 
 use crate::geometry::shapes::{self, ShapePrims};
 use crate::geometry::{Accel, Prim};
+use crate::light::spherical_rect::Rect;
 use crate::light::triangles::Shaping;
 use crate::light::{
     Cylinder, Distant, Dome, EnvMap, Light, LightModel, LightShape, Mesh, Point, Sphere, Spot,
@@ -25,8 +26,10 @@ pub fn light_shape(l: &LightDesc) -> Result<(LightShape, Option<ShapePrims>, Vec
         super::geometry::check_finite(&prims, &l.origin)?;
         let areas: Vec<f32> = prims.prims.iter().map(Prim::area).collect();
         let normals = prims.prims.iter().map(Prim::face_normal).collect();
+        let parallelogram = parallelogram(&prims.prims);
         let shape = Triangles {
-            parallelogram: parallelogram(&prims.prims),
+            parallelogram,
+            rect: parallelogram.and_then(|[p0, e1, e2]| Rect::new(p0, e1, e2)),
             // Filled once the primitives are in the scene (`locate_prims`).
             prims: Vec::new(),
             normals,
@@ -104,6 +107,7 @@ pub fn light_shape(l: &LightDesc) -> Result<(LightShape, Option<ShapePrims>, Vec
                 prims: Vec::new(),
                 normals: Vec::new(),
                 parallelogram: None,
+                rect: None,
                 by_area: Distribution1D::default(),
                 area: 0.0,
                 two_sided: l.two_sided,
