@@ -104,6 +104,21 @@ impl Triangles {
         if cos_l == 0.0 || !dist.is_finite() || dist == 0.0 {
             return None;
         }
+        let pdf = pdf_of.unwrap_or(dist2 / (cos_l.abs() * self.area));
+        self.shaped_sample(color, wi, dist, cos_l, pdf)
+    }
+
+    /// The sample towards a point seen at `cos_l` off the light's normal, its radiance
+    /// shaped (focus, tint, cone), or None where the shaping gives none.
+    #[inline(always)]
+    fn shaped_sample(
+        &self,
+        color: Vec3A,
+        wi: Vec3A,
+        dist: f32,
+        cos_l: f32,
+        pdf: f32,
+    ) -> Option<LightSample> {
         let shaped = match &self.shaping {
             Some(s) => s.factor(cos_l),
             None => Vec3A::ONE,
@@ -115,7 +130,7 @@ impl Triangles {
             wi,
             dist,
             radiance: color * shaped,
-            pdf: pdf_of.unwrap_or(dist2 / (cos_l.abs() * self.area)),
+            pdf,
             delta: false,
         })
     }
@@ -148,20 +163,7 @@ impl LightModel for Triangles {
         if cos_l <= 0.0 && !self.two_sided || cos_l == 0.0 {
             return None;
         }
-        let shaped = match &self.shaping {
-            Some(s) => s.factor(cos_l),
-            None => Vec3A::ONE,
-        };
-        if shaped.max_element() <= 0.0 {
-            return None;
-        }
-        Some(LightSample {
-            wi,
-            dist,
-            radiance: color * shaped,
-            pdf: dist2 / (cos_l.abs() * self.area),
-            delta: false,
-        })
+        self.shaped_sample(color, wi, dist, cos_l, dist2 / (cos_l.abs() * self.area))
     }
 
     fn pdf(&self, p: Vec3A, dir: Vec3A, t: f32, ng: Vec3A) -> f32 {
