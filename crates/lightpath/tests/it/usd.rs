@@ -1483,6 +1483,69 @@ fn a_farm_merges_each_render_product_into_its_own_file() {
     }
 }
 
+/// `farm … --denoise -o DIR/` end to end: the tile parts merged per product, then each
+/// product's file denoised, give exactly what `render --denoise -o DIR/` gives (tiles
+/// merge to the single render's pixels, and the filter is deterministic).
+#[cfg(feature = "denoise")]
+#[test]
+fn a_denoised_farm_gives_each_product_as_a_denoised_render_does() {
+    use std::process::Command;
+    let dir = Scratch::new("usd-farm-denoise");
+    let scene = write(&dir, "shot.usda", &two_products());
+    let path = crate::farm::fake_sbatch(&dir);
+    let bin = env!("CARGO_BIN_EXE_lightpath");
+    let args = [
+        "--spp",
+        "4",
+        "--resolution",
+        "16x12",
+        "--light-groups",
+        "--denoise",
+    ];
+    let run = |cmd: &mut Command| {
+        let out = cmd.output().unwrap();
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        String::from_utf8(out.stdout).unwrap()
+    };
+    let single = dir.join("single");
+    std::fs::create_dir(&single).unwrap();
+    run(Command::new(bin)
+        .arg("render")
+        .arg(&scene)
+        .args(args)
+        .args(["--quiet", "-o"])
+        .arg(&single));
+    let out = format!("{}/", dir.join("farm").display());
+    let script = run(Command::new(bin)
+        .args(["farm", "slurm"])
+        .arg(&scene)
+        .args(["--tasks", "2", "--by", "tiles", "-o", &out])
+        .args(args));
+    let submit = dir.join("farm.sh");
+    std::fs::write(&submit, &script).unwrap();
+    run(Command::new("bash")
+        .arg(&submit)
+        .env("PATH", &path)
+        .env("SBATCH_STATE", dir.join("farm.state")));
+    for name in ["aovs.exr", "beauty.exr"] {
+        let farmed = dir.join("farm").join(name);
+        let exr = lightpath::output::read_exr(&farmed).unwrap();
+        assert!(
+            exr.attributes
+                .iter()
+                .any(|(k, _)| k == lightpath::aov::naming::DENOISED_ATTRIBUTE),
+            "{name} is not marked denoised"
+        );
+        same_channels(&single.join(name), &farmed, true);
+        let (report, ok) = lightpath::post::partitions::report(&farmed, 1e-4).unwrap();
+        assert!(ok, "{report}");
+    }
+}
+
 #[cfg(feature = "denoise")]
 #[test]
 fn denoise_filters_each_render_products_file() {
