@@ -1434,47 +1434,68 @@ fn same_channels(a: &Path, b: &Path, exact: bool) {
     }
 }
 
+/// Runs `cmd`, which must succeed; its standard output.
+fn run_ok(cmd: &mut std::process::Command) -> String {
+    let out = cmd.output().unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    String::from_utf8(out.stdout).unwrap()
+}
+
+/// `scene` rendered with `args` into the directory `dir/single`, and as a farm job of two
+/// parts split by `by` (through the fake sbatch) into `dir/<by>`: the two directories.
+fn render_and_farm(
+    dir: &Scratch,
+    scene: &Path,
+    args: &[&str],
+    by: &str,
+) -> (std::path::PathBuf, std::path::PathBuf) {
+    use std::process::Command;
+    let bin = env!("CARGO_BIN_EXE_lightpath");
+    let single = dir.join("single");
+    if !single.exists() {
+        std::fs::create_dir(&single).unwrap();
+        run_ok(
+            Command::new(bin)
+                .arg("render")
+                .arg(scene)
+                .args(args)
+                .args(["--quiet", "-o"])
+                .arg(&single),
+        );
+    }
+    // `-o DIR/`: every product's file there, each merged from its own parts.
+    let out = format!("{}/", dir.join(by).display());
+    let script = run_ok(
+        Command::new(bin)
+            .args(["farm", "slurm"])
+            .arg(scene)
+            .args(["--tasks", "2", "--by", by, "-o", &out])
+            .args(args),
+    );
+    let submit = dir.join(&format!("{by}.sh"));
+    std::fs::write(&submit, &script).unwrap();
+    run_ok(
+        Command::new("bash")
+            .arg(&submit)
+            .env("PATH", crate::farm::fake_sbatch(dir))
+            .env("SBATCH_STATE", dir.join(&format!("{by}.state"))),
+    );
+    (single, dir.join(by))
+}
+
 #[test]
 fn a_farm_merges_each_render_product_into_its_own_file() {
-    use std::process::Command;
     let dir = Scratch::new("usd-farm");
     let scene = write(&dir, "shot.usda", &two_products());
-    let path = crate::farm::fake_sbatch(&dir);
-    let bin = env!("CARGO_BIN_EXE_lightpath");
     let args = ["--spp", "4", "--resolution", "16x12", "--light-groups"];
-    let run = |cmd: &mut Command| {
-        let out = cmd.output().unwrap();
-        assert!(
-            out.status.success(),
-            "{}",
-            String::from_utf8_lossy(&out.stderr)
-        );
-        String::from_utf8(out.stdout).unwrap()
-    };
-    let single = dir.join("single");
-    std::fs::create_dir(&single).unwrap();
-    run(Command::new(bin)
-        .arg("render")
-        .arg(&scene)
-        .args(args)
-        .args(["--quiet", "-o"])
-        .arg(&single));
     for by in ["tiles", "samples"] {
-        // `-o DIR/`: every product's file there, each merged from its own parts.
-        let out = format!("{}/", dir.join(by).display());
-        let script = run(Command::new(bin)
-            .args(["farm", "slurm"])
-            .arg(&scene)
-            .args(["--tasks", "2", "--by", by, "-o", &out])
-            .args(args));
-        let submit = dir.join(&format!("{by}.sh"));
-        std::fs::write(&submit, &script).unwrap();
-        run(Command::new("bash")
-            .arg(&submit)
-            .env("PATH", &path)
-            .env("SBATCH_STATE", dir.join(&format!("{by}.state"))));
+        let (single, farmed) = render_and_farm(&dir, &scene, &args, by);
         for name in ["aovs.exr", "beauty.exr"] {
-            let merged = dir.join(by).join(name);
+            let merged = farmed.join(name);
             // Tiles are the single render's pixels exactly; sample ranges to rounding.
             same_channels(&single.join(name), &merged, by == "tiles");
             let (report, ok) = lightpath::post::partitions::report(&merged, 1e-4).unwrap();
@@ -1489,11 +1510,8 @@ fn a_farm_merges_each_render_product_into_its_own_file() {
 #[cfg(feature = "denoise")]
 #[test]
 fn a_denoised_farm_gives_each_product_as_a_denoised_render_does() {
-    use std::process::Command;
     let dir = Scratch::new("usd-farm-denoise");
     let scene = write(&dir, "shot.usda", &two_products());
-    let path = crate::farm::fake_sbatch(&dir);
-    let bin = env!("CARGO_BIN_EXE_lightpath");
     let args = [
         "--spp",
         "4",
@@ -1502,37 +1520,9 @@ fn a_denoised_farm_gives_each_product_as_a_denoised_render_does() {
         "--light-groups",
         "--denoise",
     ];
-    let run = |cmd: &mut Command| {
-        let out = cmd.output().unwrap();
-        assert!(
-            out.status.success(),
-            "{}",
-            String::from_utf8_lossy(&out.stderr)
-        );
-        String::from_utf8(out.stdout).unwrap()
-    };
-    let single = dir.join("single");
-    std::fs::create_dir(&single).unwrap();
-    run(Command::new(bin)
-        .arg("render")
-        .arg(&scene)
-        .args(args)
-        .args(["--quiet", "-o"])
-        .arg(&single));
-    let out = format!("{}/", dir.join("farm").display());
-    let script = run(Command::new(bin)
-        .args(["farm", "slurm"])
-        .arg(&scene)
-        .args(["--tasks", "2", "--by", "tiles", "-o", &out])
-        .args(args));
-    let submit = dir.join("farm.sh");
-    std::fs::write(&submit, &script).unwrap();
-    run(Command::new("bash")
-        .arg(&submit)
-        .env("PATH", &path)
-        .env("SBATCH_STATE", dir.join("farm.state")));
+    let (single, farm) = render_and_farm(&dir, &scene, &args, "tiles");
     for name in ["aovs.exr", "beauty.exr"] {
-        let farmed = dir.join("farm").join(name);
+        let farmed = farm.join(name);
         let exr = lightpath::output::read_exr(&farmed).unwrap();
         assert!(
             exr.attributes
