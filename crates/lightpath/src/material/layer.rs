@@ -12,8 +12,8 @@ use glam::Vec3A;
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Layer {
     /// Dielectric specular reflection (OpenPBR's specular over the opaque base), at its
-    /// full weight: the base gets (1 − E(μo))(1 − E(μi)) / (1 − E_avg) of the light, E its
-    /// directional albedo (Kulla–Conty's reciprocal albedo scaling).
+    /// full weight: the base gets 1 − E(μo) of the light, E its directional albedo
+    /// towards the viewer (specular.rs says why not the reciprocal form).
     Specular(Specular),
     /// A clear coat: Fresnel transmission in and out, absorption by its colour over the
     /// path through it, and the darkening of light trapped beneath it.
@@ -48,7 +48,7 @@ impl Layer {
     /// (local frame, `wo.z > 0`).
     pub fn attenuation(&self, wo: Vec3A, wi: Vec3A) -> Vec3A {
         match *self {
-            Layer::Specular(s) => Vec3A::splat(s.base_attenuation(wo, wi)),
+            Layer::Specular(s) => Vec3A::splat(s.base_attenuation(wo)),
             Layer::Coat {
                 coat,
                 color,

@@ -78,7 +78,7 @@ macro_rules! openpbr_inputs {
             }
         }
 
-        /// Every parameter, in the specification's order.
+        /// Every parameter, in the specification's order, then Lightpath's own.
         pub const INPUTS: &[Input] = &[
             $(Input {
                 name: stringify!($name),
@@ -108,7 +108,7 @@ openpbr_inputs! {
     base_color: Color(0.8, 0.8, 0.8) "Diffuse albedo, and the metal's reflectance at normal incidence.";
     base_metalness: Scalar(0.0, 0.0, 1.0) "Mix from dielectric (0) to metal (1).";
     base_diffuse_roughness: Scalar(0.0, 0.0, 1.0) "Roughness of the diffuse lobe (Lambertian here: read, not used).";
-    specular_weight: Scalar(1.0, 0.0, BIG) "Multiplier on the specular reflection (above 1 raises the dielectric's reflectivity).";
+    specular_weight: Scalar(1.0, 0.0, BIG) "Multiplier on the dielectric's reflectance at normal incidence, through its IOR (above 1 raises it); the metal's whole reflection, up to 1.";
     specular_color: Color(1.0, 1.0, 1.0) "Tint of the dielectric's reflection; the metal's edge tint (F82).";
     specular_roughness: Scalar(0.3, 0.0, 1.0) "Roughness of the specular reflection and of transmission.";
     specular_roughness_anisotropy: Scalar(0.0, 0.0, 1.0) "Stretch of the roughness along the tangent.";
@@ -141,6 +141,7 @@ openpbr_inputs! {
     emission_color: Color(1.0, 1.0, 1.0) "Colour of the emission.";
     geometry_opacity: Scalar(1.0, 0.0, 1.0) "Presence: the fraction of rays that find the surface; the others pass through it without an event (cut-outs).";
     geometry_thin_walled: Bool(false) "An infinitely thin shell: subsurface becomes translucency, glass does not bend light.";
+    specular_color_f0_only: Bool(false) "Lightpath's, not OpenPBR's: specular_color tints the dielectric's reflectance at normal incidence only, fading to white at grazing, as glTF's KHR_materials_specular and Blender's Principled BSDF do (the glTF importer sets it).";
 }
 
 /// The input named `name`, if OpenPBR has one.
@@ -212,7 +213,7 @@ impl Bsdf {
         let thickness = p.thin_film_thickness * NM_PER_UM;
         let alpha =
             roughness_anisotropy_to_alpha(p.specular_roughness, p.specular_roughness_anisotropy);
-        let eta = p.specular_ior.max(1.0);
+        let eta = modulated_ior(p.specular_ior.max(1.0), p.specular_weight);
         // The opaque dielectric base: diffuse, and subsurface (translucency when thin).
         if set.diffuse {
             b.push(Lambert {
@@ -241,12 +242,13 @@ impl Bsdf {
             let specular = Specular {
                 eta,
                 tint: p.specular_color,
-                weight: p.specular_weight,
+                tint_f0_only: p.specular_color_f0_only,
+                weight: 1.0,
                 alpha,
                 lobe: 2,
             };
             b.push(Specular {
-                weight: p.specular_weight * opaque * (1.0 - film),
+                weight: opaque * (1.0 - film),
                 ..specular
             });
             if set.film {
@@ -255,7 +257,7 @@ impl Bsdf {
                     p.thin_film_ior,
                     thickness,
                     p.specular_color,
-                    p.specular_weight * opaque * film,
+                    opaque * film,
                     alpha,
                 ));
             }
@@ -289,6 +291,20 @@ impl Bsdf {
             + dielectric * transmission * p.transmission_color;
         Bsdf::from_builder(b, albedo)
     }
+}
+
+/// OpenPBR's modulated IOR (the specification's equation 26): `specular_weight` scales
+/// the dielectric's reflectance at normal incidence, F0 = ((η − 1)/(η + 1))², by way of its
+/// index, so the Fresnel curve still reaches 1 at grazing and the base beneath keeps
+/// what the interface does not reflect; Blender's Specular IOR Level does the same.
+fn modulated_ior(ior: f32, weight: f32) -> f32 {
+    let f0 = ((ior - 1.0) / (ior + 1.0)).powi(2);
+    if f0 <= 0.0 || weight == 1.0 {
+        return ior;
+    }
+    // Clamped so that F0 stays below 1 (an index of at most ~2000).
+    let eps = (weight.clamp(0.0, 1.0 / f0) * f0).sqrt().min(0.999);
+    (1.0 + eps) / (1.0 - eps)
 }
 
 /// The metal (`RS2`) and, with a thin film, its filmed copy (`RS5`); `metalness` is the
@@ -393,7 +409,25 @@ mod tests {
                 _ => panic!("{}: kind and value disagree", input.name),
             }
         }
-        assert_eq!(INPUTS.len(), 37);
+        assert_eq!(INPUTS.len(), 38);
+    }
+
+    #[test]
+    fn specular_weight_scales_f0_through_the_index() {
+        let f0 = |eta: f32| ((eta - 1.0) / (eta + 1.0)).powi(2);
+        assert_eq!(modulated_ior(1.5, 1.0), 1.5);
+        assert_eq!(modulated_ior(1.5, 0.0), 1.0);
+        assert_eq!(modulated_ior(1.0, 2.0), 1.0);
+        for (ior, weight) in [(1.5, 0.5), (1.5, 2.0), (1.33, 0.1), (2.4, 1.7)] {
+            let got = f0(modulated_ior(ior, weight));
+            assert!(
+                (got - weight * f0(ior)).abs() < 1e-6,
+                "{ior} {weight}: {got}"
+            );
+        }
+        // Clamped where F0 would pass 1: a finite index, F0 below 1.
+        let top = modulated_ior(1.5, 1e6);
+        assert!(top.is_finite() && f0(top) < 1.0, "{top}");
     }
 
     #[test]

@@ -2,12 +2,20 @@
 //! diffuse or subsurface base): GGX reflection, anisotropic, with exact unpolarised
 //! Fresnel and Kulla–Conty multiple scattering (Kulla & Conty 2017, "Revisiting
 //! Physically Based Shading at Imageworks"), the dielectric's mean Fresnel F_avg(η)
-//! in their F_ms. Reflection only: what it does not reflect enters the base, which the
-//! material attenuates with [`Specular::albedo`] and [`Specular::albedo_avg`] as
-//! base × (1 − E(μo))(1 − E(μi)) / (1 − E_avg), reciprocal, and for a white base the
-//! energy the layer leaves, up to the tables' accuracy (within 1 % in the furnace
+//! in their F_ms. Reflection only: what it does not reflect towards the viewer enters
+//! the base, which the material attenuates by 1 − E(μo) with [`Specular::albedo`]
+//! (albedo scaling at the outgoing direction, as OpenPBR's MaterialX reference and
+//! Cycles' Principled BSDF layer it; for a white base the layer and the base then
+//! reflect all the energy, up to the tables' accuracy: within 1 % in the furnace
 //! tests; anisotropic lobes under total internal reflection, η < 1, overestimate E on
-//! purpose and lose up to 45 % there).
+//! purpose and lose up to 45 % there). Kulla–Conty's reciprocal form
+//! (1 − E(μo))(1 − E(μi)) / (1 − E_avg) was measured 3–5 % brighter than Cycles on
+//! every layered object (benches/materials/RESULTS.md).
+//!
+//! The tint either scales the whole lobe (OpenPBR's `specular_color`) or only the
+//! reflectance at normal incidence, F = mix(tint·F0, 1, s(μ)) with s the real Fresnel
+//! remapped from [F0, 1] to [0, 1] (glTF's `KHR_materials_specular`, Blender's
+//! Principled BSDF: [`Specular::tint_f0_only`]).
 //!
 //! Its event is `RS2` (primary specular), or the lobe number it is given.
 
@@ -26,9 +34,12 @@ pub struct Specular {
     /// Relative index of refraction, below / above the surface (below 1: the denser
     /// medium is above, e.g. under a coat of higher index).
     pub eta: f32,
-    /// Colour of the reflection (OpenPBR: specular colour); it does not change what
-    /// the base receives.
+    /// Colour of the reflection (OpenPBR: specular colour). Over the whole lobe it does
+    /// not change what the base receives; on F0 only, the base receives 1 − the largest
+    /// channel's albedo (as Cycles' `closure_layering_weight`).
     pub tint: Vec3A,
+    /// The tint applies to F0 only, fading to white at grazing (glTF, Blender).
+    pub tint_f0_only: bool,
     /// Mixing weight in [0, 1].
     pub weight: f32,
     /// GGX (αx along the tangent, αy); both 0 is smooth, a delta lobe.
@@ -46,67 +57,97 @@ impl Specular {
         }
     }
 
-    fn f_avg(&self) -> Vec3A {
-        Vec3A::splat(albedo::dielectric_f_avg(self.eta()))
+    /// Reflectance at normal incidence, from both sides alike.
+    fn f0(&self) -> f32 {
+        let e = self.eta();
+        ((e - 1.0) / (e + 1.0)).powi(2)
     }
 
-    /// Directional albedo E(ωo) with a white tint: weight × (single scattering with the
-    /// exact Fresnel + multiple scattering), towards `wo` in the local frame (`wo.z`
-    /// taken as positive; the azimuth matters only when anisotropic). Below 1; what
-    /// the base beneath receives is 1 − E.
+    /// The cosine-weighted mean of [`Specular::fresnel`], the tint included (the
+    /// multiple scattering takes the tint as the single scattering does).
+    fn f_avg(&self) -> Vec3A {
+        self.tinted(albedo::dielectric_f_avg(self.eta()))
+    }
+
+    /// A reflectance `f` of the untinted interface (or a mean of them), tinted: scaled,
+    /// or with the tint on F0 only mix(tint·F0, 1, s), s = (f − F0) / (1 − F0).
+    fn tinted(&self, f: f32) -> Vec3A {
+        if self.tint_f0_only {
+            let f0 = self.f0();
+            let s = ((f - f0) / (1.0 - f0)).clamp(0.0, 1.0);
+            self.tint * (f0 * (1.0 - s)) + Vec3A::splat(s)
+        } else {
+            self.tint * f
+        }
+    }
+
+    /// Directional albedo E(ωo): weight × (single scattering with the exact Fresnel +
+    /// multiple scattering), towards `wo` in the local frame (`wo.z` taken as positive;
+    /// the azimuth matters only when anisotropic), with a white tint over the whole
+    /// lobe and the largest channel's with the tint on F0 only. Below 1; what the base
+    /// beneath receives is 1 − E.
     pub fn albedo(&self, wo: Vec3A) -> f32 {
+        if self.tint_f0_only {
+            self.albedo_rgb(wo).max_element().min(1.0)
+        } else {
+            let white = Specular {
+                tint: Vec3A::ONE,
+                ..*self
+            };
+            white.albedo_rgb(wo).x
+        }
+    }
+
+    /// Directional albedo per channel, the tint included.
+    pub fn albedo_rgb(&self, wo: Vec3A) -> Vec3A {
         let wo = Vec3A::new(wo.x, wo.y, wo.z.abs());
         let w = clamp_weight(self.weight);
         if is_smooth(self.alpha) {
-            return w * fresnel_dielectric(wo.z, self.eta());
+            return (w * self.fresnel(wo.z)).min(Vec3A::ONE);
         }
         let r = MicrofacetReflection::new(self.alpha, self.f_avg());
         let g = Ggx::new(self.alpha);
-        let ss = albedo::dielectric_e(wo.z, self.table_alpha(&g, wo), self.eta());
-        (w * (ss + r.ms_albedo(wo).x)).min(1.0)
-    }
-
-    /// The cosine-weighted average of [`Specular::albedo`], 2∫E(μ)μ dμ.
-    pub fn albedo_avg(&self) -> f32 {
-        let w = clamp_weight(self.weight);
-        if is_smooth(self.alpha) {
-            return w * albedo::dielectric_f_avg(self.eta());
-        }
-        let r = MicrofacetReflection::new(self.alpha, self.f_avg());
-        let g = Ggx::new(self.alpha);
-        let a = if self.eta() >= 1.0 {
-            albedo::rms_alpha(&g)
+        let a = self.table_alpha(&g, wo);
+        let e_fresnel = albedo::dielectric_e(wo.z, a, self.eta());
+        let ss = if self.tint_f0_only {
+            // Linear in the Fresnel term: mix(tint·F0, 1, s) integrates to
+            // tint·F0·(E₁ − E_s) + E_s, E₁ the albedo with F = 1 and E_s that with
+            // F = s = (F − F0) / (1 − F0).
+            let f0 = self.f0();
+            let e_one = albedo::ggx_e(wo.z, a);
+            let e_s = ((e_fresnel - f0 * e_one) / (1.0 - f0)).max(0.0);
+            self.tint * (f0 * (e_one - e_s)) + Vec3A::splat(e_s)
         } else {
-            albedo::min_alpha(&g)
+            self.tint * e_fresnel
         };
-        let ss = albedo::dielectric_e_avg(a, self.eta());
-        (w * (ss + r.ms_albedo_avg().x)).min(1.0)
+        (w * (ss + r.ms_albedo(wo))).min(Vec3A::ONE)
     }
 
-    /// The factor on a base lobe beneath, (1 − E(μo))(1 − E(μi)) / (1 − E_avg): what
-    /// enters through the layer and leaves through it again.
-    pub fn base_attenuation(&self, wo: Vec3A, wi: Vec3A) -> f32 {
-        let avg = 1.0 - self.albedo_avg();
-        if avg <= 0.0 {
-            return 0.0;
-        }
-        (1.0 - self.albedo(wo)) * (1.0 - self.albedo(wi)) / avg
+    /// The factor on a base lobe beneath for light leaving towards `wo`: 1 − E(μo).
+    pub fn base_attenuation(&self, wo: Vec3A) -> f32 {
+        (1.0 - self.albedo(wo)).max(0.0)
     }
 
     /// The isotropic tables' alpha for anisotropic `g` towards `wo`: the roughness in
-    /// `wo`'s plane of incidence; under total internal reflection (η < 1) the smaller
-    /// alpha, which overestimates the albedo, so that the base beneath is dimmed a
-    /// little too much rather than brightened.
+    /// `wo`'s plane of incidence; under total internal reflection (η < 1), where the
+    /// albedo is not monotonic in the roughness, whichever of the smallest and largest
+    /// alpha gives the larger albedo, so that the base beneath is dimmed a little too
+    /// much rather than brightened.
     fn table_alpha(&self, g: &Ggx, wo: Vec3A) -> f32 {
-        if self.eta() >= 1.0 {
-            albedo::directional_alpha(g, wo)
+        let eta = self.eta();
+        if eta >= 1.0 || g.alpha_x == g.alpha_y {
+            return albedo::directional_alpha(g, wo);
+        }
+        let (lo, hi) = (g.alpha_x.min(g.alpha_y), g.alpha_x.max(g.alpha_y));
+        if albedo::dielectric_e(wo.z, lo, eta) >= albedo::dielectric_e(wo.z, hi, eta) {
+            lo
         } else {
-            albedo::min_alpha(g)
+            hi
         }
     }
 
     fn fresnel(&self, cos: f32) -> Vec3A {
-        self.tint * fresnel_dielectric(cos, self.eta())
+        self.tinted(fresnel_dielectric(cos, self.eta()))
     }
 }
 
@@ -115,15 +156,12 @@ impl LobeModel for Specular {
         reflection_tags(self.lobe, is_smooth(self.alpha))
     }
     fn eval(&self, _: usize, wo: Vec3A, wi: Vec3A, sel: f32) -> (Vec3A, f32) {
-        // The multiple scattering takes the tint as the single scattering does.
-        let f_avg = self.f_avg() * self.tint;
-        reflection_eval(self.alpha, self.weight, f_avg, wo, wi, sel, |c| {
+        reflection_eval(self.alpha, self.weight, self.f_avg(), wo, wi, sel, |c| {
             self.fresnel(c)
         })
     }
     fn sample(&self, wo: Vec3A, ctx: SampleCtx, u: Vec2) -> Option<LobeSample> {
-        let f_avg = self.f_avg() * self.tint;
-        reflection_sample(self.alpha, self.weight, f_avg, wo, ctx, u, |c| {
+        reflection_sample(self.alpha, self.weight, self.f_avg(), wo, ctx, u, |c| {
             self.fresnel(c)
         })
     }

@@ -452,11 +452,12 @@ fn light_units_convert_as_blenders_importer_does() {
     let layer = lightpath::material::Specular {
         eta: 1.5,
         tint: Vec3A::ONE,
+        tint_f0_only: true,
         weight: 1.0,
         alpha: glam::Vec2::ONE,
         lobe: 2,
     };
-    let rho = 0.5 * layer.base_attenuation(Vec3A::Z, Vec3A::Z);
+    let rho = 0.5 * layer.base_attenuation(Vec3A::Z);
     let want = rho / std::f32::consts::PI;
     let got = film.pixel(k, 2, 2).x;
     assert!((got - want).abs() < 2e-3 * want, "{got} vs {want}");
@@ -1034,7 +1035,7 @@ fn khr_material_extensions_map_to_openpbr_as_blender_does() {
             "iridescenceIor": 1.33, "iridescenceThicknessMaximum": 600.0}}},
         {"name": "leaf", "extensions": {"KHR_materials_diffuse_transmission": {
             "diffuseTransmissionFactor": 0.4, "diffuseTransmissionColorFactor": [0.2, 0.9, 0.1]}}},
-        {"name": "brushed", "pbrMetallicRoughness": {"metallicFactor": 1.0},
+        {"name": "brushed", "pbrMetallicRoughness": {"metallicFactor": 1.0, "roughnessFactor": 0.4},
          "extensions": {"KHR_materials_anisotropy": {"anisotropyStrength": 0.7}}},
     ]);
     doc.json["extensionsUsed"] = json!([
@@ -1097,7 +1098,19 @@ fn khr_material_extensions_map_to_openpbr_as_blender_does() {
             && leaf.subsurface_weight == 0.4
             && leaf.subsurface_color == Vec3A::new(0.2, 0.9, 0.1)
     );
-    assert_eq!(openpbr("brushed").specular_roughness_anisotropy, 0.7);
+    // The strength read as Blender's importer reads it (Principled "Anisotropic"), whose
+    // alphas in Cycles are α/ρ and α·ρ, α = roughness², ρ = √(1 − 0.9 s).
+    let brushed = openpbr("brushed");
+    let alpha = lightpath::material::microfacet::roughness_anisotropy_to_alpha(
+        brushed.specular_roughness,
+        brushed.specular_roughness_anisotropy,
+    );
+    let rho = (1.0f32 - 0.9 * 0.7).sqrt();
+    let want = glam::Vec2::new(0.16 / rho, 0.16 * rho);
+    assert!(
+        (alpha - want).abs().max_element() < 1e-5,
+        "{alpha} vs {want}"
+    );
     // A bad value names the file and where in it.
     let mut bad = Doc::new();
     bad.json["materials"] =

@@ -927,6 +927,63 @@ def Material "Mat"
     assert!(e.contains("nothing.usda"), "{e}");
 }
 
+/// UsdPreviewSurface's specular workflow: `specularColor` is the reflectance at normal
+/// incidence with white at grazing, so it becomes an F0-only tint over the index whose F0
+/// is its brightest channel; black turns the dielectric's reflection off.
+#[test]
+fn the_specular_workflow_gives_specular_color_as_f0() {
+    let dir = Scratch::new("usd-specular-workflow");
+    let stage = |color: &str| {
+        format!(
+            r#"#usda 1.0
+def Sphere "Ball"
+{{
+    rel material:binding = </Mat>
+}}
+def Material "Mat"
+{{
+    token outputs:surface.connect = </Mat/S.outputs:surface>
+    def Shader "S"
+    {{
+        uniform token info:id = "UsdPreviewSurface"
+        int inputs:useSpecularWorkflow = 1
+        color3f inputs:specularColor = {color}
+        float inputs:metallic = 1
+        float inputs:ior = 1.33
+        token outputs:surface
+    }}
+}}
+"#
+        )
+    };
+    let material = |name: &str, color: &str| {
+        let desc = load(&write(&dir, name, &stage(color)));
+        let m = &desc.materials[&desc.objects[0].material.as_ref().unwrap().name];
+        let MaterialKind::OpenPbr(p) = &m.kind else {
+            panic!("{:?}", m.kind)
+        };
+        **p
+    };
+    let p = material("tinted.usda", "(0.08, 0.04, 0.02)");
+    assert!(p.specular_color_f0_only);
+    assert_eq!(p.base_metalness, 0.0, "the workflow ignores metallic");
+    let f0 = ((p.specular_ior - 1.0) / (p.specular_ior + 1.0)).powi(2);
+    assert!(
+        (f0 - 0.08).abs() < 1e-6,
+        "ior {} gives F0 {f0}",
+        p.specular_ior
+    );
+    let tint = p.specular_color * f0;
+    assert!(
+        (tint - glam::Vec3A::new(0.08, 0.04, 0.02))
+            .abs()
+            .max_element()
+            < 1e-6
+    );
+    let black = material("black.usda", "(0, 0, 0)");
+    assert_eq!(black.specular_weight, 0.0);
+}
+
 /// A stage whose RenderVars redefine standard names, rendered with `--aovs standard`,
 /// light groups and bounces: its header declares only the partitions that hold.
 fn partitions_of(

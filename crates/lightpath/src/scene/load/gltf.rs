@@ -52,6 +52,23 @@ pub const SUPPORTED: &[&str] = &[
     "KHR_texture_transform",
 ];
 
+/// KHR_materials_anisotropy's strength as Blender reads it: its importer makes the
+/// strength the Principled BSDF's Anisotropic (not KHR's own α_t = mix(α, 1, s²)), which
+/// Cycles renders as α/ρ along the tangent and α·ρ across, ρ = √(1 − 0.9 s), α =
+/// roughness². OpenPBR gives those alphas with anisotropy 1 − ρ² and the roughness scaled
+/// by (ρ √(2 / (1 + ρ⁴)))^(−½): a factor, so a roughness texture stays exact; a strength
+/// texture is exact in the anisotropy and takes the roughness scale of the factor.
+fn blender_anisotropy(p: &mut OpenPbr) {
+    let s = p.specular_roughness_anisotropy.clamp(0.0, 1.0);
+    if s <= 0.0 {
+        return;
+    }
+    let rho2 = 1.0 - 0.9 * s;
+    let scale = (rho2.sqrt() * (2.0 / (1.0 + rho2 * rho2)).sqrt()).powf(-0.5);
+    p.specular_roughness_anisotropy = 1.0 - rho2;
+    p.specular_roughness = (p.specular_roughness * scale).min(1.0);
+}
+
 /// Lumens per watt of the photometric conversion Blender's importer uses (555 nm).
 pub const WATTS_TO_LUMENS: f32 = 683.0;
 
@@ -102,7 +119,9 @@ const NUMBERS: &[(&str, &str, &str, f32)] = &[
         "fuzz_roughness",
         0.0,
     ),
-    // KHR's specular factor is Blender's "Specular IOR Level" × 2: OpenPBR's weight.
+    // KHR's specular factor is Blender's "Specular IOR Level" × 2: OpenPBR's weight, which
+    // scales F0 through the index as Blender's level does (KHR's own definition scales the
+    // whole lobe; artists check against Blender).
     (
         "KHR_materials_specular",
         "specularFactor",
@@ -724,6 +743,9 @@ impl Loader {
             // (Blender's Principled coat, which artists check against, does not).
             coat_ior: 1.5,
             coat_darkening: 0.0,
+            // KHR_materials_specular's colour tints F0 only (as Blender's Principled BSDF
+            // does); with the default white it is the same as OpenPBR's.
+            specular_color_f0_only: true,
             ..OpenPbr::default()
         };
         let mut textures = TexturesDesc::default();
@@ -882,6 +904,7 @@ impl Loader {
                 None => None,
             };
             textures.anisotropy_direction = Some((rotation, texture));
+            blender_anisotropy(p);
         }
         for &(ext, key, input, channel, srgb) in TEXTURES {
             let Some(info) = value(ext, key) else {

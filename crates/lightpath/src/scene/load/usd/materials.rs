@@ -11,7 +11,7 @@
 //! | roughness | specular_roughness |
 //! | ior | specular_ior |
 //! | clearcoat, clearcoatRoughness | coat_weight, coat_roughness (coat ior 1.5, no darkening) |
-//! | useSpecularWorkflow = 1, specularColor | specular_color (metalness 0) |
+//! | useSpecularWorkflow = 1, specularColor | F0 = specularColor, white at grazing: specular_ior from its brightest channel, specular_color the rest, tinting F0 only (metalness 0; `ior` not used for it) |
 //! | emissiveColor | the object's emission (a glowing surface, `O`) |
 //! | opacity < 1 | transmission_weight = 1 − opacity (thin-walled) |
 //! | normal (a UsdUVTexture, scale 2 bias −1) | the tangent-space normal map |
@@ -33,6 +33,15 @@ use glam::Vec3A;
 use openusd::schemas::shade::MaterialBindingAPI;
 use openusd::usd::Prim;
 use std::path::PathBuf;
+
+/// Reflectance at normal incidence of index 1.5.
+const F0_OF_1_5: f32 = 0.04;
+
+/// The index of refraction whose reflectance at normal incidence is `f0` (below 1).
+fn ior_of_f0(f0: f32) -> f32 {
+    let r = f0.sqrt();
+    (1.0 + r) / (1.0 - r)
+}
 
 /// A `UsdUVTexture` as an input reads it.
 struct Texture {
@@ -248,7 +257,17 @@ impl Loader {
             ..OpenPbr::default()
         };
         if specular_workflow {
-            p.specular_color = Vec3A::from(color("specularColor", [0.0; 3]));
+            // specularColor is the reflectance at normal incidence, white at grazing: a
+            // tint on F0 only, over the index whose F0 is its brightest channel.
+            let f0 = Vec3A::from(color("specularColor", [0.0; 3]));
+            let top = f0.max_element().min(0.999);
+            p.specular_color_f0_only = true;
+            if top > 0.0 {
+                p.specular_ior = ior_of_f0(top);
+                p.specular_color = f0 / top;
+            } else {
+                p.specular_weight = 0.0;
+            }
         }
         let mut textures = TexturesDesc::default();
         let mut inputs = Vec::new();
@@ -355,7 +374,10 @@ impl Loader {
                     ));
                 }
                 "specularColor" if specular_workflow => {
-                    p.specular_color = Vec3A::new(s[0], s[1], s[2]).max(Vec3A::ZERO);
+                    // The texture's F0 as a tint on the F0 of index 1.5.
+                    p.specular_ior = 1.5;
+                    p.specular_weight = 1.0;
+                    p.specular_color = Vec3A::new(s[0], s[1], s[2]).max(Vec3A::ZERO) / F0_OF_1_5;
                     textures
                         .inputs
                         .push(input_texture("specular_color", tex.desc, 0, tex.srgb));
