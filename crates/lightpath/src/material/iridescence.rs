@@ -2,17 +2,17 @@
 //! 2017 ("A Practical Extension to Microfacet Theory for the Modeling of Varying
 //! Iridescence", `thin_film.rs`), as a GGX reflection lobe whose Fresnel is the film's
 //! over the base beneath it: a dielectric (OpenPBR's specular over the dielectric base)
-//! or a metal (a complex index from its F0 and its reflectance at 82°, Gulbrandsen 2014,
-//! so that the film lies on the metal the bare lobe shows: see [`Iridescence::on_metal`]). OpenPBR mixes
-//! the filmed and the bare specular by `thin_film_weight`; the filmed one is this lobe,
-//! numbered 5 so that `C<RS5>` (the `iridescence` AOV) picks it out.
+//! or a metal given by its F0 and its reflectance at 82° (as Blender Cycles has it: see
+//! [`Iridescence::on_metal`] and `FilmBase::F82`). OpenPBR mixes the filmed and the bare
+//! specular by `thin_film_weight`; the filmed one is this lobe, numbered 5 so that
+//! `C<RS5>` (the `iridescence` AOV) picks it out.
 
 use super::fresnel::{f82_tint, f82_tint_avg, MU_BAR};
 use super::lobe::{LobeModel, LobeSample, LobeTag, SampleCtx};
 use super::microfacet::{
     clamp_weight, is_smooth, reflection_eval, reflection_sample, reflection_tags,
 };
-use super::thin_film::{conductor_ior_from_colors, thin_film_fresnel, FilmBase};
+use super::thin_film::{thin_film_fresnel, FilmBase};
 use crate::light::luminance;
 use glam::{Vec2, Vec3A};
 
@@ -53,14 +53,10 @@ impl Iridescence {
         }
     }
 
-    /// A film on a metal of normal-incidence colour `f0` and F82 edge tint `edge`.
-    ///
-    /// Gulbrandsen's mapping takes a reflectance near grazing as its second colour; given
-    /// the F82 model's reflectance at μ̄ = 1/7 (not the tint itself, a ratio to Schlick's
-    /// value there) the complex index's Fresnel is `f0` at normal incidence and close to
-    /// the bare lobe's at 82° (for f0 0.05 and tint 1: 0.52 against the bare 0.49; the
-    /// tint itself, 1, gave 0.63 and a film twice as bright as Blender Cycles', which maps
-    /// a Principled metal under a thin film the same way).
+    /// A film on a metal of normal-incidence colour `f0` and F82 edge tint `edge`: the
+    /// metal the bare lobe shows, by the F82 model's reflectance at μ̄ = 1/7 (not the tint
+    /// itself, a ratio to Schlick's value there), which is what Blender Cycles passes
+    /// for a Principled metal under a thin film ([`FilmBase::F82`]).
     pub fn on_metal(
         f0: Vec3A,
         edge: Vec3A,
@@ -69,9 +65,11 @@ impl Iridescence {
         weight: f32,
         alpha: Vec2,
     ) -> Iridescence {
-        let (eta, kappa) = conductor_ior_from_colors(f0, f82_tint(f0, edge, MU_BAR));
         Iridescence {
-            base: FilmBase::Conductor { eta, kappa },
+            base: FilmBase::F82 {
+                f0,
+                f82: f82_tint(f0, edge, MU_BAR),
+            },
             film_ior,
             thickness_nm,
             tint: Vec3A::ONE,

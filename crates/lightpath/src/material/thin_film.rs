@@ -5,15 +5,21 @@
 //! dielectric or a conductor (complex index η₃ + iκ₃). Per polarisation, the Airy
 //! reflectance is a Fourier series in the optical path difference OPD = 2 η₂ d cos θ₂
 //! (the paper's equation 10): R = C₀ + 2 Σₘ Cₘ cos(m (2π OPD ν + φ)), ν the wavenumber.
-//! Integrating it against a colour-matching function is then analytic: the paper fits
-//! CIE 1931 XYZ by Gaussians in ν, whose Fourier transforms are closed form
-//! ([`sensitivity`]). The series is cut after m = 3 as in the paper's code (the terms
-//! fall as (R₁₂R₂₃)^(m/2)). XYZ is normalised so a flat reflectance R gives (R, R, R)
-//! (illuminant E), scaled to the D65 white and converted to linear Rec.709 — as Blender
-//! Cycles does — then clamped to [0, 1] (interference colours can leave the gamut).
+//! Integrating it against a sensitivity curve then needs only the curve's Fourier
+//! transform at m·OPD ([`Sensitivity`]). The series is cut after m = 3 as in the paper's
+//! code (the terms fall as (R₁₂R₂₃)^(m/2)).
 //!
-//! Below 30 nm the film's index blends towards the outside's, as Cycles and glTF's
-//! `KHR_materials_iridescence` do, so a vanishing film is no film.
+//! The sensitivities are the CIE 1931 colour-matching functions (`cie1931_2deg.csv`)
+//! turned into linear Rec.709 ones by the XYZ → RGB matrix, each normalised to unit area,
+//! so a flat reflectance R gives (R, R, R): an equal-energy spectrum white-balanced per RGB
+//! channel. That is what Blender Cycles 5.0 integrates, from a table of the
+//! same functions' transform; the paper's Gaussian fit of XYZ, white-balanced in XYZ,
+//! which Lightpath used before, differs from it by up to 13 % per channel on a dark
+//! metal under a film (benches/materials/RESULTS.md). Interference colours can leave the
+//! gamut: the result is clamped to [0, 1].
+//!
+//! Below 30 nm the film's index blends towards the outside's, as glTF's
+//! `KHR_materials_iridescence` sample renderer does, so a vanishing film is no film.
 //!
 //! A conductor's index differs per RGB channel: each channel runs the spectral
 //! integration with its own index and keeps its own component. A metal given by
@@ -21,6 +27,9 @@
 
 use glam::Vec3A;
 use std::f32::consts::PI;
+use std::sync::OnceLock;
+
+use super::fresnel::{f82_tint, MU_BAR};
 
 /// What lies under the film.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -29,6 +38,15 @@ pub enum FilmBase {
     Dielectric { eta: f32 },
     /// A conductor of complex index `eta + i·kappa` per RGB channel.
     Conductor { eta: Vec3A, kappa: Vec3A },
+    /// A metal given as the F82 model's colours, as OpenPBR and Blender's Principled BSDF
+    /// describe one: `f0` at normal incidence and `f82`, its reflectance at μ̄ = 1/7
+    /// (about 82°). Under the film it reflects as Blender Cycles 5.0 has it:
+    /// the phase of a complex index from the two colours ([`conductor_ior_from_colors`]),
+    /// the strength (s and p alike) of the F82 model with the same `f82` and the F0 of
+    /// that index seen from the film. As the film's index goes to the outside's this is
+    /// the bare F82 lobe, which a thin-film weight below one mixes with; the complex
+    /// index's own Fresnel would depart from it towards grazing.
+    F82 { f0: Vec3A, f82: Vec3A },
 }
 
 /// Reflectance of a film of index `film_ior` and thickness `thickness_nm` on `base`,
@@ -69,30 +87,55 @@ pub fn thin_film_fresnel(
             } else {
                 (eta1, eta3)
             };
-            let xyz =
-                Film::new(cos1, outside, eta2, d).map_or(Vec3A::ONE, |f| f.xyz(C::real(under)));
-            Vec3A::new(
-                XYZ_TO_RGB[0].dot(xyz),
-                XYZ_TO_RGB[1].dot(xyz),
-                XYZ_TO_RGB[2].dot(xyz),
-            )
+            Film::new(cos1, outside, eta2, d).map_or(Vec3A::ONE, |f| f.rgb(C::real(under), None))
         }
-        FilmBase::Conductor { eta, kappa } => match Film::new(cos1, eta1, eta2, d) {
-            None => Vec3A::ONE,
-            Some(film) => {
-                let mut out = [0.0; 3];
-                for (c, o) in out.iter_mut().enumerate() {
-                    let n3 = C {
-                        re: positive_or(eta[c], 1e-4).max(1e-4),
-                        im: if kappa[c] > 0.0 { kappa[c] } else { 0.0 },
-                    };
-                    *o = XYZ_TO_RGB[c].dot(film.xyz(n3));
-                }
-                Vec3A::from(out)
-            }
-        },
+        FilmBase::Conductor { eta, kappa } => {
+            per_channel(cos1, eta1, eta2, d, |c| (conductor(eta[c], kappa[c]), None))
+        }
+        FilmBase::F82 { f0, f82 } => {
+            let (eta, kappa) = conductor_ior_from_colors(f0, f82);
+            per_channel(cos1, eta1, eta2, d, |c| {
+                let n3 = conductor(eta[c], kappa[c]);
+                // F0 of the metal under the film; the F82 colour as given (Cycles does
+                // the same, so that a film of the outside's index is the bare lobe).
+                let f0 = n3.sub(C::real(eta2)).div(n3.add(C::real(eta2))).norm_sqr();
+                let f82 = unit(f82[c]);
+                let tint = f82_tint(Vec3A::splat(f0), Vec3A::ONE, MU_BAR).x;
+                let tint = if tint > 0.0 { f82 / tint } else { 1.0 };
+                (n3, Some((f0, tint)))
+            })
+        }
     };
     Vec3A::new(unit(rgb.x), unit(rgb.y), unit(rgb.z))
+}
+
+/// A conductor's reflectance per channel: channel `c` integrates the film over the
+/// base `base(c)` gives (its index and, for an F82 metal, the F82 model's F0 and tint
+/// for the strength of the reflection under the film) and keeps its own component.
+fn per_channel(
+    cos1: f32,
+    eta1: f32,
+    eta2: f32,
+    d: f32,
+    base: impl Fn(usize) -> (C, Option<(f32, f32)>),
+) -> Vec3A {
+    let Some(film) = Film::new(cos1, eta1, eta2, d) else {
+        return Vec3A::ONE;
+    };
+    let mut out = [0.0; 3];
+    for (c, o) in out.iter_mut().enumerate() {
+        let (n3, f82) = base(c);
+        *o = film.rgb(n3, f82)[c];
+    }
+    Vec3A::from(out)
+}
+
+/// A complex index from a conductor's (η, κ), nonsense replaced by a harmless index.
+fn conductor(eta: f32, kappa: f32) -> C {
+    C {
+        re: positive_or(eta, 1e-4).max(1e-4),
+        im: if kappa > 0.0 { kappa } else { 0.0 },
+    }
 }
 
 /// A conductor's complex index (η, κ) per channel from its normal-incidence colour `f0`
@@ -136,50 +179,116 @@ fn smoothstep(t: f32) -> f32 {
     t * t * (3.0 - 2.0 * t)
 }
 
-/// The paper's Gaussian fit of the CIE XYZ curves in wavenumber, as its code evaluates
-/// their Fourier transforms: `val · √(2π var) · cos(pos·t + shift) · exp(−var·t²)` at
-/// t = 2π·OPD, for X (two lobes), Y and Z. Here `pos` and `var` are per nanometre
-/// (the paper's per-metre values × 10⁻⁹ and × 10⁻¹⁸), and `val · √(2π var)` is
-/// normalised per channel so that t = 0 gives 1: (weight, pos, var, channel).
-const LOBES: [(f32, f32, f32, usize); 4] = [
-    (0.846_202_2, 1.6810e-3, 4.3278e-9, 0),
-    (0.153_797_8, 2.2399e-3, 4.5282e-9, 0),
-    (1.0, 1.7953e-3, 9.3046e-9, 1),
-    (1.0, 2.2084e-3, 6.6121e-9, 2),
+/// CIE XYZ (D65 white at Y = 1) to linear Rec.709: the inverse of the matrix whose columns
+/// are the Rec.709 primaries scaled so that they sum to the D65 white, from IEC
+/// 61966-2-1's chromaticities (the test `constants_follow_from_their_sources` derives it).
+pub(super) const XYZ_TO_RGB: [[f64; 3]; 3] = [
+    [3.240_969_942, -1.537_383_178, -0.498_610_760],
+    [-0.969_243_636, 1.875_967_502, 0.041_555_057],
+    [0.055_630_080, -0.203_976_959, 1.056_971_514],
 ];
 
-/// The paper's raw fit (val, pos, var in metres), from which [`LOBES`] follows.
-#[cfg(test)]
-pub(super) const PAPER_FIT: [(f64, f64, f64, usize); 4] = [
-    (5.4856e-13, 1.6810e+06, 4.3278e+09, 0),
-    (9.7470e-14, 2.2399e+06, 4.5282e+09, 0),
-    (4.4201e-13, 1.7953e+06, 9.3046e+09, 1),
-    (5.2481e-13, 2.2084e+06, 6.6121e+09, 2),
-];
+/// The CIE 1931 colour-matching functions, 1 nm steps from 360 nm: (nm, x̄, ȳ, z̄).
+pub(super) fn cie1931() -> Vec<[f64; 4]> {
+    include_str!("cie1931_2deg.csv")
+        .lines()
+        .filter(|l| l.starts_with(|c: char| c.is_ascii_digit()))
+        .map(|l| {
+            let mut v = [0.0; 4];
+            for (x, f) in v.iter_mut().zip(l.split(',')) {
+                *x = f.trim().parse().expect("cie1931_2deg.csv: a number");
+            }
+            v
+        })
+        .collect()
+}
 
-/// XYZ of illuminant E (flat, normalised to (1, 1, 1)) to linear Rec.709: the sRGB
-/// matrix (primaries and D65 white of IEC 61966-2-1) times diag(D65 white), so E white
-/// maps to RGB white (rows sum to one).
-pub(super) const XYZ_TO_RGB: [Vec3A; 3] = [
-    Vec3A::new(3.080_399, -1.537_383, -0.543_016),
-    Vec3A::new(-0.921_223_4, 1.875_968, 0.045_255_86),
-    Vec3A::new(0.052_873_94, -0.203_977, 1.151_103),
-];
+/// Spacing and extent of the tabulated transform, in nm of optical path difference.
+/// Beyond `OPD_MAX` the transform is about 10⁻⁴ and taken as zero (a film whose path
+/// difference is tens of µm looks white: its colours average out within each channel).
+const OPD_STEP: f64 = 5.0;
+const OPD_MAX: f64 = 40_000.0;
 
-/// The normalised sensitivities' Fourier transform at optical path difference `opd`
-/// (nm), split so that any phase shift is cheap: S(opd, shift) = A cos(shift) −
-/// B sin(shift), returned as (A, B) (cos(x + s) = cos x cos s − sin x sin s).
-fn sensitivity(opd: f32) -> (Vec3A, Vec3A) {
-    let t = 2.0 * PI * opd;
-    let mut a = [0.0f32; 3];
-    let mut b = [0.0f32; 3];
-    for (w, pos, var, c) in LOBES {
-        let g = w * (-var * t * t).exp();
-        let (sin, cos) = (pos * t).sin_cos();
-        a[c] += g * cos;
-        b[c] += g * sin;
+/// The normalised RGB sensitivities' Fourier transform S(x) = ∫ s(ν) e^{2πiνx} dν over
+/// the wavenumber ν, per channel, tabulated in x (nm of optical path difference). Each
+/// channel is stored as its slowly varying envelope S(x)·e^{−2πiν̄x} about its mean
+/// wavenumber ν̄, which linear interpolation follows closely at 5 nm steps (the
+/// transform itself turns by 2πν̄·5 nm ≈ 0.06 rad a step, the envelope by less).
+pub(super) struct Sensitivity {
+    /// Mean wavenumber per channel, 1/nm.
+    nu: [f64; 3],
+    /// Envelope (re, im) per channel at x = i·OPD_STEP.
+    envelope: Vec<[[f32; 2]; 3]>,
+}
+
+impl Sensitivity {
+    /// The table, built on first use from the CIE data (a few milliseconds).
+    pub(super) fn get() -> &'static Sensitivity {
+        static TABLE: OnceLock<Sensitivity> = OnceLock::new();
+        TABLE.get_or_init(Sensitivity::build)
     }
-    (Vec3A::from(a), Vec3A::from(b))
+
+    fn build() -> Sensitivity {
+        // s_c(λ) dλ = (XYZ_TO_RGB · x̄ȳz̄(λ))_c dλ, per 1 nm sample, normalised so
+        // that each sums to one; ν = 1/λ.
+        let cmf = cie1931();
+        let mut weight = vec![[0.0f64; 3]; cmf.len()];
+        let mut total = [0.0f64; 3];
+        for (w, row) in weight.iter_mut().zip(&cmf) {
+            for c in 0..3 {
+                w[c] = (0..3).map(|j| XYZ_TO_RGB[c][j] * row[j + 1]).sum();
+                total[c] += w[c];
+            }
+        }
+        let mut nu = [0.0f64; 3];
+        for (w, row) in weight.iter_mut().zip(&cmf) {
+            for c in 0..3 {
+                w[c] /= total[c];
+                nu[c] += w[c] / row[0];
+            }
+        }
+        // Each sample's phasor about the channel's ν̄, turned one step at a time.
+        let steps = (OPD_MAX / OPD_STEP) as usize + 1;
+        let mut envelope = vec![[[0.0f32; 2]; 3]; steps];
+        for (w, row) in weight.iter().zip(&cmf) {
+            for c in 0..3 {
+                let turn = 2.0 * std::f64::consts::PI * (1.0 / row[0] - nu[c]) * OPD_STEP;
+                let (sin, cos) = turn.sin_cos();
+                let (mut re, mut im) = (w[c], 0.0f64);
+                for e in envelope.iter_mut() {
+                    e[c][0] += re as f32;
+                    e[c][1] += im as f32;
+                    (re, im) = (re * cos - im * sin, re * sin + im * cos);
+                }
+            }
+        }
+        Sensitivity { nu, envelope }
+    }
+
+    /// The transform at path difference `opd` (nm, ≥ 0) as (Re, Im) per channel: the
+    /// sensitivity-weighted mean of cos and sin of 2πν·opd.
+    pub(super) fn at(&self, opd: f32) -> (Vec3A, Vec3A) {
+        let x = opd as f64 / OPD_STEP;
+        if !(x >= 0.0 && x < (self.envelope.len() - 1) as f64) {
+            return (Vec3A::ZERO, Vec3A::ZERO);
+        }
+        let i = x as usize;
+        let t = (x - i as f64) as f32;
+        let (e0, e1) = (self.envelope[i], self.envelope[i + 1]);
+        let mut re = [0.0f32; 3];
+        let mut im = [0.0f32; 3];
+        for c in 0..3 {
+            let a = e0[c][0] + t * (e1[c][0] - e0[c][0]);
+            let b = e0[c][1] + t * (e1[c][1] - e0[c][1]);
+            // The carrier in f64: ν̄·opd reaches hundreds of turns.
+            let turn = self.nu[c] * opd as f64;
+            let (sin, cos) = (2.0 * std::f64::consts::PI * turn.fract()).sin_cos();
+            let (sin, cos) = (sin as f32, cos as f32);
+            re[c] = a * cos - b * sin;
+            im[c] = a * sin + b * cos;
+        }
+        (Vec3A::from(re), Vec3A::from(im))
+    }
 }
 
 /// The film seen at one angle: the top interface and the sensitivities at the first
@@ -198,32 +307,38 @@ impl Film {
         let (r12, cos2) = amplitudes(eta1, C::real(eta2), cos1)?;
         let cos2 = cos2.real_part()?;
         let opd = 2.0 * eta2 * d * cos2;
+        let sensitivity = Sensitivity::get();
         Some(Film {
             eta2,
             cos2,
             r12,
-            orders: [1.0, 2.0, 3.0].map(|m| sensitivity(m * opd)),
+            orders: [1.0, 2.0, 3.0].map(|m| sensitivity.at(m * opd)),
         })
     }
 
-    /// Spectrally integrated reflectance (XYZ, flat reflectance R → (R, R, R)) over a
-    /// base of index `n3`.
-    fn xyz(&self, n3: C) -> Vec3A {
+    /// Spectrally integrated reflectance (linear Rec.709, flat reflectance R → (R, R, R))
+    /// over a base of index `n3`; with `f82` = (F0, tint) the base reflects with the
+    /// strength of the F82 model at θ₂ (see [`FilmBase::F82`]) and the phase of `n3`.
+    fn rgb(&self, n3: C, f82: Option<(f32, f32)>) -> Vec3A {
         let Some((r23, _)) = amplitudes(self.eta2, n3, self.cos2) else {
             return Vec3A::ONE;
         };
+        let strength =
+            f82.map(|(f0, tint)| f82_tint(Vec3A::splat(f0), Vec3A::splat(tint), self.cos2).x);
         let mut sum = Vec3A::ZERO;
         for (a12, a23) in self.r12.into_iter().zip(r23) {
-            sum += 0.5 * self.airy_sum(a12, a23);
+            let big_r23 = strength.unwrap_or_else(|| a23.norm_sqr());
+            sum += 0.5 * self.airy_sum(a12, big_r23, a23.arg());
         }
         sum
     }
 
-    /// Equation 10 for one polarisation: amplitudes r₁₂ (outside → film) and r₂₃
-    /// (film → base); r₂₁ = −r₁₂ gives the phase π − φ₁₂ + φ₂₃ of each round trip.
-    fn airy_sum(&self, r12: C, r23: C) -> Vec3A {
+    /// Equation 10 for one polarisation: amplitude r₁₂ (outside → film), reflectance
+    /// R₂₃ and phase φ₂₃ (film → base); r₂₁ = −r₁₂ gives the phase π − φ₁₂ + φ₂₃ of each
+    /// round trip.
+    fn airy_sum(&self, r12: C, big_r23: f32, phi23: f32) -> Vec3A {
         let big_r12 = r12.norm_sqr().min(1.0);
-        let big_r23 = r23.norm_sqr().min(1.0);
+        let big_r23 = big_r23.min(1.0);
         let r123 = big_r12 * big_r23;
         if r123 >= 1.0 || big_r23 >= 1.0 {
             // Total reflection at the base: a lossless film sends everything back.
@@ -231,7 +346,7 @@ impl Film {
         }
         let t121 = 1.0 - big_r12;
         let rs = t121 * t121 * big_r23 / (1.0 - r123);
-        let phi = PI - r12.arg() + r23.arg();
+        let phi = PI - r12.arg() + phi23;
         let mut out = Vec3A::splat(big_r12 + rs);
         let mut cm = rs - t121;
         let root = r123.sqrt();
