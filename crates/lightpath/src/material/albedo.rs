@@ -195,12 +195,6 @@ pub fn min_alpha(g: &Ggx) -> f32 {
     g.alpha_x.min(g.alpha_y)
 }
 
-/// The cosine-weighted mean of [`directional_alpha`]² is α_rms²: the alpha of the
-/// dielectric tables' averages for an anisotropic `g`.
-pub fn rms_alpha(g: &Ggx) -> f32 {
-    ((g.alpha_x * g.alpha_x + g.alpha_y * g.alpha_y) / 2.0).sqrt()
-}
-
 /// Albedo of single-scattering GGX reflection with F = 1 from `mu` = cos θo.
 pub fn ggx_e(mu: f32, alpha: f32) -> f32 {
     bilinear(&t::GGX_E, N_2D, alpha_coord(alpha), mu)

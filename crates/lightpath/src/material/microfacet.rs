@@ -226,11 +226,6 @@ impl MicrofacetReflection {
             self.ms * (1.0 - self.e(wo))
         }
     }
-
-    /// Its cosine-weighted average over the hemisphere, `F_ms · (1 − E_avg)`.
-    pub fn ms_albedo_avg(&self) -> Vec3A {
-        self.ms * (1.0 - self.e_avg)
-    }
 }
 
 /// A reflection lobe of roughness `alpha` (both 0: a smooth mirror, a delta lobe) with
