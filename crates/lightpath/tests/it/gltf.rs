@@ -428,6 +428,12 @@ fn light_units_convert_as_blenders_importer_does() {
     assert!((light("bulbnode").strength - 4.0).abs() < 1e-5);
     assert_eq!(light("sun").groups, ["sun".to_string()]);
     assert!((light("sun").strength - 1.0).abs() < 1e-6);
+    // Blender's importer gives the sun it makes its default angular diameter, 0.526°.
+    assert!(
+        matches!(light("sun").kind, LightKind::Distant { angle, .. } if angle == 0.526),
+        "{:?}",
+        light("sun").kind
+    );
     let LightKind::Spot {
         cone_angle,
         cone_softness,

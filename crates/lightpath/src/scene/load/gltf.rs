@@ -1174,7 +1174,7 @@ impl Loader {
             Kind::Directional => (
                 LightKind::Distant {
                     direction,
-                    angle: 0.0,
+                    angle: SUN_ANGLE_DEG,
                 },
                 sun_irradiance(intensity),
             ),
@@ -1216,6 +1216,12 @@ pub fn point_intensity(candela: f32) -> f32 {
     let watts = candela * 4.0 * PI / WATTS_TO_LUMENS;
     watts / (4.0 * PI)
 }
+
+/// The angular diameter (degrees) of a directional light's disc. glTF has none, and
+/// Blender's importer leaves a new sun's default, 0.526° (the real sun's), which Cycles
+/// then renders: the sun shows in smooth reflections and refractions, and smooth glass
+/// throws its caustics. A delta direction would show neither (benches/materials/RESULTS.md).
+pub const SUN_ANGLE_DEG: f32 = 0.526;
 
 /// A directional light's irradiance (W/m²) from its illuminance (lux), as Blender's
 /// importer sets a sun's strength.
