@@ -1,6 +1,8 @@
 //! Glass (RS8 + TS8): exact dielectric Fresnel; smooth, or rough (anisotropic GGX,
 //! Walter et al. 2007, as pbrt-v4's DielectricBxDF). One lobe with two events, because
-//! rough glass chooses reflection or transmission per sampled microfacet.
+//! rough glass chooses reflection or transmission per sampled microfacet. The
+//! transmission colour tints each crossing; the reflection has its own (untinted in
+//! OpenPBR's and glTF's glass).
 //!
 //! Rough glass compensates the energy single scattering loses as Turquin 2019
 //! ("Practical multiple scattering compensation for microfacet models") does for
@@ -24,7 +26,11 @@ pub struct Dielectric {
     pub eta: f32,
     /// GGX (αx along the tangent, αy); both 0 is smooth.
     pub alpha: Vec2,
+    /// Colour of transmitted light, at each crossing.
     pub tint: Vec3A,
+    /// Colour (and weight) of the reflection: glTF, Cycles and OpenPBR leave a glass's
+    /// reflection untinted by its transmission colour.
+    pub reflect_tint: Vec3A,
     /// Turquin's compensation on (false only for a regularised glass: see
     /// `Bsdf::regularized_glass`).
     pub compensate: bool,
@@ -38,6 +44,10 @@ impl Dielectric {
         } else {
             1.0 / self.eta
         }
+    }
+
+    fn tints(&self) -> (Vec3A, Vec3A) {
+        (self.reflect_tint, self.tint)
     }
 
     /// Turquin's energy scale 1/E(μo) for rough glass seen from `wo`.
@@ -78,7 +88,7 @@ impl LobeModel for Dielectric {
             return (Vec3A::ZERO, 0.0);
         }
         let g = Ggx::new(self.alpha);
-        let (f, pdf) = rough_eval(sub, self.eta, g, self.tint, wo, wi);
+        let (f, pdf) = rough_eval(sub, self.eta, g, self.tints(), wo, wi);
         (f * self.compensation(&g, wo), pdf)
     }
     fn sample(&self, wo: Vec3A, ctx: SampleCtx, u: Vec2) -> Option<LobeSample> {
@@ -96,7 +106,7 @@ impl LobeModel for Dielectric {
                     sub: 0,
                     wi: Vec3A::new(-wo.x, -wo.y, wo.z),
                     eta: 1.0,
-                    value: Some((self.tint, f, true)),
+                    value: Some((self.reflect_tint, f, true)),
                 });
             }
             let wi = refract(wo, n, etap)?;
@@ -121,7 +131,7 @@ impl LobeModel for Dielectric {
             let n = if wo.dot(m) > 0.0 { m } else { -m };
             (1, refract(wo, n, self.etap(wo))?)
         };
-        let (fv, pdf) = rough_eval(k, eta, g, self.tint, wo, wi);
+        let (fv, pdf) = rough_eval(k, eta, g, self.tints(), wo, wi);
         if pdf <= 0.0 || fv == Vec3A::ZERO {
             return None;
         }
@@ -142,7 +152,15 @@ impl LobeModel for Dielectric {
 
 /// Rough dielectric event `k` (0 reflection, 1 transmission): `f · |cos θi|` and pdf,
 /// both including the per-microfacet Fresnel choice.
-fn rough_eval(k: usize, eta: f32, g: Ggx, tint: Vec3A, wo: Vec3A, wi: Vec3A) -> (Vec3A, f32) {
+/// `tints` are (reflection, transmission).
+fn rough_eval(
+    k: usize,
+    eta: f32,
+    g: Ggx,
+    tints: (Vec3A, Vec3A),
+    wo: Vec3A,
+    wi: Vec3A,
+) -> (Vec3A, f32) {
     let (cos_o, cos_i) = (wo.z, wi.z);
     let reflect = cos_o * cos_i > 0.0;
     if reflect != (k == 0) {
@@ -175,13 +193,13 @@ fn rough_eval(k: usize, eta: f32, g: Ggx, tint: Vec3A, wo: Vec3A, wi: Vec3A) -> 
     if reflect {
         let val = g.d(m) * g.g(wo, wi) * f / (4.0 * cos_o.abs());
         let pdf = pdf_m / (4.0 * wo.dot(m).abs()) * f;
-        (tint * val, pdf)
+        (tints.0 * val, pdf)
     } else {
         let denom = (wi.dot(m) + wo.dot(m) / etap).powi(2);
         let val = (1.0 - f) * g.d(m) * g.g(wo, wi) * (wi.dot(m) * wo.dot(m)).abs()
             / (denom * cos_o.abs())
             / (etap * etap);
         let pdf = pdf_m * wi.dot(m).abs() / denom * (1.0 - f);
-        (tint * val, pdf)
+        (tints.1 * val, pdf)
     }
 }

@@ -257,6 +257,7 @@ impl Bsdf {
                 eta,
                 alpha,
                 tint,
+                reflect_tint: Vec3A::ONE,
                 compensate: true,
             }
             .into()],

@@ -278,6 +278,7 @@ impl Bsdf {
                 eta,
                 alpha,
                 tint: tint * (dielectric * transmission),
+                reflect_tint: Vec3A::splat(dielectric * transmission),
             });
         }
         if set.metal {

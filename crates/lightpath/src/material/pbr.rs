@@ -58,6 +58,7 @@ impl Bsdf {
                     eta: p.ior,
                     alpha: glam::Vec2::splat(p.alpha),
                     tint: base,
+                    reflect_tint: Vec3A::ONE,
                 }
                 .into()],
                 None,

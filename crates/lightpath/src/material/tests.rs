@@ -205,6 +205,7 @@ fn rough_lobe_cases() -> Vec<(String, Lobe, Vec<Vec3A>)> {
                 eta: 1.5,
                 alpha,
                 tint: Vec3A::ONE,
+                reflect_tint: Vec3A::ONE,
             }
             .into(),
             up.clone(),
@@ -243,6 +244,7 @@ fn rough_lobe_cases() -> Vec<(String, Lobe, Vec<Vec3A>)> {
                 eta: 1.5,
                 alpha: Vec2::splat(alpha),
                 tint: Vec3A::ONE,
+                reflect_tint: Vec3A::ONE,
             }
             .into(),
             up.clone(),
@@ -268,6 +270,7 @@ fn rough_glass_inside_cases() -> Vec<(String, Lobe, Vec<Vec3A>)> {
                 eta: 1.5,
                 alpha,
                 tint: Vec3A::ONE,
+                reflect_tint: Vec3A::ONE,
             }
             .into(),
             vec![dir(170.0, 0.0), dir(130.0, 90.0)],
@@ -671,6 +674,7 @@ fn smooth_lobes_reflect_their_fresnel_and_glass_conserves_energy() {
         eta: 1.5,
         alpha: Vec2::splat(0.0),
         tint: Vec3A::ONE,
+        reflect_tint: Vec3A::ONE,
     });
     for wo in [
         dir(10.0, 0.0),
@@ -1030,6 +1034,7 @@ fn white_furnace_rough_glass_keeps_its_energy_from_both_sides() {
                 eta: 1.5,
                 alpha,
                 tint: Vec3A::ONE,
+                reflect_tint: Vec3A::ONE,
             });
             let mut dirs = furnace_dirs();
             dirs.extend(furnace_dirs().into_iter().map(|w| -w));
@@ -1144,6 +1149,7 @@ fn passive_lobes_never_create_energy() {
                 eta: 1.0 + 2.0 * r(),
                 alpha,
                 tint: colour(&mut r),
+                reflect_tint: Vec3A::ONE,
             }
             .into(),
         };
@@ -1332,4 +1338,45 @@ fn f82_tint_is_schlick_at_tint_one_and_tints_near_82_degrees() {
         (avg - closed).abs().max_element() < 1e-4,
         "{avg} vs {closed}"
     );
+}
+
+/// Glass tints what it transmits (at each crossing) and not what it reflects, smooth or
+/// rough, as glTF, Cycles and OpenPBR define it.
+#[test]
+fn glass_tints_what_it_transmits_and_not_what_it_reflects() {
+    let tint = Vec3A::new(0.9, 0.5, 0.2);
+    for alpha in [Vec2::ZERO, Vec2::splat(0.3)] {
+        let lobe = Lobe::from(Dielectric {
+            eta: 1.5,
+            alpha,
+            tint,
+            reflect_tint: Vec3A::ONE,
+            compensate: true,
+        });
+        let mut rng = Rng::for_sample(77, 0, 0);
+        let (mut reflected, mut transmitted) = (0, 0);
+        for _ in 0..4000 {
+            let Some(d) = draw(&lobe, dir(70.0, 0.0), &mut rng) else {
+                continue;
+            };
+            // The colour of the weight, whatever its size.
+            let hue = d.weight / d.weight.max_element();
+            let want = if d.wi.z > 0.0 {
+                reflected += 1;
+                Vec3A::ONE
+            } else {
+                transmitted += 1;
+                tint / tint.max_element()
+            };
+            assert!(
+                (hue - want).abs().max_element() < 1e-4,
+                "{alpha} {}",
+                d.weight
+            );
+        }
+        assert!(
+            reflected > 100 && transmitted > 100,
+            "{reflected} {transmitted}"
+        );
+    }
 }

@@ -756,6 +756,11 @@ impl Loader {
                 .inputs
                 .push(input_texture("transmission_color", t.clone(), 0, true));
             textures.base_color = Some(t);
+        } else {
+            // Blender's Principled glass tints by √(base colour) at each crossing, so a
+            // ray through a solid takes the base colour once (textured, the texture's
+            // colour is taken at each crossing: inputs have no square root).
+            p.transmission_color = base_color.max(Vec3A::ZERO).powf(0.5);
         }
         if let Some(info) = pbr.metallic_roughness_texture() {
             textures.metallic_roughness =
