@@ -984,6 +984,52 @@ def Material "Mat"
     assert_eq!(black.specular_weight, 0.0);
 }
 
+/// UsdPreviewSurface's opacity is coverage: presence (as Cycles' USD import makes it the
+/// Principled alpha), a cut-out with `opacityThreshold`; never a glass.
+#[test]
+fn preview_surface_opacity_is_presence() {
+    let dir = Scratch::new("usd-opacity");
+    let stage = |inputs: &str| {
+        format!(
+            r#"#usda 1.0
+def Sphere "Ball"
+{{
+    rel material:binding = </Mat>
+}}
+def Material "Mat"
+{{
+    token outputs:surface.connect = </Mat/S.outputs:surface>
+    def Shader "S"
+    {{
+        uniform token info:id = "UsdPreviewSurface"
+        {inputs}
+        token outputs:surface
+    }}
+}}
+"#
+        )
+    };
+    let material = |name: &str, inputs: &str| {
+        let desc = load(&write(&dir, name, &stage(inputs)));
+        desc.materials[&desc.objects[0].material.as_ref().unwrap().name].clone()
+    };
+    let openpbr = |m: &lightpath::scene::desc::MaterialDesc| match &m.kind {
+        MaterialKind::OpenPbr(p) => **p,
+        other => panic!("{other:?}"),
+    };
+    let veil = material("veil.usda", "float inputs:opacity = 0.3");
+    let p = openpbr(&veil);
+    assert_eq!((p.geometry_opacity, p.transmission_weight), (0.3, 0.0));
+    assert!(!p.geometry_thin_walled);
+    assert_eq!(veil.textures.opacity_cutoff, None);
+    let leaf = material(
+        "leaf.usda",
+        "float inputs:opacity = 0.8\n        float inputs:opacityThreshold = 0.5",
+    );
+    assert_eq!(openpbr(&leaf).geometry_opacity, 0.8);
+    assert_eq!(leaf.textures.opacity_cutoff, Some(0.5));
+}
+
 /// A stage whose RenderVars redefine standard names, rendered with `--aovs standard`,
 /// light groups and bounces: its header declares only the partitions that hold.
 fn partitions_of(

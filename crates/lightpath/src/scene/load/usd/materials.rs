@@ -13,7 +13,7 @@
 //! | clearcoat, clearcoatRoughness | coat_weight, coat_roughness (coat ior 1.5, no darkening) |
 //! | useSpecularWorkflow = 1, specularColor | F0 = specularColor, white at grazing: specular_ior from its brightest channel, specular_color the rest, tinting F0 only (metalness 0; `ior` not used for it) |
 //! | emissiveColor | the object's emission (a glowing surface, `O`) |
-//! | opacity < 1 | transmission_weight = 1 − opacity (thin-walled) |
+//! | opacity (a texture too), opacityThreshold | geometry_opacity, presence (docs/lpe.md#presence); with a threshold > 0 a cut-out: present where opacity ≥ threshold |
 //! | normal (a UsdUVTexture, scale 2 bias −1) | the tangent-space normal map |
 //!
 //! A texture multiplies its input by its `scale` (its `bias` is honoured only as the
@@ -252,8 +252,9 @@ impl Loader {
             coat_roughness: num("clearcoatRoughness", 0.01).clamp(0.0, 1.0),
             coat_ior: 1.5,
             coat_darkening: 0.0,
-            transmission_weight: 1.0 - opacity,
-            geometry_thin_walled: opacity < 1.0,
+            // UsdPreviewSurface's opacity is coverage, not glass (Cycles' USD import
+            // makes it the Principled alpha): presence.
+            geometry_opacity: opacity,
             ..OpenPbr::default()
         };
         if specular_workflow {
@@ -270,6 +271,11 @@ impl Loader {
             }
         }
         let mut textures = TexturesDesc::default();
+        // With a threshold, a cut-out: present where opacity ≥ it, absent elsewhere.
+        let threshold = num("opacityThreshold", 0.0);
+        if threshold > 0.0 {
+            textures.opacity_cutoff = Some(threshold.min(1.0));
+        }
         let mut inputs = Vec::new();
         for input in [
             "diffuseColor",
@@ -403,6 +409,15 @@ impl Loader {
                         1.0
                     };
                     textures.normal = Some((tex.desc, strength));
+                }
+                "opacity" => {
+                    p.geometry_opacity = s[tex.channel as usize].clamp(0.0, 1.0);
+                    textures.inputs.push(input_texture(
+                        "geometry_opacity",
+                        tex.desc,
+                        tex.channel,
+                        false,
+                    ));
                 }
                 other => self.warn_once(
                     &format!("input {} {other}", material.path()),
