@@ -278,7 +278,13 @@ impl Bsdf {
                 eta,
                 alpha,
                 tint: tint * (dielectric * transmission),
-                reflect_tint: Vec3A::splat(dielectric * transmission),
+                // OpenPBR's specular colour tints the dielectric's reflection over glass
+                // as over the opaque base; a tint on F0 only (glTF) is left out here.
+                reflect_tint: if p.specular_color_f0_only {
+                    Vec3A::ONE
+                } else {
+                    p.specular_color
+                } * (dielectric * transmission),
             });
         }
         if set.metal {
@@ -429,6 +435,34 @@ mod tests {
         // Clamped where F0 would pass 1: a finite index, F0 below 1.
         let top = modulated_ior(1.5, 1e6);
         assert!(top.is_finite() && f0(top) < 1.0, "{top}");
+    }
+
+    #[test]
+    fn glass_reflects_in_the_specular_colour_and_transmits_in_the_transmission_colour() {
+        let p = OpenPbr {
+            transmission_weight: 1.0,
+            transmission_color: Vec3A::new(0.9, 0.5, 0.2),
+            specular_color: Vec3A::new(1.0, 0.8, 0.6),
+            ..OpenPbr::default()
+        };
+        let bsdf = Bsdf::openpbr(&p, &LobeSet::of(&p, |_| false));
+        let glass = bsdf.lobes[..bsdf.n_lobes]
+            .iter()
+            .find_map(|l| match l {
+                Lobe::Dielectric(d) => Some(*d),
+                _ => None,
+            })
+            .expect("a glass lobe");
+        assert_eq!(glass.tint, p.transmission_color);
+        assert_eq!(glass.reflect_tint, p.specular_color);
+        let gltf = OpenPbr {
+            specular_color_f0_only: true,
+            ..p
+        };
+        let bsdf = Bsdf::openpbr(&gltf, &LobeSet::of(&gltf, |_| false));
+        assert!(bsdf.lobes[..bsdf.n_lobes]
+            .iter()
+            .any(|l| matches!(l, Lobe::Dielectric(d) if d.reflect_tint == Vec3A::ONE)));
     }
 
     #[test]
