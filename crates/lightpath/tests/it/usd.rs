@@ -6,7 +6,7 @@
 use crate::common::Scratch;
 use lightpath::aov;
 use lightpath::scene::desc::Origin;
-use lightpath::scene::desc::{LightKind, MaterialKind, SceneDesc, ShapeDesc};
+use lightpath::scene::desc::{LightKind, MaterialDesc, MaterialKind, SceneDesc, ShapeDesc};
 use lightpath::scene::load::usd::{load_scene, UsdOptions};
 use lightpath::{render, RenderOptions, Scene};
 use std::f32::consts::PI;
@@ -927,15 +927,10 @@ def Material "Mat"
     assert!(e.contains("nothing.usda"), "{e}");
 }
 
-/// UsdPreviewSurface's specular workflow: `specularColor` is the reflectance at normal
-/// incidence with white at grazing, so it becomes an F0-only tint over the index whose F0
-/// is its brightest channel; black turns the dielectric's reflection off.
-#[test]
-fn the_specular_workflow_gives_specular_color_as_f0() {
-    let dir = Scratch::new("usd-specular-workflow");
-    let stage = |color: &str| {
-        format!(
-            r#"#usda 1.0
+/// The material of a stage with one sphere bound to a UsdPreviewSurface of `inputs`.
+fn preview_surface(dir: &Scratch, name: &str, inputs: &str) -> MaterialDesc {
+    let stage = format!(
+        r#"#usda 1.0
 def Sphere "Ball"
 {{
     rel material:binding = </Mat>
@@ -946,23 +941,35 @@ def Material "Mat"
     def Shader "S"
     {{
         uniform token info:id = "UsdPreviewSurface"
-        int inputs:useSpecularWorkflow = 1
-        color3f inputs:specularColor = {color}
-        float inputs:metallic = 1
-        float inputs:ior = 1.33
+        {inputs}
         token outputs:surface
     }}
 }}
 "#
-        )
-    };
+    );
+    let desc = load(&write(dir, name, &stage));
+    desc.materials[&desc.objects[0].material.as_ref().unwrap().name].clone()
+}
+
+fn openpbr_of(m: &MaterialDesc) -> lightpath::material::openpbr::OpenPbr {
+    match &m.kind {
+        MaterialKind::OpenPbr(p) => **p,
+        other => panic!("{other:?}"),
+    }
+}
+
+/// UsdPreviewSurface's specular workflow: `specularColor` is the reflectance at normal
+/// incidence with white at grazing, so it becomes an F0-only tint over the index whose F0
+/// is its brightest channel; black turns the dielectric's reflection off.
+#[test]
+fn the_specular_workflow_gives_specular_color_as_f0() {
+    let dir = Scratch::new("usd-specular-workflow");
     let material = |name: &str, color: &str| {
-        let desc = load(&write(&dir, name, &stage(color)));
-        let m = &desc.materials[&desc.objects[0].material.as_ref().unwrap().name];
-        let MaterialKind::OpenPbr(p) = &m.kind else {
-            panic!("{:?}", m.kind)
-        };
-        **p
+        let inputs = format!(
+            "int inputs:useSpecularWorkflow = 1\n        color3f inputs:specularColor = {color}\n        \
+             float inputs:metallic = 1\n        float inputs:ior = 1.33"
+        );
+        openpbr_of(&preview_surface(&dir, name, &inputs))
     };
     let p = material("tinted.usda", "(0.08, 0.04, 0.02)");
     assert!(p.specular_color_f0_only);
@@ -989,44 +996,17 @@ def Material "Mat"
 #[test]
 fn preview_surface_opacity_is_presence() {
     let dir = Scratch::new("usd-opacity");
-    let stage = |inputs: &str| {
-        format!(
-            r#"#usda 1.0
-def Sphere "Ball"
-{{
-    rel material:binding = </Mat>
-}}
-def Material "Mat"
-{{
-    token outputs:surface.connect = </Mat/S.outputs:surface>
-    def Shader "S"
-    {{
-        uniform token info:id = "UsdPreviewSurface"
-        {inputs}
-        token outputs:surface
-    }}
-}}
-"#
-        )
-    };
-    let material = |name: &str, inputs: &str| {
-        let desc = load(&write(&dir, name, &stage(inputs)));
-        desc.materials[&desc.objects[0].material.as_ref().unwrap().name].clone()
-    };
-    let openpbr = |m: &lightpath::scene::desc::MaterialDesc| match &m.kind {
-        MaterialKind::OpenPbr(p) => **p,
-        other => panic!("{other:?}"),
-    };
-    let veil = material("veil.usda", "float inputs:opacity = 0.3");
-    let p = openpbr(&veil);
+    let veil = preview_surface(&dir, "veil.usda", "float inputs:opacity = 0.3");
+    let p = openpbr_of(&veil);
     assert_eq!((p.geometry_opacity, p.transmission_weight), (0.3, 0.0));
     assert!(!p.geometry_thin_walled);
     assert_eq!(veil.textures.opacity_cutoff, None);
-    let leaf = material(
+    let leaf = preview_surface(
+        &dir,
         "leaf.usda",
         "float inputs:opacity = 0.8\n        float inputs:opacityThreshold = 0.5",
     );
-    assert_eq!(openpbr(&leaf).geometry_opacity, 0.8);
+    assert_eq!(openpbr_of(&leaf).geometry_opacity, 0.8);
     assert_eq!(leaf.textures.opacity_cutoff, Some(0.5));
 }
 

@@ -23,7 +23,7 @@
 //! Lightpath's at the top-left, so `t` is flipped when the mesh is read.
 
 use super::{stage, Loader};
-use crate::material::openpbr::{self, OpenPbr};
+use crate::material::openpbr::{self, InputMut, OpenPbr};
 use crate::material::texture::{UvTransform, Wrap};
 use crate::scene::desc::{
     ImageSource, InputTexture, MaterialDesc, MaterialKind, TextureDesc, TexturesDesc,
@@ -41,6 +41,17 @@ const F0_OF_1_5: f32 = 0.04;
 fn ior_of_f0(f0: f32) -> f32 {
     let r = f0.sqrt();
     (1.0 + r) / (1.0 - r)
+}
+
+/// A texture on OpenPBR number `input` in [0, 1]: its scale in the texture's channel is the
+/// input's factor.
+fn number_input(p: &mut OpenPbr, textures: &mut TexturesDesc, input: &'static str, tex: Texture) {
+    if let Some(InputMut::Scalar(v)) = openpbr::input(input).map(|i| (i.get)(p)) {
+        *v = tex.scale[tex.channel as usize].clamp(0.0, 1.0);
+    }
+    textures
+        .inputs
+        .push(input_texture(input, tex.desc, tex.channel, false));
 }
 
 /// A `UsdUVTexture` as an input reads it.
@@ -344,41 +355,11 @@ impl Loader {
                     }
                 }
                 "metallic" if !specular_workflow => {
-                    p.base_metalness = s[tex.channel as usize].clamp(0.0, 1.0);
-                    textures.inputs.push(input_texture(
-                        "base_metalness",
-                        tex.desc,
-                        tex.channel,
-                        false,
-                    ));
+                    number_input(p, textures, "base_metalness", tex)
                 }
-                "roughness" => {
-                    p.specular_roughness = s[tex.channel as usize].clamp(0.0, 1.0);
-                    textures.inputs.push(input_texture(
-                        "specular_roughness",
-                        tex.desc,
-                        tex.channel,
-                        false,
-                    ));
-                }
-                "clearcoat" => {
-                    p.coat_weight = s[tex.channel as usize].clamp(0.0, 1.0);
-                    textures.inputs.push(input_texture(
-                        "coat_weight",
-                        tex.desc,
-                        tex.channel,
-                        false,
-                    ));
-                }
-                "clearcoatRoughness" => {
-                    p.coat_roughness = s[tex.channel as usize].clamp(0.0, 1.0);
-                    textures.inputs.push(input_texture(
-                        "coat_roughness",
-                        tex.desc,
-                        tex.channel,
-                        false,
-                    ));
-                }
+                "roughness" => number_input(p, textures, "specular_roughness", tex),
+                "clearcoat" => number_input(p, textures, "coat_weight", tex),
+                "clearcoatRoughness" => number_input(p, textures, "coat_roughness", tex),
                 "specularColor" if specular_workflow => {
                     // The texture's F0 as a tint on the F0 of index 1.5.
                     p.specular_ior = 1.5;
@@ -410,15 +391,7 @@ impl Loader {
                     };
                     textures.normal = Some((tex.desc, strength));
                 }
-                "opacity" => {
-                    p.geometry_opacity = s[tex.channel as usize].clamp(0.0, 1.0);
-                    textures.inputs.push(input_texture(
-                        "geometry_opacity",
-                        tex.desc,
-                        tex.channel,
-                        false,
-                    ));
-                }
+                "opacity" => number_input(p, textures, "geometry_opacity", tex),
                 other => self.warn_once(
                     &format!("input {} {other}", material.path()),
                     material,
