@@ -160,6 +160,7 @@ impl Tracer<'_> {
 
     /// Light sampling at a scattering vertex: one light, one point on it, and every
     /// non-delta lobe through its own event, then `L`, weighted against BSDF sampling.
+    #[inline(always)]
     pub(super) fn direct_light<S: Sampler>(
         &self,
         out: &mut Sink,

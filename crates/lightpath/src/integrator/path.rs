@@ -101,12 +101,26 @@ impl Tracer<'_> {
     /// Traces one camera path; returns its alpha. A training pass's path then records
     /// its vertices into the guide (guided.rs).
     pub(super) fn trace<S: Sampler>(&self, ray: Ray, sampler: &mut S, out: &mut Sink) -> f32 {
-        let alpha = self.trace_path(ray, sampler, out);
+        let scene = self.scene;
+        let alpha = if scene.has_media || scene.has_presence || self.guide.is_some() {
+            self.trace_path::<S, true>(ray, sampler, out)
+        } else {
+            self.trace_path::<S, false>(ray, sampler, out)
+        };
         self.flush_record(out);
         alpha
     }
 
-    fn trace_path<S: Sampler>(&self, mut ray: Ray, sampler: &mut S, out: &mut Sink) -> f32 {
+    /// `RICH`: whether the scene may have media, null boundaries, surfaces only partly
+    /// there (presence) or a guide. Without them a ray always stops at what it finds,
+    /// so the loop compiled with `RICH = false` carries none of their state and tests:
+    /// the plain scenes (cornell-classic) render as fast as before those features.
+    fn trace_path<S: Sampler, const RICH: bool>(
+        &self,
+        mut ray: Ray,
+        sampler: &mut S,
+        out: &mut Sink,
+    ) -> f32 {
         let scene = self.scene;
         let mut path = PathState::start(scene, &ray, self.path_rng);
         let mut alpha = 0.0;
@@ -123,7 +137,11 @@ impl Tracer<'_> {
             } else {
                 Visibility::INDIRECT
             };
-            let (found, passes, null, also) = self.find(&path.media, &ray, tmin, mask);
+            let (found, passes, null, also) = if RICH {
+                self.find(&path.media, &ray, tmin, mask)
+            } else {
+                (scene.accel.intersect(&ray, 0.0, mask), false, false, None)
+            };
             tmin = 0.0;
             if let Some(hit) = found.as_ref().filter(|_| !passes) {
                 self.first_hit(out, path.depth, hit, &mut alpha);
@@ -133,7 +151,7 @@ impl Tracer<'_> {
             if path.depth > 0 && scene.any_unoccluded && path.travelled == 0.0 {
                 self.lights_only(out, &path, &ray, found.as_ref());
             }
-            if scene.has_media {
+            if RICH && scene.has_media {
                 let camera_ray = path.depth == 0;
                 let flight = self.fly(out, &mut path, &ray, found.as_ref(), sampler);
                 if camera_ray && !matches!(flight, Flight::Reached) {
@@ -153,7 +171,7 @@ impl Tracer<'_> {
                 break;
             };
             path.cone_width += path.cone_spread * hit.t;
-            if passes {
+            if RICH && passes {
                 // A null surface or a false boundary: no event, the ray goes on.
                 crossings += 1;
                 if crossings > MAX_CROSSINGS {
@@ -201,7 +219,7 @@ impl Tracer<'_> {
                 bsdf,
                 sh,
                 dir: ray.dir,
-                guide: self.guide_at(bsdf, hit.p),
+                guide: if RICH { self.guide_at(bsdf, hit.p) } else { None },
             };
             self.data_lobes(out, &path, &v);
             self.direct_light(out, &mut path, &v, sampler);
@@ -211,7 +229,8 @@ impl Tracer<'_> {
             // Through an interior's boundary (not a subsurface walk's exit, elsewhere):
             // the medium changes, and its flight starts on the surface (see `tmin`).
             let through = ray.dir.dot(hit.ng) * next.dir.dot(hit.ng) > 0.0;
-            if obj.interior.is_some()
+            if RICH
+                && obj.interior.is_some()
                 && through
                 && next.origin.distance(hit.p) <= 2.0 * scene.epsilon
             {
@@ -362,6 +381,7 @@ impl Tracer<'_> {
 
     /// Samples one lobe and a direction and steps the path through them (through a
     /// random walk for a subsurface lobe, subsurface.rs); the ray to trace next, or `None` where the path ends (no sample, depth limits, dead state).
+    #[inline(always)]
     fn scatter<S: Sampler>(
         &self,
         out: &mut Sink,
