@@ -160,8 +160,9 @@ impl Tracer<'_> {
 
     /// Light sampling at a scattering vertex: one light, one point on it, and every
     /// non-delta lobe through its own event, then `L`, weighted against BSDF sampling.
+    /// `RICH` as in `trace_path` (path.rs): without it, no medium or guide is tested.
     #[inline(always)]
-    pub(super) fn direct_light<S: Sampler>(
+    pub(super) fn direct_light<S: Sampler, const RICH: bool>(
         &self,
         out: &mut Sink,
         path: &mut PathState,
@@ -193,7 +194,7 @@ impl Tracer<'_> {
         let mut transmitted: Option<Vec3A> = None;
         // At a guided vertex BSDF sampling is a mixture with the guide (guided.rs).
         let mixture = match (v.guide, self.guide) {
-            (Some(g), Some(tree)) if g.alpha > 0.0 => Some((
+            (Some(g), Some(tree)) if RICH && g.alpha > 0.0 => Some((
                 g.alpha,
                 LobeValues::at(bsdf, &v.sh, wi),
                 tree.leaf(g.leaf).sampling.pdf(ls.wi),
@@ -226,7 +227,7 @@ impl Tracer<'_> {
             } else {
                 power_heuristic(light_pdf, lobe_pdf)
             };
-            if scene.has_media {
+            if RICH && scene.has_media {
                 let tr = *transmitted.get_or_insert_with(|| {
                     let tmax = if ls.dist.is_finite() {
                         ls.dist - 2.0 * scene.epsilon
@@ -250,16 +251,22 @@ impl Tracer<'_> {
                 self.split_by_transmittance(out, s_light, path, value, w, tr, glow, part);
                 continue;
             }
-            let vis = *visible.get_or_insert_with(|| {
-                out.rays += 1;
-                let tmax = if ls.dist.is_finite() {
-                    ls.dist - 2.0 * scene.epsilon
-                } else {
-                    f32::INFINITY
-                };
-                tmax <= 0.0
-                    || !self.occluded(out, &self.spawn(v.hit, ls.wi, tmax), light, li as u32)
-            });
+            // A `match`, not `get_or_insert_with`, which the compiler kept as a call.
+            let vis = match visible {
+                Some(vis) => vis,
+                None => {
+                    out.rays += 1;
+                    let tmax = if ls.dist.is_finite() {
+                        ls.dist - 2.0 * scene.epsilon
+                    } else {
+                        f32::INFINITY
+                    };
+                    let vis = tmax <= 0.0
+                        || !self.occluded(out, &self.spawn(v.hit, ls.wi, tmax), light, li as u32);
+                    visible = Some(vis);
+                    vis
+                }
+            };
             let via = match (glow, vis) {
                 // A glow is no light: what cannot reach it is no shadow.
                 (true, false) => continue,

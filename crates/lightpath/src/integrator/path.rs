@@ -222,7 +222,7 @@ impl Tracer<'_> {
                 guide: if RICH { self.guide_at(bsdf, hit.p) } else { None },
             };
             self.data_lobes(out, &path, &v);
-            self.direct_light(out, &mut path, &v, sampler);
+            self.direct_light::<S, RICH>(out, &mut path, &v, sampler);
             let Some(mut next) = self.scatter(out, &mut path, &v, sampler) else {
                 break;
             };
@@ -347,12 +347,19 @@ impl Tracer<'_> {
     }
 
     /// Data lobes, each as if lit by a unit light (docs/lpe.md#paths-and-events).
+    /// Inlined down to the test of whether any data AOV is still live (past the first
+    /// vertex, usually none): a call per vertex otherwise.
+    #[inline(always)]
     fn data_lobes(&self, out: &mut Sink, path: &PathState, v: &Vertex) {
         let scene = self.scene;
-        let a = &scene.automaton;
-        if !scene.data_live[a.state_index(path.state)] {
-            return;
+        if scene.data_live[scene.automaton.state_index(path.state)] {
+            self.live_data_lobes(out, path, v);
         }
+    }
+
+    fn live_data_lobes(&self, out: &mut Sink, path: &PathState, v: &Vertex) {
+        let scene = self.scene;
+        let a = &scene.automaton;
         for &(kind, class) in &v.obj.data_lobes {
             let s1 = a.step(path.state, class);
             if a.is_dead(s1) {
