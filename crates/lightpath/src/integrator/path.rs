@@ -137,11 +137,7 @@ impl Tracer<'_> {
             } else {
                 Visibility::INDIRECT
             };
-            let (found, passes, null, also) = if RICH {
-                self.find(&path.media, &ray, tmin, mask)
-            } else {
-                (scene.accel.intersect(&ray, 0.0, mask), false, false, None)
-            };
+            let (found, passes, null, also) = self.find::<RICH>(&path.media, &ray, tmin, mask);
             tmin = 0.0;
             if let Some(hit) = found.as_ref().filter(|_| !passes) {
                 self.first_hit(out, path.depth, hit, &mut alpha);
@@ -219,7 +215,7 @@ impl Tracer<'_> {
                 bsdf,
                 sh,
                 dir: ray.dir,
-                guide: if RICH { self.guide_at(bsdf, hit.p) } else { None },
+                guide: RICH.then(|| self.guide_at(bsdf, hit.p)).flatten(),
             };
             self.data_lobes(out, &path, &v);
             self.direct_light::<S, RICH>(out, &mut path, &v, sampler);
@@ -250,9 +246,9 @@ impl Tracer<'_> {
     /// or one only partly there that this ray misses: presence), whether that is a null
     /// boundary, and another boundary lying on that one (crossed with it). A surface a
     /// passed null boundary lies on (a fog box resting on a floor) is found instead, and
-    /// the boundary is not crossed (volume.rs, `coincident`).
+    /// the boundary is not crossed (volume.rs, `coincident`). Without `RICH`, the hit.
     #[inline(always)]
-    fn find(
+    fn find<const RICH: bool>(
         &self,
         media: &MediumStack,
         ray: &Ray,
@@ -260,6 +256,9 @@ impl Tracer<'_> {
         mask: u8,
     ) -> (Option<Hit>, bool, bool, Option<Hit>) {
         let mut found = self.scene.accel.intersect(ray, tmin, mask);
+        if !RICH {
+            return (found, false, false, None);
+        }
         let (mut passes, null) = self.passing(media, found.as_ref(), ray);
         let mut also = None;
         if null {
