@@ -380,6 +380,9 @@ impl Tracer<'_> {
     /// or the escape lights if there is none, with the same MIS weight as the light the
     /// real ray would find. `hit` is what the real ray found: the light counts as
     /// occluded unless it is that, so `plain + shadows = unoccluded` sample by sample.
+    /// Inlined down to whether such an AOV can still take a light's event from the
+    /// path's state (most renders have none: `Scene::lights_only_live`).
+    #[inline(always)]
     pub(super) fn lights_only(
         &self,
         out: &mut Sink,
@@ -387,6 +390,13 @@ impl Tracer<'_> {
         ray: &Ray,
         hit: Option<&Hit>,
     ) {
+        let scene = self.scene;
+        if scene.lights_only_live[scene.automaton.state_index(path.state)] {
+            self.lights_only_test(out, path, ray, hit);
+        }
+    }
+
+    fn lights_only_test(&self, out: &mut Sink, path: &PathState, ray: &Ray, hit: Option<&Hit>) {
         let scene = self.scene;
         match self.nearest_light(ray) {
             Some((li, t, n)) => {

@@ -144,7 +144,7 @@ impl Tracer<'_> {
             }
             // Here, after the roulette and with the real ray's result, so that the lights-only
             // estimate is the beauty's own, sample by sample; once per scatter, not past a null.
-            if path.depth > 0 && scene.any_unoccluded && path.travelled == 0.0 {
+            if path.depth > 0 && path.travelled == 0.0 {
                 self.lights_only(out, &path, &ray, found.as_ref());
             }
             if RICH && scene.has_media {

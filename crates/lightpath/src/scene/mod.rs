@@ -122,8 +122,9 @@ pub struct Scene {
     pub epsilon: f32,
     /// Light group names, sorted; split AOV parts follow this order, then the default.
     pub light_groups: Vec<String>,
-    /// True if any rule has the `unoccluded` or `shadows` prefix.
-    pub any_unoccluded: bool,
+    /// Per automaton state: can a light's event from here reach an `unoccluded` or
+    /// `shadows` AOV (build/mod.rs, `lights_only_live`)?
+    pub lights_only_live: Vec<bool>,
     /// Per automaton state: can some object's data lobe be accepted from here? Most
     /// states cannot, and the integrator skips the data lobes there.
     pub data_live: Vec<bool>,

@@ -75,9 +75,7 @@ impl Scene {
         let light_groups = lights::groups(&mut lights);
         let aovs = output_aovs(&automaton, aovs, &light_groups);
         let data_live = data_live(&automaton, &objects, classes.data_light);
-        let any_unoccluded = aovs.iter().any(|a| {
-            a.flags.contains(lpe::Prefix::Unoccluded) || a.flags.contains(lpe::Prefix::Shadows)
-        });
+        let lights_only_live = lights_only_live(&automaton, &lights);
         Ok(Scene {
             accel,
             surface,
@@ -98,7 +96,7 @@ impl Scene {
             scene_radius,
             epsilon,
             light_groups,
-            any_unoccluded,
+            lights_only_live,
             data_live,
             variance_aovs: Vec::new(),
             volumes,
@@ -354,6 +352,33 @@ fn data_live(automaton: &Automaton, objects: &[Object], data_light: ClassId) -> 
         .collect()
 }
 
+/// Per automaton state (a path's state after a scatter event): can some light's event
+/// from here be accepted by an `unoccluded` or `shadows` AOV? Only there does the
+/// integrator test a BSDF ray against the lights alone (direct.rs, `lights_only`). The
+/// standard `albedo`, `depth` and `normal` AOVs carry `unoccluded` but take a light's
+/// event only after a data lobe's, which no path continues from: in most renders no state
+/// a path scatters into is live.
+fn lights_only_live(automaton: &Automaton, lights: &[Light]) -> Vec<bool> {
+    let wanted: Vec<bool> = automaton
+        .rules()
+        .iter()
+        .map(|r| {
+            r.flags.contains(lpe::Prefix::Unoccluded) || r.flags.contains(lpe::Prefix::Shadows)
+        })
+        .collect();
+    automaton
+        .states()
+        .map(|s| {
+            lights.iter().any(|l| {
+                automaton
+                    .accepting(automaton.step(s, l.classes.light))
+                    .iter()
+                    .any(|r| wanted[r.0 as usize])
+            })
+        })
+        .collect()
+}
+
 /// Compiles the AOVs into one automaton whose alphabet is exactly the scene's events.
 fn compile_aovs(
     desc: &SceneDesc,
@@ -385,4 +410,46 @@ fn compile_aovs(
             e.message
         ))
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use crate::aov::{self, AovSpec};
+    use crate::scene::{Scene, Source};
+
+    fn room(aovs: Vec<AovSpec>) -> Scene {
+        let desc = Source {
+            name: "room.toml".into(),
+            text: "[camera]\nposition = [0, 0, 5]\nlook_at = [0, 0, 0]\nfov = 30\n\
+                   [materials.white]\ntype = \"diffuse\"\nalbedo = [0.8, 0.8, 0.8]\n\
+                   [[objects]]\nshape = \"sphere\"\ncenter = [0, 0, 0]\nradius = 1\n\
+                   material = \"white\"\n\
+                   [[lights]]\ntype = \"point\"\nposition = [2, 2, 2]\n\
+                   intensity = [10, 10, 10]\n"
+                .into(),
+            dir: Default::default(),
+        }
+        .parse()
+        .unwrap();
+        Scene::build(&desc, &aov::assemble(aovs)).unwrap()
+    }
+
+    /// The states a real path is in past the camera and each diffuse bounce: the
+    /// standard AOVs' `unoccluded` rules (albedo, depth, normal) take a light's event only
+    /// after a data lobe's, so none of them asks for the lights-only test there. An
+    /// `unoccluded` light AOV does, after its diffuse event but not at the camera.
+    #[test]
+    fn lights_only_is_live_only_where_an_unoccluded_light_aov_can_accept() {
+        let path_states = |scene: &Scene| {
+            let a = &scene.automaton;
+            let diffuse = scene.objects[0].lobe_classes[0];
+            let camera = a.step(a.start(), scene.camera_class);
+            let once = a.step(camera, diffuse);
+            let twice = a.step(once, diffuse);
+            [camera, once, twice].map(|s| scene.lights_only_live[a.state_index(s)])
+        };
+        assert_eq!(path_states(&room(aov::standard())), [false; 3]);
+        let with = room(vec![AovSpec::new("u", "unoccluded;C<RD>L")]);
+        assert_eq!(path_states(&with), [false, true, false]);
+    }
 }
