@@ -16,21 +16,25 @@ Python 3.11); not a CI dependency. Steps, each skipped when its output exists:
 3. for each seed and scene, alternately, Cycles and Lightpath at --spp on 2 threads.
 
 Cycles: CPU, 2 threads, its light tree, no denoiser, no adaptive sampling, every bounce
-limit at DEPTH, caustics on, Filter Glossy left at its default (1: it blurs glossy
-paths, against its own reference), clamps at --clamp-indirect (default off; Cycles'
-factory default is 10). Its time is the second of two renders in one process (the first
-loads the kernels). Lightpath: `render --max-depth DEPTH+1` (Mitsuba's count of
-segments), its defaults otherwise (guiding auto), the same clamp; its time is the whole
-process's wall time (loading the .glb included).
+limit at DEPTH, caustics on, Filter Glossy --filter-glossy (default 1, Cycles' own: it
+blurs glossy lobes after rough bounces, a regularisation), clamps at --clamp-indirect
+(default off; Cycles' factory default is 10). Its time is the second of two renders in
+one process (the first loads the kernels). Lightpath: `render --max-depth DEPTH+1` (Mitsuba's count of
+segments), `--regularize` (default 0, Lightpath's own; 0.65 matches Filter Glossy 1
+after a diffuse bounce), its defaults otherwise (guiding auto), the same clamp; its time
+is the whole process's wall time (loading the .glb included). docs/performance.md,
+"Real scenes against Cycles", has the figures.
 
-Prints per scene and seed: seconds, MSE and relMSE (squared error over reference² +
-0.01) against the renderer's own reference, efficiency = 1 / (MSE × seconds) and
-Lightpath's efficiency over Cycles'; the medians; the two references' means over the
+Prints per scene and seed: wall and CPU seconds, MSE, relMSE (squared error over
+reference² + 0.01) and the MSE off the sun's glints (GLINT) against the renderer's own
+reference, efficiency = 1 / (MSE × seconds) and Lightpath's efficiency over Cycles' by
+each measure; the medians; the two references' means over the
 frame and per object (Cycles' Object Index pass masks both, the camera being the same);
 and where Lightpath's 64-spp squared error sits (per object, and the share of its 20
-worst pixels). Writes OUT_DIR/results.json. The scene `heldout` is reported apart.
+worst pixels). Writes OUT_DIR/results_<settings>.json; --reuse reports again from the
+images and timings already there. The scene `heldout` is reported apart.
 
-`python real_scenes.py cycles FILE.glb OUT.exr SPP SEED DEPTH CLAMP REPEAT` is the Cycles
+`python real_scenes.py cycles FILE.glb OUT.exr SPP SEED DEPTH CLAMP FILTER_GLOSSY REPEAT` is the Cycles
 step alone (the script runs it in a subprocess, one Blender session per render).
 """
 
