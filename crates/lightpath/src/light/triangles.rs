@@ -1,10 +1,9 @@
 //! Area lights made of triangles: a rectangle, a quad or a disk (`type = "rect"`,
 //! `"quad"`, `"disk"`), sampled uniformly by area (directly on the parallelogram when the
-//! triangles form one), or uniformly in solid angle when they form a rectangle and the
-//! shading point is close to it (`spherical_rect.rs` says when, and why). They emit on
-//! the side of their normal unless `two_sided`. A
-//! [`Shaping`] (UsdLux's ShapingAPI on rect and disk lights) narrows their emission about
-//! the normal.
+//! triangles form one), or in solid angle, warped by the receiver's cosine, when they
+//! form a rectangle and the shading point is close to it (`spherical_rect.rs` says when,
+//! and why). They emit on the side of their normal unless `two_sided`. A [`Shaping`]
+//! (UsdLux's ShapingAPI on rect and disk lights) narrows their emission about the normal.
 //!
 //! ```toml
 //! [[lights]]
