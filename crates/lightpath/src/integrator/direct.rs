@@ -315,7 +315,7 @@ impl Tracer<'_> {
         if a.accepting(s_light).is_empty() {
             return;
         }
-        let Some(ls) = light.sample(hit.p, u_point, scene.accel.prims()) else {
+        let Some(ls) = light.sample(hit.p, n, u_point, scene.accel.prims()) else {
             return;
         };
         let cos = ls.wi.dot(n);
@@ -406,7 +406,7 @@ impl Tracer<'_> {
                     return;
                 }
                 let w = self.bsdf_weight(path, li as u32, |light| {
-                    light.pdf_hit(path.prev_p, ray.dir, t, n)
+                    light.pdf_hit(path.prev_p, path.prev_n, ray.dir, t, n)
                 });
                 if scene.has_media {
                     let seg = Ray {
@@ -429,7 +429,13 @@ impl Tracer<'_> {
                         continue;
                     }
                     let w = self.bsdf_weight(path, li, |light| {
-                        light.pdf_hit(path.prev_p, ray.dir, f32::INFINITY, Vec3A::ZERO)
+                        light.pdf_hit(
+                            path.prev_p,
+                            path.prev_n,
+                            ray.dir,
+                            f32::INFINITY,
+                            Vec3A::ZERO,
+                        )
                     });
                     if scene.has_media {
                         let tr = self.lights_only_transmittance(out, path, ray, u32::MAX);

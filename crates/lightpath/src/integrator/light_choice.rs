@@ -110,7 +110,7 @@ impl Tracer<'_> {
         if !self.lit(v.hit.object, li as u32) {
             return None;
         }
-        let ls = scene.lights[li].sample(v.hit.p, u_point, scene.accel.prims())?;
+        let ls = scene.lights[li].sample(v.hit.p, v.sh.frame.n, u_point, scene.accel.prims())?;
         let mis_pdf = select_pmf * ls.pdf;
         Some(Chosen {
             li,

@@ -303,7 +303,13 @@ impl Tracer<'_> {
             let le = scene.lights[li as usize].emitted_escaped(ray.dir);
             if le != Vec3A::ZERO && self.lit(path.prev_object, li) {
                 self.light_seen(out, path, li, le, |light| {
-                    light.pdf_hit(path.prev_p, ray.dir, f32::INFINITY, Vec3A::ZERO)
+                    light.pdf_hit(
+                        path.prev_p,
+                        path.prev_n,
+                        ray.dir,
+                        f32::INFINITY,
+                        Vec3A::ZERO,
+                    )
                 });
             }
         }
@@ -325,7 +331,13 @@ impl Tracer<'_> {
             let le = light.emitted_at(hit.ng, ray.dir);
             if le != Vec3A::ZERO && self.lit(path.prev_object, li) {
                 self.light_seen(out, path, li, le, |light| {
-                    light.pdf_hit(path.prev_p, ray.dir, hit.t + path.travelled, hit.ng)
+                    light.pdf_hit(
+                        path.prev_p,
+                        path.prev_n,
+                        ray.dir,
+                        hit.t + path.travelled,
+                        hit.ng,
+                    )
                 });
             }
         } else if let Some(glow) = obj.glow_class {
@@ -333,7 +345,13 @@ impl Tracer<'_> {
             let emission = obj.emission * self.glow_texture(obj, hit, ray.dir, path.cone_width);
             let weight = obj.glow_light.map_or(1.0, |li| {
                 self.bsdf_weight(path, li, |light| {
-                    light.pdf_hit(path.prev_p, ray.dir, hit.t + path.travelled, hit.ng)
+                    light.pdf_hit(
+                        path.prev_p,
+                        path.prev_n,
+                        ray.dir,
+                        hit.t + path.travelled,
+                        hit.ng,
+                    )
                 })
             });
             let origin = Origin {

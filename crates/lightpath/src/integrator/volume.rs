@@ -476,7 +476,7 @@ impl Tracer<'_> {
         if a.accepting(s_light).is_empty() {
             return;
         }
-        let Some(ls) = light.sample(v.p, u_point, scene.accel.prims()) else {
+        let Some(ls) = light.sample(v.p, Vec3A::ZERO, u_point, scene.accel.prims()) else {
             return;
         };
         let volume = &scene.volumes[v.medium.volume as usize];
@@ -581,7 +581,7 @@ impl Tracer<'_> {
             true => Vec2::ZERO,
             false => Vec2::new(path.rng.next_f32(), path.rng.next_f32()),
         };
-        let Some(ls) = light.sample(p, u_point, scene.accel.prims()) else {
+        let Some(ls) = light.sample(p, Vec3A::ZERO, u_point, scene.accel.prims()) else {
             return;
         };
         let f = volume.phase.eval(seg.dir, ls.wi);

@@ -132,7 +132,7 @@ impl Cylinder {
 }
 
 impl LightModel for Cylinder {
-    fn sample(&self, color: Vec3A, p: Vec3A, u: Vec2, _: &[Prim]) -> Option<LightSample> {
+    fn sample(&self, color: Vec3A, p: Vec3A, _: Vec3A, u: Vec2, _: &[Prim]) -> Option<LightSample> {
         let arc = self.visible_arc(p)?;
         let angle = arc.half_angle * (2.0 * u.x - 1.0);
         let n = arc.towards * angle.cos() + arc.sideways * angle.sin();
@@ -154,7 +154,7 @@ impl LightModel for Cylinder {
             delta: false,
         })
     }
-    fn pdf(&self, p: Vec3A, dir: Vec3A, t: f32, ng: Vec3A) -> f32 {
+    fn pdf(&self, p: Vec3A, _: Vec3A, dir: Vec3A, t: f32, ng: Vec3A) -> f32 {
         let Some(arc) = self.visible_arc(p) else {
             return 0.0;
         };
@@ -236,7 +236,7 @@ mod tests {
         let (flux, se) = estimate(400_000, || {
             let n = uniform_sphere(rng.next_2d());
             let x = light.center + n * big;
-            match light.sample(color, x, rng.next_2d(), &[]) {
+            match light.sample(color, x, Vec3A::ZERO, rng.next_2d(), &[]) {
                 Some(s) => (s.radiance.x * s.wi.dot(n).abs() / s.pdf) as f64 * area,
                 None => 0.0,
             }
@@ -271,7 +271,7 @@ mod tests {
                 };
                 match light.intersect(&ray, f32::INFINITY, &[]) {
                     Some((t, n)) if light.emitted(Vec3A::ONE, n, dir) != Vec3A::ZERO => {
-                        (light.pdf(p, dir, t, n) * 4.0 * PI) as f64
+                        (light.pdf(p, Vec3A::ZERO, dir, t, n) * 4.0 * PI) as f64
                     }
                     _ => 0.0,
                 }
@@ -290,7 +290,7 @@ mod tests {
         for _ in 0..2000 {
             let p = light.center + Vec3A::new(rng.next_f32(), rng.next_f32(), rng.next_f32()) * 4.0
                 - 2.0;
-            let Some(s) = light.sample(Vec3A::ONE, p, rng.next_2d(), &[]) else {
+            let Some(s) = light.sample(Vec3A::ONE, p, Vec3A::ZERO, rng.next_2d(), &[]) else {
                 continue;
             };
             samples += 1;
@@ -317,21 +317,21 @@ mod tests {
             // the two roots of the quadratic are close and the hit moves along the surface
             // by up to ~1e-4 of the distance, so that pdf is only checked to be a density.
             let normal = light.prim().curved_normal(q);
-            let pdf = light.pdf(p, s.wi, s.dist, normal);
+            let pdf = light.pdf(p, Vec3A::ZERO, s.wi, s.dist, normal);
             let tolerance = 1e-4 + 1e-5 / normal.dot(s.wi).abs();
             assert!(
                 (pdf - s.pdf).abs() <= tolerance * s.pdf,
                 "{pdf} vs {}",
                 s.pdf
             );
-            let found = light.pdf(p, s.wi, t, n);
+            let found = light.pdf(p, Vec3A::ZERO, s.wi, t, n);
             assert!(found > 0.0 && found.is_finite(), "{found}");
         }
         assert!(samples > 1000, "{samples}");
         // From inside its radius, beyond an end, nothing emits towards the point.
         let inside = light.center + light.axis * 2.0;
         assert!(light
-            .sample(Vec3A::ONE, inside, Vec2::splat(0.5), &[])
+            .sample(Vec3A::ONE, inside, Vec3A::ZERO, Vec2::splat(0.5), &[])
             .is_none());
     }
 

@@ -60,7 +60,7 @@ impl Distant {
 }
 
 impl LightModel for Distant {
-    fn sample(&self, color: Vec3A, _: Vec3A, u: Vec2, _: &[Prim]) -> Option<LightSample> {
+    fn sample(&self, color: Vec3A, _: Vec3A, _: Vec3A, u: Vec2, _: &[Prim]) -> Option<LightSample> {
         if self.one_minus_cos <= 0.0 {
             return Some(LightSample {
                 wi: -self.dir,
@@ -83,7 +83,7 @@ impl LightModel for Distant {
             delta: false,
         })
     }
-    fn pdf(&self, _: Vec3A, dir: Vec3A, t: f32, _: Vec3A) -> f32 {
+    fn pdf(&self, _: Vec3A, _: Vec3A, dir: Vec3A, t: f32, _: Vec3A) -> f32 {
         if self.one_minus_cos > 0.0 && t == f32::INFINITY && self.in_disc(dir) {
             self.cone_pdf()
         } else {
@@ -139,12 +139,14 @@ mod tests {
             for i in 0..n {
                 for j in 0..n {
                     let u = Vec2::new((i as f32 + 0.5) / n as f32, (j as f32 + 0.5) / n as f32);
-                    let s = light.sample(e, Vec3A::ZERO, u, &[]).unwrap();
+                    let s = light.sample(e, Vec3A::ZERO, Vec3A::ZERO, u, &[]).unwrap();
                     let cos = s.wi.dot(-dir);
                     assert!(cos >= half.cos() - 1e-5, "{angle}: {cos}");
                     assert!(light.in_disc(s.wi) && !s.delta);
                     assert!(
-                        (light.pdf(Vec3A::ZERO, s.wi, f32::INFINITY, Vec3A::ZERO) - s.pdf).abs()
+                        (light.pdf(Vec3A::ZERO, Vec3A::ZERO, s.wi, f32::INFINITY, Vec3A::ZERO)
+                            - s.pdf)
+                            .abs()
                             < 1e-3 * s.pdf
                     );
                     sum += (s.radiance.x * cos / s.pdf) as f64;

@@ -24,7 +24,7 @@ pub struct Dome {
 }
 
 impl LightModel for Dome {
-    fn sample(&self, color: Vec3A, _: Vec3A, u: Vec2, _: &[Prim]) -> Option<LightSample> {
+    fn sample(&self, color: Vec3A, _: Vec3A, _: Vec3A, u: Vec2, _: &[Prim]) -> Option<LightSample> {
         match &self.map {
             None => {
                 let wi = uniform_sphere(u);
@@ -51,7 +51,7 @@ impl LightModel for Dome {
             }
         }
     }
-    fn pdf(&self, _: Vec3A, dir: Vec3A, _: f32, _: Vec3A) -> f32 {
+    fn pdf(&self, _: Vec3A, _: Vec3A, dir: Vec3A, _: f32, _: Vec3A) -> f32 {
         match &self.map {
             None => 1.0 / (4.0 * PI),
             Some(m) => m.pdf(dir),

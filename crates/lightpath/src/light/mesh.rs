@@ -20,11 +20,18 @@ use glam::{Vec2, Vec3A};
 pub struct Mesh(pub Triangles);
 
 impl LightModel for Mesh {
-    fn sample(&self, color: Vec3A, p: Vec3A, u: Vec2, prims: &[Prim]) -> Option<LightSample> {
-        self.0.sample(color, p, u, prims)
+    fn sample(
+        &self,
+        color: Vec3A,
+        p: Vec3A,
+        n: Vec3A,
+        u: Vec2,
+        prims: &[Prim],
+    ) -> Option<LightSample> {
+        self.0.sample(color, p, n, u, prims)
     }
-    fn pdf(&self, p: Vec3A, dir: Vec3A, t: f32, ng: Vec3A) -> f32 {
-        self.0.pdf(p, dir, t, ng)
+    fn pdf(&self, p: Vec3A, n: Vec3A, dir: Vec3A, t: f32, ng: Vec3A) -> f32 {
+        self.0.pdf(p, n, dir, t, ng)
     }
     fn emitted(&self, color: Vec3A, ng: Vec3A, dir: Vec3A) -> Vec3A {
         self.0.emitted(color, ng, dir)

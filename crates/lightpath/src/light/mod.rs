@@ -67,13 +67,22 @@ pub struct LightSample {
 /// `prims` is the scene's primitive list, which triangle lights index.
 pub trait LightModel {
     /// A point of the light as seen from `p`, chosen with `u`, or `None` when the light
-    /// cannot reach `p` (behind a one-sided emitter, outside a spot's cone).
-    fn sample(&self, color: Vec3A, p: Vec3A, u: Vec2, prims: &[Prim]) -> Option<LightSample>;
-    /// The solid-angle pdf with which `sample` from `p` would pick the point a ray along
-    /// `dir` finds at distance `t` with normal `ng` (infinite `t` and zero `ng`: a ray
-    /// that escaped). Zero for delta lights, which no ray finds.
-    fn pdf(&self, p: Vec3A, dir: Vec3A, t: f32, ng: Vec3A) -> f32 {
-        let _ = (p, dir, t, ng);
+    /// cannot reach `p` (behind a one-sided emitter, outside a spot's cone). `n` is the
+    /// receiver's shading normal (zero in a medium): rect lights warp their samples by
+    /// its cosine (`spherical_rect.rs`), the others ignore it.
+    fn sample(
+        &self,
+        color: Vec3A,
+        p: Vec3A,
+        n: Vec3A,
+        u: Vec2,
+        prims: &[Prim],
+    ) -> Option<LightSample>;
+    /// The solid-angle pdf with which `sample` from `p` with normal `n` would pick the
+    /// point a ray along `dir` finds at distance `t` with normal `ng` (infinite `t` and
+    /// zero `ng`: a ray that escaped). Zero for delta lights, which no ray finds.
+    fn pdf(&self, p: Vec3A, n: Vec3A, dir: Vec3A, t: f32, ng: Vec3A) -> f32 {
+        let _ = (p, n, dir, t, ng);
         0.0
     }
     /// Radiance leaving the light's surface at a point with normal `ng` towards `-dir`
@@ -127,12 +136,12 @@ macro_rules! lights {
 
         impl LightModel for LightShape {
             #[inline]
-            fn sample(&self, color: Vec3A, p: Vec3A, u: Vec2, prims: &[Prim]) -> Option<LightSample> {
-                match self { $(LightShape::$kind(l) => l.sample(color, p, u, prims),)* }
+            fn sample(&self, color: Vec3A, p: Vec3A, n: Vec3A, u: Vec2, prims: &[Prim]) -> Option<LightSample> {
+                match self { $(LightShape::$kind(l) => l.sample(color, p, n, u, prims),)* }
             }
             #[inline]
-            fn pdf(&self, p: Vec3A, dir: Vec3A, t: f32, ng: Vec3A) -> f32 {
-                match self { $(LightShape::$kind(l) => l.pdf(p, dir, t, ng),)* }
+            fn pdf(&self, p: Vec3A, n: Vec3A, dir: Vec3A, t: f32, ng: Vec3A) -> f32 {
+                match self { $(LightShape::$kind(l) => l.pdf(p, n, dir, t, ng),)* }
             }
             #[inline]
             fn emitted(&self, color: Vec3A, ng: Vec3A, dir: Vec3A) -> Vec3A {
@@ -228,11 +237,11 @@ impl Light {
         self.shape.is_delta()
     }
 
-    /// Samples a point of the light as seen from `p`; `prims` is the scene's primitive
-    /// list, which area lights index.
+    /// Samples a point of the light as seen from `p` with shading normal `n` (zero in a
+    /// medium); `prims` is the scene's primitive list, which area lights index.
     #[inline]
-    pub fn sample(&self, p: Vec3A, u: Vec2, prims: &[Prim]) -> Option<LightSample> {
-        self.shape.sample(self.color, p, u, prims)
+    pub fn sample(&self, p: Vec3A, n: Vec3A, u: Vec2, prims: &[Prim]) -> Option<LightSample> {
+        self.shape.sample(self.color, p, n, u, prims)
     }
 
     /// The object a shadow ray towards this light may pass through: an area light's own
@@ -260,11 +269,11 @@ impl Light {
         self.shape.escaped(self.color, dir)
     }
 
-    /// The solid-angle pdf with which `sample` from `p` would pick the point hit at
-    /// distance `t` along `dir` (normal `ng`).
+    /// The solid-angle pdf with which `sample` from `p` with normal `n` would pick the
+    /// point hit at distance `t` along `dir` (normal `ng`).
     #[inline]
-    pub fn pdf_hit(&self, p: Vec3A, dir: Vec3A, t: f32, ng: Vec3A) -> f32 {
-        self.shape.pdf(p, dir, t, ng)
+    pub fn pdf_hit(&self, p: Vec3A, n: Vec3A, dir: Vec3A, t: f32, ng: Vec3A) -> f32 {
+        self.shape.pdf(p, n, dir, t, ng)
     }
 
     /// The colour's largest component, the scale of `power` and of the tree's bounds.

@@ -19,7 +19,7 @@ pub struct Point {
 }
 
 impl LightModel for Point {
-    fn sample(&self, color: Vec3A, p: Vec3A, _: Vec2, _: &[Prim]) -> Option<LightSample> {
+    fn sample(&self, color: Vec3A, p: Vec3A, _: Vec3A, _: Vec2, _: &[Prim]) -> Option<LightSample> {
         let d = self.position - p;
         let dist2 = d.length_squared();
         let dist = dist2.sqrt();

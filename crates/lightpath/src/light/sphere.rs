@@ -36,7 +36,7 @@ pub struct Sphere {
 
 impl LightModel for Sphere {
     /// A direction in the cone the sphere subtends from `p`, uniformly.
-    fn sample(&self, color: Vec3A, p: Vec3A, u: Vec2, _: &[Prim]) -> Option<LightSample> {
+    fn sample(&self, color: Vec3A, p: Vec3A, _: Vec3A, u: Vec2, _: &[Prim]) -> Option<LightSample> {
         let (center, radius) = (self.center, self.radius);
         let to_c = center - p;
         let d2 = to_c.length_squared();
@@ -58,7 +58,7 @@ impl LightModel for Sphere {
             delta: false,
         })
     }
-    fn pdf(&self, p: Vec3A, _: Vec3A, _: f32, _: Vec3A) -> f32 {
+    fn pdf(&self, p: Vec3A, _: Vec3A, _: Vec3A, _: f32, _: Vec3A) -> f32 {
         let radius = self.radius;
         let d2 = (self.center - p).length_squared();
         if d2 <= radius * radius {
@@ -115,10 +115,10 @@ mod tests {
             let d2 = f64::from((sphere.center - p).length_squared());
             let s2 = f64::from(sphere.radius).powi(2) / d2;
             let exact = 1.0 / (2.0 * std::f64::consts::PI * s2 / (1.0 + (1.0 - s2).sqrt()));
-            let got = f64::from(sphere.pdf(p, Vec3A::X, 1.0, Vec3A::Z));
+            let got = f64::from(sphere.pdf(p, Vec3A::ZERO, Vec3A::X, 1.0, Vec3A::Z));
             assert!((got / exact - 1.0).abs() < 1e-5, "{got} vs {exact}");
             let s = sphere
-                .sample(Vec3A::ONE, p, Vec2::new(0.3, 0.7), &[])
+                .sample(Vec3A::ONE, p, Vec3A::ZERO, Vec2::new(0.3, 0.7), &[])
                 .unwrap();
             assert!((f64::from(s.pdf) / exact - 1.0).abs() < 1e-5);
         }
