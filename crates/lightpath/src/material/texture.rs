@@ -15,6 +15,13 @@
 //! UVs follow glTF: (0, 0) is the image's top-left corner, `v` grows downwards.
 //! Colour images (base colour, emission) are decoded from sRGB; data images (roughness,
 //! metallic, normals, transmission) are read as linear values. EXR images are linear.
+//!
+//! Bilinear and mip filtering average decoded (linear) values, so a texture's mean
+//! reflectance is the same at every distance and texel frequency. Cycles differs: it keeps
+//! 8-bit sRGB images as bytes, interpolates the encoded values and decodes afterwards
+//! (`kernel/svm/image.h`, `NODE_IMAGE_COMPRESS_AS_SRGB`), which darkens every transition
+//! between texels: a checker of 8-texel cells is 4–7 % darker in Cycles, one of 1-texel
+//! cells up to 39 % (benches/materials/RESULTS.md, "Checker crates: Cycles filters sRGB bytes").
 
 use glam::{Vec2, Vec4};
 use std::path::Path;
@@ -460,6 +467,31 @@ mod tests {
         assert!((d.x - 128.0 / 255.0).abs() < 1e-6);
         assert_eq!((c.y, c.z, c.w), (1.0, 0.0, 1.0));
         assert!(MipMap::decode(b"not an image", ColorSpace::Srgb).is_err());
+    }
+
+    #[test]
+    fn filtering_averages_decoded_values_not_srgb_bytes() {
+        // A 2×2 checker of sRGB bytes 26 and 204 (the crate's dim and bright channels):
+        // the midpoint between texels and the 1×1 mip level are the mean of the decoded
+        // values, 0.307, not the decoded mean byte, srgb(115) = 0.171 (Cycles' bilinear).
+        let (dim, bright) = (26u8, 204u8);
+        let mut png = Vec::new();
+        image::RgbaImage::from_fn(2, 2, |x, y| {
+            let c = if (x + y) % 2 == 0 { dim } else { bright };
+            image::Rgba([c, c, c, 255])
+        })
+        .write_to(&mut std::io::Cursor::new(&mut png), image::ImageFormat::Png)
+        .unwrap();
+        let m = MipMap::decode(&png, ColorSpace::Srgb).unwrap();
+        let mean =
+            0.5 * (srgb_to_linear(dim as f32 / 255.0) + srgb_to_linear(bright as f32 / 255.0));
+        assert!((mean - 0.3071).abs() < 1e-3, "{mean}");
+        let w = [Wrap::Clamp; 2];
+        let midpoint = m.bilinear(0, Vec2::new(0.5, 0.25), w);
+        let top = m.lookup(Vec2::splat(0.5), 1.0, w);
+        for v in [midpoint, top] {
+            assert!((v.x - mean).abs() < 1e-6, "{v} against {mean}");
+        }
     }
 
     #[test]
