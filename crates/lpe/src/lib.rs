@@ -29,7 +29,7 @@ pub mod syntax;
 pub use error::Report;
 pub use error::{Error, ErrorKind, Span};
 pub use event::{format_path, parse_path, Event, EventType, Scatter, ScatterClass};
-pub use prefix::{standard_name, Flags, Prefix, BEAUTY_PARTITION, STANDARD_NAMES};
+pub use prefix::{standard_name, Flags, Prefix, BEAUTY_PARTITION, STANDARD_NAMES, STANDARD_SUMS};
 pub use runtime::{
     compile, matches, Automaton, ClassId, Compiler, Profile, Rule, RuleId, StateId, Stats, Warning,
     DEFAULT_STATE_LIMIT,

@@ -114,6 +114,22 @@ pub const BEAUTY_PARTITION: [&str; 9] = [
     "volumeIndirect",
 ];
 
+/// Standard AOVs that are the sum of others, by their definitions: the first event after
+/// the camera is diffuse (or specular) either by reflection or by transmission, and a
+/// reflection is followed by no more scattering (direct) or by some (indirect); so
+/// `diffuse = directDiffuse + indirectDiffuse + subsurface`, and the same for `specular`.
+/// Each light-group part of a whole is the sum of its parts' same light-group parts.
+pub const STANDARD_SUMS: [(&str, [&str; 3]); 2] = [
+    (
+        "diffuse",
+        ["directDiffuse", "indirectDiffuse", "subsurface"],
+    ),
+    (
+        "specular",
+        ["directSpecular", "indirectSpecular", "transmissive"],
+    ),
+];
+
 /// Looks up a standard name in its exact or all-lowercase spelling; returns the canonical
 /// name and its definition.
 pub fn standard_name(word: &str) -> Option<(&'static str, &'static str)> {
@@ -163,6 +179,42 @@ mod tests {
         assert_eq!(closest("holdout", words), Some("holdouts"));
         assert_eq!(closest("Unoccluded", words), Some("unoccluded"));
         assert_eq!(closest("C", words), None);
+    }
+
+    #[test]
+    fn standard_sums_hold_on_every_short_path() {
+        // Every path of up to three scattering events, lit or seen as emission: it is in
+        // a sum's whole exactly when it is in one of its parts.
+        let steps = ["<RD>", "<TD>", "<RS>", "<TS>", "V"];
+        let mut paths: Vec<String> = vec!["C".into()];
+        let mut all = Vec::new();
+        for _ in 0..=3 {
+            all.extend(
+                paths
+                    .iter()
+                    .flat_map(|p| [format!("{p}<L'key'>"), format!("{p}O")]),
+            );
+            paths = paths
+                .iter()
+                .flat_map(|p| steps.map(|s| format!("{p}{s}")))
+                .collect();
+        }
+        for (whole, parts) in STANDARD_SUMS {
+            let definition = |n: &str| standard_name(n).unwrap().1;
+            let mut compiler = crate::Compiler::new();
+            let w = compiler.add(definition(whole)).unwrap();
+            let ps = parts.map(|p| compiler.add(definition(p)).unwrap());
+            let automaton = compiler.compile().unwrap();
+            let mut lit = 0;
+            for text in &all {
+                let path = crate::parse_path(text).unwrap();
+                let rules = automaton.run(&path).unwrap_or(&[]);
+                let in_parts = ps.iter().filter(|p| rules.contains(p)).count();
+                assert_eq!(in_parts, rules.contains(&w) as usize, "{whole}: {text}");
+                lit += in_parts;
+            }
+            assert!(lit > 20, "{whole}: only {lit} paths");
+        }
     }
 
     #[test]

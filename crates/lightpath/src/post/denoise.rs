@@ -4,8 +4,9 @@
 //! OIDN's recommended final-frame setup: the `albedo` and `normal` AOVs are prefiltered
 //! once (each by an `RT` filter of its own) and every filter then takes them as clean
 //! auxiliary images (`cleanAux`), so their noise is not read as detail. Beauty is filtered
-//! at `high`; every other AOV at the job's quality (`--quality`, default `fast`: about half
-//! `high`'s CPU time, for AOVs that are comped rather than looked at whole). Filters are
+//! at `high`; every other AOV at the job's quality (`--quality`, default `fast`: 2–4× less
+//! CPU than `high`, for AOVs that are comped rather than looked at whole), and
+//! so are the two prefilters (see [`Filter::prefilter`]). Filters are
 //! made one at a time, in the order beauty, AOVs as they are, AOVs divided by albedo, so
 //! OIDN's working memory is one filter's.
 //!
@@ -18,7 +19,11 @@
 //!   parts of beauty, user AOVs) are filtered as they are. Light-group parts are filtered
 //!   one by one, like any AOV; an AOV split by light group (beauty excepted) is then the
 //!   sum of its denoised groups, as a compositor rebuilds it, instead of a filter run of
-//!   its own. An AOV that is zero (or one constant) everywhere stays as
+//!   its own. Likewise `diffuse` and `specular` (and each of their light-group parts) are
+//!   the sums of their denoised standard parts (`directDiffuse + indirectDiffuse +
+//!   subsurface`, `lpe::STANDARD_SUMS`) where the noisy file adds up that way to
+//!   [`SUM_TOLERANCE`]: they are made after reconciliation, so they stay those sums in the
+//!   output. An AOV that is zero (or one constant) everywhere stays as
 //!   it is (no filtering), and so does one already converged: where the file holds its
 //!   variance (`<aov>_var`, `--variance`), an AOV whose noise (the root mean variance of
 //!   its pixel means) is below [`CONVERGED_NOISE`] of its mean level, in every channel.
@@ -73,7 +78,8 @@ pub enum Quality {
     /// The best images (OIDN's default for final frames): always the beauty's.
     High,
     Balanced,
-    /// A smaller network: about half `high`'s CPU time. The default for AOVs other than
+    /// A smaller network: 2–4× less CPU than `high` (1080p: 2.9 against 12.7 CPU-s,
+    /// docs/performance.md). The default for AOVs other than
     /// beauty (`--quality`).
     #[default]
     Fast,
@@ -86,6 +92,12 @@ pub const BEAUTY_QUALITY: Quality = Quality::High;
 /// as it is: half a step of an 8-bit display at the AOV's mean level (1/512), noise no
 /// viewer sees and a filter could only blur.
 pub const CONVERGED_NOISE: f64 = 1.0 / 512.0;
+
+/// How closely a file's noisy AOV must equal the sum of its standard parts, relative to
+/// its value (at least 10⁻³), in every pixel and channel, for the denoised AOV to be made
+/// as the sum of the denoised parts: thirty times the float rounding of the renderer's
+/// sums (≤ 3·10⁻⁷ on a 1080p, 44-AOV frame), far below any AOV that differs from the sum.
+pub const SUM_TOLERANCE: f32 = 1e-5;
 
 impl Quality {
     pub fn parse(s: &str) -> Result<Quality, crate::error::InvalidValue> {
@@ -149,6 +161,8 @@ pub struct DenoiseSummary {
     pub converged: usize,
     /// Wholes split by light group made as the sum of their denoised groups.
     pub summed: usize,
+    /// AOVs made as the sum of their denoised standard parts (`lpe::STANDARD_SUMS`).
+    pub derived: usize,
     /// Remainder AOVs written to keep partitions summing.
     pub remainders: usize,
     /// Partitions reconciled.
@@ -168,11 +182,12 @@ impl DenoiseSummary {
             _ => "no auxiliary images (no albedo AOV)",
         };
         format!(
-            "denoised {} AOVs ({} more as sums of their light groups; {} zero or constant and \
-             {} converged AOVs left as they are) with {aux}, {} partitions reconciled ({} \
-             remainders): {:.2} s",
+            "denoised {} AOVs ({} more as sums of their light groups and {} as sums of their \
+             standard parts; {} zero or constant and {} converged AOVs left as they are) with \
+             {aux}, {} partitions reconciled ({} remainders): {:.2} s",
             self.filtered,
             self.summed,
+            self.derived,
             self.zero,
             self.converged,
             self.partitions,
@@ -230,6 +245,14 @@ const EMISSION: &str = "emission";
 /// RGB planes of one AOV.
 type Planes = [Vec<f32>; 3];
 
+/// RGB planes of one AOV of the input file, borrowed (no copy of what is only read).
+type View<'a> = [&'a [f32]; 3];
+
+/// The planes as a [`View`].
+fn view(p: &Planes) -> View<'_> {
+    [&p[0], &p[1], &p[2]]
+}
+
 /// An EXR's named channels.
 type Channels = Vec<(String, Vec<f32>)>;
 
@@ -244,8 +267,12 @@ pub struct How {
 /// An image filter over interleaved RGB of the file's size: OIDN, or a stand-in in
 /// tests.
 pub trait Filter {
-    /// Prefilters the auxiliary images in place, once, before any AOV is filtered.
-    fn prefilter(&mut self, aux: &mut Aux) -> Result<(), DenoiseFault>;
+    /// Prefilters the auxiliary images in place, once, before any AOV is filtered, at
+    /// the AOVs' quality: albedo and normal are noisy only where a pixel's samples see
+    /// different surfaces, and at `fast` the two prefilters of a 1080p frame cost 6 CPU-s
+    /// instead of 26 (the beauty's RMSE against a reference moves by under 1 %,
+    /// docs/performance.md).
+    fn prefilter(&mut self, aux: &mut Aux, quality: Quality) -> Result<(), DenoiseFault>;
     /// Filters one image with the (prefiltered) auxiliary images.
     fn filter(&mut self, rgb: &mut [f32], how: How, aux: &Aux) -> Result<(), OidnError>;
 }
@@ -256,24 +283,32 @@ pub struct Aux {
     pub normal: Option<Vec<f32>>,
 }
 
-fn interleave(p: [&[f32]; 3]) -> Vec<f32> {
-    let mut out = Vec::with_capacity(p[0].len() * 3);
-    for ((r, g), b) in p[0].iter().zip(p[1]).zip(p[2]) {
-        out.extend([*r, *g, *b]);
-    }
+fn interleave(p: View) -> Vec<f32> {
+    let mut out = Vec::new();
+    interleave_into(p, &mut out);
     out
 }
 
-fn planes_of(exr: &ExrContents, aov: &str) -> Option<Planes> {
+/// `p` interleaved into `out` (its allocation reused: no fresh pages per AOV).
+fn interleave_into(p: View, out: &mut Vec<f32>) {
+    out.clear();
+    out.reserve(p[0].len() * 3);
+    for ((r, g), b) in p[0].iter().zip(p[1]).zip(p[2]) {
+        out.extend([*r, *g, *b]);
+    }
+}
+
+/// AOV `aov`'s planes in the file, if it has all three.
+fn planes_in<'a>(exr: &'a ExrContents, aov: &str) -> Option<View<'a>> {
     let names = channel_names(aov);
-    let get = |c: usize| exr.channel(&names[c]).map(|v| v.to_vec());
+    let get = |c: usize| exr.channel(&names[c]);
     Some([get(0)?, get(1)?, get(2)?])
 }
 
 /// The auxiliary images of an EXR: its `albedo` and `normal` AOVs.
 pub fn aux_images(exr: &ExrContents) -> Aux {
-    let albedo = planes_of(exr, naming::ALBEDO).map(|p| {
-        let mut v = interleave([&p[0], &p[1], &p[2]]);
+    let albedo = planes_in(exr, naming::ALBEDO).map(|p| {
+        let mut v = interleave(p);
         v.iter_mut().for_each(|a| {
             *a = if a.is_finite() {
                 a.clamp(0.0, 1.0)
@@ -284,8 +319,8 @@ pub fn aux_images(exr: &ExrContents) -> Aux {
         v
     });
     let normal = albedo.as_ref().and_then(|_| {
-        planes_of(exr, naming::NORMAL).map(|p| {
-            let mut v = interleave([&p[0], &p[1], &p[2]]);
+        planes_in(exr, naming::NORMAL).map(|p| {
+            let mut v = interleave(p);
             v.iter_mut().for_each(|n| {
                 *n = if n.is_finite() {
                     n.clamp(-1.0, 1.0)
@@ -300,16 +335,18 @@ pub fn aux_images(exr: &ExrContents) -> Aux {
 }
 
 /// Filters one AOV: sanitises it (non-finite → 0, negative → 0), divides by the albedo
-/// if asked, filters, multiplies back and clamps at zero.
+/// if asked, filters, multiplies back and clamps at zero. `rgb` is the interleaved
+/// image's buffer, reused from one AOV to the next.
 fn filter_aov(
-    planes: &Planes,
+    planes: View,
     treatment: Treatment,
     quality: Quality,
     aux: &Aux,
     filter: &mut dyn Filter,
+    rgb: &mut Vec<f32>,
 ) -> Result<Planes, OidnError> {
-    let mut rgb = interleave([&planes[0], &planes[1], &planes[2]]);
-    for v in &mut rgb {
+    interleave_into(planes, rgb);
+    for v in rgb.iter_mut() {
         if !v.is_finite() || *v < 0.0 {
             *v = 0.0;
         }
@@ -325,7 +362,7 @@ fn filter_aov(
         albedo_divided: divide,
         quality,
     };
-    filter.filter(&mut rgb, how, aux)?;
+    filter.filter(rgb, how, aux)?;
     if let (true, Some(a)) = (divide, albedo) {
         for (v, a) in rgb.iter_mut().zip(a) {
             *v *= a.max(MIN_ALBEDO);
@@ -346,8 +383,8 @@ fn filter_aov(
 }
 
 /// `a − b`, channel by channel.
-fn minus(a: &Planes, b: &Planes) -> Planes {
-    [0, 1, 2].map(|c| a[c].iter().zip(&b[c]).map(|(x, y)| x - y).collect())
+fn minus(a: View, b: View) -> Planes {
+    [0, 1, 2].map(|c| a[c].iter().zip(b[c]).map(|(x, y)| x - y).collect())
 }
 
 /// One declared partition: a whole and its parts.
@@ -401,7 +438,7 @@ pub fn partitions(exr: &ExrContents) -> Vec<Partition> {
 pub fn reconcile(
     whole: &Planes,
     parts: &mut [&mut Planes],
-    noisy: &[&Planes],
+    noisy: &[View],
     fixed: &[bool],
 ) -> Option<Planes> {
     let n = whole[0].len();
@@ -467,15 +504,21 @@ pub fn denoise_contents(
     let prefilters = aux.albedo.iter().chain(&aux.normal).count() as u64;
     progress.task(Task::DENOISE);
     progress.start(prefilters + work.filter.len() as u64, 0);
-    filter.prefilter(&mut aux)?;
+    filter.prefilter(&mut aux, options.quality)?;
     progress.advance(prefilters, prefilters * pixels);
-    let (noisy, mut denoised) = filter_aovs(exr, &work, &aux, filter, options.quality, progress)?;
+    let (mut noisy, mut denoised) =
+        filter_aovs(exr, &work, &aux, filter, options.quality, progress)?;
     progress.finish();
     let mut attributes = exr.attributes.clone();
-    let remainders = reconcile_partitions(exr, &noisy, &mut denoised, &work.kept, summary);
-    for r in &remainders {
+    // Partitions of the derived AOVs are reconciled once those are made, from their
+    // reconciled parts.
+    let (mut remainders, waiting) =
+        reconcile_partitions(exr, partitions(exr), &noisy, &mut denoised, &work, summary);
+    derive_sums(exr, &work, &mut noisy, &mut denoised);
+    remainders.extend(reconcile_partitions(exr, waiting, &noisy, &mut denoised, &work, summary).0);
+    for r in &mut remainders {
         attributes.extend(r.attributes());
-        denoised.insert(r.name.clone(), r.planes.clone());
+        denoised.insert(r.name.clone(), std::mem::take(&mut r.planes));
     }
     if plan
         .iter()
@@ -484,11 +527,12 @@ pub fn denoise_contents(
         let matte = shadow_matte_of(exr, &denoised);
         denoised.insert(naming::SHADOW.into(), matte);
     }
-    // Every input channel, the denoised AOVs' replaced; remainders after them.
+    // Every input channel, the denoised AOVs' replaced (moved, not copied); remainders
+    // after them.
     let mut replaced: HashMap<String, Vec<f32>> = HashMap::new();
-    for (name, planes) in &denoised {
-        for (ch, v) in channel_names(name).into_iter().zip(planes) {
-            replaced.insert(ch, v.clone());
+    for (name, planes) in denoised {
+        for (ch, v) in channel_names(&name).into_iter().zip(planes) {
+            replaced.insert(ch, v);
         }
     }
     let mut channels: Vec<(String, Vec<f32>)> = exr
@@ -522,8 +566,11 @@ pub struct ContentOptions {
     pub quality: Quality,
 }
 
-/// Each AOV the plan filters or keeps, by name: as read (`noisy`) and as it goes out.
+/// Each AOV the plan filters or keeps, by name, as it goes out.
 type AovPlanes = HashMap<String, Planes>;
+
+/// The same AOVs as read (the noisy input), borrowed from the file.
+type NoisyPlanes<'a> = HashMap<String, View<'a>>;
 
 /// The light AOVs of a file, sorted by what is done with them.
 struct Work {
@@ -535,6 +582,9 @@ struct Work {
     /// Wholes split by light group (beauty excepted) made as the sum of their denoised
     /// parts, with those parts.
     summed: Vec<(String, Vec<String>)>,
+    /// AOVs made, after reconciliation, as the sum of their denoised standard parts
+    /// (those in the file), with those parts.
+    derived: Vec<(String, Vec<String>)>,
 }
 
 fn work(exr: &ExrContents, plan: &[(String, Treatment)], summary: &mut DenoiseSummary) -> Work {
@@ -547,7 +597,7 @@ fn work(exr: &ExrContents, plan: &[(String, Treatment)], summary: &mut DenoiseSu
         ) {
             continue;
         }
-        let Some(p) = planes_of(exr, name) else {
+        let Some(p) = planes_in(exr, name) else {
             continue;
         };
         if *t == Treatment::Emission {
@@ -556,7 +606,7 @@ fn work(exr: &ExrContents, plan: &[(String, Treatment)], summary: &mut DenoiseSu
             // Zero or constant everywhere: no noise to remove (and no OIDN run to pay).
             summary.zero += 1;
             kept.insert(name.clone());
-        } else if converged(exr, name, &p) {
+        } else if converged(exr, name, p) {
             summary.converged += 1;
             kept.insert(name.clone());
         } else {
@@ -569,7 +619,7 @@ fn work(exr: &ExrContents, plan: &[(String, Treatment)], summary: &mut DenoiseSu
     let mut summed = Vec::new();
     for p in partitions(exr) {
         let filtered = filter.iter().position(|(n, _)| *n == p.whole);
-        let complete = p.parts.iter().all(|n| planes_of(exr, n).is_some());
+        let complete = p.parts.iter().all(|n| planes_in(exr, n).is_some());
         if p.kind != naming::PartitionKind::LightGroups || p.whole == naming::BEAUTY || !complete {
             continue;
         }
@@ -578,20 +628,122 @@ fn work(exr: &ExrContents, plan: &[(String, Treatment)], summary: &mut DenoiseSu
             summed.push((p.whole, p.parts));
         }
     }
+    let derived = standard_sums(exr, &mut filter, &mut summed, &kept);
     filter.sort_by_key(|(name, t)| (name != naming::BEAUTY, *t == Treatment::AlbedoDivided));
     summary.filtered = filter.len();
     summary.summed = summed.len();
+    summary.derived = derived.len();
     Work {
         filter,
         kept,
         summed,
+        derived,
+    }
+}
+
+/// The AOVs to be filtered or summed from their light groups that the file shows to be
+/// the sum of their standard parts (`lpe::STANDARD_SUMS`: `diffuse`, `specular`, and
+/// each of their light-group parts `diffuse_<group>` from `directDiffuse_<group>`, …),
+/// taken out of `filter` and `summed`: one OIDN run fewer each. Only where every part
+/// the file has is denoised or kept, and the noisy AOV equals the sum of those parts to
+/// [`SUM_TOLERANCE`] everywhere (a part the file lacks then holds nothing).
+fn standard_sums(
+    exr: &ExrContents,
+    filter: &mut Vec<(String, Treatment)>,
+    summed: &mut Vec<(String, Vec<String>)>,
+    kept: &std::collections::HashSet<String>,
+) -> Vec<(String, Vec<String>)> {
+    let mut derived = Vec::new();
+    let candidates: Vec<String> = filter
+        .iter()
+        .map(|(n, _)| n.clone())
+        .chain(summed.iter().map(|(n, _)| n.clone()))
+        .collect();
+    for name in candidates {
+        let Some((suffix, parts)) = lpe::STANDARD_SUMS.iter().find_map(|(whole, parts)| {
+            let suffix = name.strip_prefix(whole)?;
+            (suffix.is_empty() || suffix.starts_with('_')).then_some((suffix, parts))
+        }) else {
+            continue;
+        };
+        let parts: Vec<String> = parts
+            .iter()
+            .map(|p| format!("{p}{suffix}"))
+            .filter(|p| planes_in(exr, p).is_some())
+            .collect();
+        let denoised = |p: &String| {
+            kept.contains(p)
+                || filter.iter().any(|(n, _)| n == p)
+                || summed.iter().any(|(n, _)| n == p)
+        };
+        if parts.is_empty() || !parts.iter().all(denoised) || !adds_up(exr, &name, &parts) {
+            continue;
+        }
+        filter.retain(|(n, _)| *n != name);
+        summed.retain(|(n, _)| *n != name);
+        derived.push((name, parts));
+    }
+    // A whole summed from light groups that are made so is made after them.
+    let is_derived = |p: &String| derived.iter().any(|(d, _)| d == p);
+    let (late, early): (Vec<_>, Vec<_>) = std::mem::take(summed)
+        .into_iter()
+        .partition(|(_, parts)| parts.iter().any(is_derived));
+    *summed = early;
+    derived.extend(late);
+    derived
+}
+
+/// Whether AOV `whole` of the file equals the sum of `parts` to [`SUM_TOLERANCE`] in
+/// every pixel and channel (non-finite values never do).
+fn adds_up(exr: &ExrContents, whole: &str, parts: &[String]) -> bool {
+    let names = channel_names(whole);
+    (0..3).all(|c| {
+        let Some(w) = exr.channel(&names[c]) else {
+            return false;
+        };
+        let ps: Option<Vec<&[f32]>> = parts
+            .iter()
+            .map(|p| exr.channel(&channel_names(p)[c]))
+            .collect();
+        let Some(ps) = ps else {
+            return false;
+        };
+        w.iter().enumerate().all(|(i, w)| {
+            let sum: f32 = ps.iter().map(|p| p[i]).sum();
+            (sum - w).abs() <= SUM_TOLERANCE * w.abs().max(1e-3)
+        })
+    })
+}
+
+/// The work's derived AOVs as the sums of their denoised parts, with their noisy input.
+fn derive_sums<'a>(
+    exr: &'a ExrContents,
+    work: &Work,
+    noisy: &mut NoisyPlanes<'a>,
+    denoised: &mut AovPlanes,
+) {
+    for (name, parts) in &work.derived {
+        let Some(p) = planes_in(exr, name) else {
+            continue;
+        };
+        let n = p[0].len();
+        let mut sum: Planes = [vec![0.0; n], vec![0.0; n], vec![0.0; n]];
+        for part in parts {
+            if let Some(q) = denoised.get(part) {
+                for c in 0..3 {
+                    sum[c].iter_mut().zip(&q[c]).for_each(|(s, v)| *s += v);
+                }
+            }
+        }
+        denoised.insert(name.clone(), sum);
+        noisy.insert(name.clone(), p);
     }
 }
 
 /// Whether the file's variance of AOV `name` (its `<name>_var`, if written) says its
 /// noise is below [`CONVERGED_NOISE`] of its mean level in every channel.
-fn converged(exr: &ExrContents, name: &str, planes: &Planes) -> bool {
-    let Some(variance) = planes_of(exr, &naming::variance_name(name)) else {
+fn converged(exr: &ExrContents, name: &str, planes: View) -> bool {
+    let Some(variance) = planes_in(exr, &naming::variance_name(name)) else {
         return false;
     };
     (0..3).all(|c| {
@@ -604,57 +756,60 @@ fn converged(exr: &ExrContents, name: &str, planes: &Planes) -> bool {
 
 /// Filters the work's AOVs; the kept ones go out as read (emission with negative and
 /// non-finite values zeroed).
-fn filter_aovs(
-    exr: &ExrContents,
+fn filter_aovs<'a>(
+    exr: &'a ExrContents,
     work: &Work,
     aux: &Aux,
     filter: &mut dyn Filter,
     quality: Quality,
     progress: &dyn Progress,
-) -> Result<(AovPlanes, AovPlanes), DenoiseFault> {
-    let mut noisy = AovPlanes::new();
+) -> Result<(NoisyPlanes<'a>, AovPlanes), DenoiseFault> {
+    let mut noisy = NoisyPlanes::new();
     let mut denoised = AovPlanes::new();
     for name in &work.kept {
-        let Some(p) = planes_of(exr, name) else {
+        let Some(p) = planes_in(exr, name) else {
             continue;
         };
-        let out = p.clone().map(|c| {
-            c.into_iter()
-                .map(|v| if v.is_finite() { v.max(0.0) } else { 0.0 })
-                .collect()
+        let out = p.map(|c| {
+            if is_emission(name) {
+                c.iter()
+                    .map(|v| if v.is_finite() { v.max(0.0) } else { 0.0 })
+                    .collect()
+            } else {
+                c.to_vec()
+            }
         });
-        denoised.insert(
-            name.clone(),
-            if is_emission(name) { out } else { p.clone() },
-        );
+        denoised.insert(name.clone(), out);
         noisy.insert(name.clone(), p);
     }
     // Beauty is filtered without the emission seen directly, which is added back after.
     let emission = work
         .kept
         .contains(EMISSION)
-        .then(|| planes_of(exr, EMISSION))
+        .then(|| planes_in(exr, EMISSION))
         .flatten();
     let pixels = (exr.width * exr.height) as u64;
+    let mut rgb = Vec::new();
     for (name, t) in &work.filter {
-        let Some(p) = planes_of(exr, name) else {
+        let Some(p) = planes_in(exr, name) else {
             continue;
         };
         let is_beauty = name == naming::BEAUTY;
         let quality = if is_beauty { BEAUTY_QUALITY } else { quality };
-        let emission = emission.as_ref().filter(|_| is_beauty);
-        let out = filter_lit(&p, *t, quality, emission, aux, filter).map_err(|source| {
-            DenoiseFault::Filtering {
-                aov: name.clone(),
-                source,
-            }
-        })?;
+        let emission = emission.filter(|_| is_beauty);
+        let out =
+            filter_lit(p, *t, quality, emission, aux, filter, &mut rgb).map_err(|source| {
+                DenoiseFault::Filtering {
+                    aov: name.clone(),
+                    source,
+                }
+            })?;
         progress.advance(1, pixels);
         denoised.insert(name.clone(), out);
         noisy.insert(name.clone(), p);
     }
     for (whole, parts) in &work.summed {
-        let (Some(p), Some(first)) = (planes_of(exr, whole), parts.first()) else {
+        let (Some(p), Some(first)) = (planes_in(exr, whole), parts.first()) else {
             continue;
         };
         let mut sum = denoised.get(first).cloned().unwrap_or_default();
@@ -674,18 +829,20 @@ fn filter_aovs(
 /// One AOV filtered; with `emission` (beauty's), that is taken out before and added
 /// back after, so the light seen directly is not smeared into its surroundings.
 fn filter_lit(
-    p: &Planes,
+    p: View,
     t: Treatment,
     quality: Quality,
-    emission: Option<&Planes>,
+    emission: Option<View>,
     aux: &Aux,
     filter: &mut dyn Filter,
+    rgb: &mut Vec<f32>,
 ) -> Result<Planes, OidnError> {
     let unlit = emission.map(|e| minus(p, e));
-    let mut out = filter_aov(unlit.as_ref().unwrap_or(p), t, quality, aux, filter)?;
+    let input = unlit.as_ref().map_or(p, view);
+    let mut out = filter_aov(input, t, quality, aux, filter, rgb)?;
     if let Some(e) = emission {
         for c in 0..3 {
-            for (o, e) in out[c].iter_mut().zip(&e[c]) {
+            for (o, e) in out[c].iter_mut().zip(e[c]) {
                 *o += e.max(0.0);
             }
         }
@@ -730,23 +887,32 @@ impl Remainder {
     }
 }
 
-/// Scales each declared partition's denoised parts to sum to its denoised whole; the
-/// remainders that takes.
+/// Scales each of `partitions`' denoised parts to sum to its denoised whole: the
+/// remainders that takes, and the partitions waiting for a derived AOV (not yet made).
 fn reconcile_partitions(
     exr: &ExrContents,
-    noisy: &AovPlanes,
+    partitions: Vec<Partition>,
+    noisy: &NoisyPlanes,
     denoised: &mut AovPlanes,
-    kept: &std::collections::HashSet<String>,
+    work: &Work,
     summary: &mut DenoiseSummary,
-) -> Vec<Remainder> {
+) -> (Vec<Remainder>, Vec<Partition>) {
+    let kept = &work.kept;
     let mut remainders = Vec::new();
-    for part in partitions(exr) {
+    let mut waiting = Vec::new();
+    for part in partitions {
         let all = std::iter::once(&part.whole).chain(&part.parts);
         if !all.clone().all(|n| denoised.contains_key(n)) {
+            if all
+                .clone()
+                .any(|n| work.derived.iter().any(|(d, _)| d == n))
+            {
+                waiting.push(part);
+            }
             continue;
         }
-        let whole = denoised[&part.whole].clone();
-        let noisy_parts: Vec<&Planes> = part.parts.iter().map(|p| &noisy[p]).collect();
+        let whole = denoised.remove(&part.whole).unwrap_or_default();
+        let noisy_parts: Vec<View> = part.parts.iter().map(|p| noisy[p]).collect();
         let mut taken: Vec<Planes> = part
             .parts
             .iter()
@@ -771,9 +937,10 @@ fn reconcile_partitions(
         for (name, planes) in part.parts.iter().zip(taken) {
             denoised.insert(name.clone(), planes);
         }
+        denoised.insert(part.whole, whole);
         summary.partitions += 1;
     }
-    remainders
+    (remainders, waiting)
 }
 
 /// The shadow matte made again from the denoised `occluded` and `unoccluded`.
@@ -781,21 +948,17 @@ fn shadow_matte_of(exr: &ExrContents, denoised: &AovPlanes) -> Planes {
     let get = |n: &str| {
         denoised
             .get(n)
-            .cloned()
-            .or_else(|| planes_of(exr, n))
-            .unwrap_or_default()
+            .map(view)
+            .or_else(|| planes_in(exr, n))
+            .unwrap_or([&[], &[], &[]])
     };
-    let (occ, unocc) = (get(naming::OCCLUDED), get(naming::UNOCCLUDED));
-    crate::output::shadow_matte(
-        [&occ[0], &occ[1], &occ[2]],
-        [&unocc[0], &unocc[1], &unocc[2]],
-    )
+    crate::output::shadow_matte(get(naming::OCCLUDED), get(naming::UNOCCLUDED))
 }
 
 /// `--keep-noisy`: each filtered AOV's input as `<aov>_noisy`, declared as such.
 fn keep_noisy_aovs(
     exr: &ExrContents,
-    noisy: &AovPlanes,
+    noisy: &NoisyPlanes,
     channels: &mut Channels,
     attributes: &mut Vec<(String, String)>,
 ) -> Result<(), DenoiseFault> {
@@ -810,8 +973,8 @@ fn keep_noisy_aovs(
                 name: kept,
             });
         }
-        for (ch, v) in channel_names(&kept).into_iter().zip(&noisy[name]) {
-            channels.push((ch, v.clone()));
+        for (ch, v) in channel_names(&kept).into_iter().zip(noisy[name]) {
+            channels.push((ch, v.to_vec()));
         }
         attributes.push((
             naming::aov_attribute(&kept),
@@ -832,15 +995,19 @@ fn keep_noisy_aovs(
 /// The `lightpath/denoised` attribute: how the file was filtered.
 fn describe(s: &DenoiseSummary, quality: Quality) -> String {
     let aux = match (s.albedo, s.normal) {
-        (true, true) => "prefiltered albedo and normal auxiliary images (cleanAux)",
-        (true, false) => "prefiltered albedo auxiliary image (cleanAux)",
+        (true, true) => {
+            "albedo and normal auxiliary images prefiltered at the AOVs' quality \
+                         (cleanAux)"
+        }
+        (true, false) => "albedo auxiliary image prefiltered at the AOVs' quality (cleanAux)",
         _ => "no auxiliary images",
     };
     format!(
         "Intel Open Image Denoise RT filter (hdr), {aux}; beauty at {}, other AOVs at {}; \
          AOVs named diffuse*, directDiffuse*, indirectDiffuse*, subsurface* divided by \
          albedo; AOVs split by light group (beauty excepted) the sum of their denoised \
-         groups; zero, constant and converged AOVs kept; every declared partition's \
+         groups; diffuse and specular (and their light groups), where the noisy file adds \
+         up so, the sums of their denoised direct, indirect and transmitted parts; zero, constant and converged AOVs kept; every declared partition's \
          filtered parts scaled to sum to its denoised whole, with a remainder AOV where \
          its kept parts cannot",
         BEAUTY_QUALITY.as_str(),
@@ -990,9 +1157,8 @@ fn with_oidn<R>(
         raw: fn(Quality) -> super::oidn::Quality,
     }
     impl Filter for Run<'_> {
-        fn prefilter(&mut self, aux: &mut Aux) -> Result<(), DenoiseFault> {
-            // At the beauty's quality: the clean images steer every filter after.
-            let q = (self.raw)(BEAUTY_QUALITY);
+        fn prefilter(&mut self, aux: &mut Aux, quality: Quality) -> Result<(), DenoiseFault> {
+            let q = (self.raw)(quality);
             if let Some(a) = aux.albedo.as_mut() {
                 let f = self.oidn.filter_for(Inputs::Albedo, q);
                 f.and_then(|f| f.run(a, None, None)).map_err(|source| {
@@ -1064,6 +1230,10 @@ fn with_oidn<R>(
 mod tests {
     use super::*;
 
+    fn planes_of(exr: &ExrContents, aov: &str) -> Option<Planes> {
+        planes_in(exr, aov).map(|p| p.map(<[f32]>::to_vec))
+    }
+
     /// A 3×3 box blur: a real (if crude) denoiser with OIDN's interface.
     struct BoxBlur {
         width: usize,
@@ -1071,7 +1241,8 @@ mod tests {
         divided_calls: usize,
         /// The quality of each call, in order.
         qualities: Vec<Quality>,
-        prefiltered: bool,
+        /// The quality the auxiliary images were prefiltered at, once they are.
+        prefiltered: Option<Quality>,
     }
 
     impl BoxBlur {
@@ -1081,7 +1252,7 @@ mod tests {
                 height: 5,
                 divided_calls: 0,
                 qualities: Vec::new(),
-                prefiltered: false,
+                prefiltered: None,
             }
         }
 
@@ -1109,12 +1280,12 @@ mod tests {
     }
 
     impl Filter for BoxBlur {
-        fn prefilter(&mut self, aux: &mut Aux) -> Result<(), DenoiseFault> {
+        fn prefilter(&mut self, aux: &mut Aux, quality: Quality) -> Result<(), DenoiseFault> {
             assert!(
-                !self.prefiltered,
+                self.prefiltered.is_none(),
                 "the auxiliary images are prefiltered once"
             );
-            self.prefiltered = true;
+            self.prefiltered = Some(quality);
             for image in aux.albedo.iter_mut().chain(aux.normal.iter_mut()) {
                 self.blur(image);
             }
@@ -1122,7 +1293,7 @@ mod tests {
         }
         fn filter(&mut self, rgb: &mut [f32], how: How, aux: &Aux) -> Result<(), OidnError> {
             assert!(
-                self.prefiltered,
+                self.prefiltered.is_some(),
                 "every filter runs with prefiltered auxiliary images"
             );
             assert!(aux.albedo.is_some());
@@ -1260,6 +1431,8 @@ mod tests {
         // Beauty first, at high; the other AOVs at the job's quality.
         assert_eq!(f.qualities[0], BEAUTY_QUALITY);
         assert!(f.qualities[1..].iter().all(|q| *q == Quality::Fast));
+        // The auxiliary images at the AOVs' quality.
+        assert_eq!(f.prefiltered, Some(Quality::Fast));
         let checks = crate::post::check_partitions(&out);
         assert_eq!(checks.len(), 2);
         for c in &checks {
@@ -1284,7 +1457,7 @@ mod tests {
     fn albedo_division_round_trips_where_filtering_is_the_identity() {
         struct Identity;
         impl Filter for Identity {
-            fn prefilter(&mut self, _: &mut Aux) -> Result<(), DenoiseFault> {
+            fn prefilter(&mut self, _: &mut Aux, _: Quality) -> Result<(), DenoiseFault> {
                 Ok(())
             }
             fn filter(&mut self, _: &mut [f32], _: How, _: &Aux) -> Result<(), OidnError> {
@@ -1295,11 +1468,12 @@ mod tests {
         let aux = aux_images(&exr);
         let p = planes_of(&exr, "directDiffuse").unwrap();
         let out = filter_aov(
-            &p,
+            view(&p),
             Treatment::AlbedoDivided,
             Quality::Fast,
             &aux,
             &mut Identity,
+            &mut Vec::new(),
         )
         .unwrap();
         for c in 0..3 {
@@ -1334,7 +1508,12 @@ mod tests {
         let mut b: Planes = [vec![3.0, 0.0], vec![0.5, 0.0], vec![0.0, 0.0]];
         let na: Planes = [vec![0.0, 1.0], vec![0.0, 0.0], vec![0.0, 0.0]];
         let nb: Planes = [vec![0.0, 3.0], vec![0.0, 0.0], vec![0.0, 0.0]];
-        let rest = reconcile(&whole, &mut [&mut a, &mut b], &[&na, &nb], &[false, false]);
+        let rest = reconcile(
+            &whole,
+            &mut [&mut a, &mut b],
+            &[view(&na), view(&nb)],
+            &[false, false],
+        );
         assert!(rest.is_none());
         // Scaled: 1 and 3 of 2 → 0.5 and 1.5.
         assert_eq!((a[0][0], b[0][0]), (0.5, 1.5));
@@ -1353,7 +1532,12 @@ mod tests {
         let mut a: Planes = [vec![3.0, 1.0], vec![0.0; 2], vec![0.0; 2]];
         let ne = e.clone();
         let na = a.clone();
-        let rest = reconcile(&whole, &mut [&mut e, &mut a], &[&ne, &na], &[true, false]);
+        let rest = reconcile(
+            &whole,
+            &mut [&mut e, &mut a],
+            &[view(&ne), view(&na)],
+            &[true, false],
+        );
         // Emission 4 kept, the other part takes 5 − 4.
         assert_eq!((e[0][0], a[0][0]), (4.0, 1.0));
         // A whole below its emission: the emission is kept exactly, the free part
@@ -1364,7 +1548,7 @@ mod tests {
         // Every part kept: the remainder is all of the difference.
         let mut k: Planes = [vec![0.5, 3.0], vec![0.0; 2], vec![0.0; 2]];
         let nk = k.clone();
-        let rest = reconcile(&whole, &mut [&mut k], &[&nk], &[true]).unwrap();
+        let rest = reconcile(&whole, &mut [&mut k], &[view(&nk)], &[true]).unwrap();
         assert_eq!((k[0][0], rest[0][0], rest[0][1]), (0.5, 4.5, -2.0));
     }
 
@@ -1493,6 +1677,99 @@ mod tests {
         assert_eq!(f.qualities.len(), 6);
         let checks = crate::post::check_partitions(&out);
         assert_eq!(checks.len(), 3);
+        for c in &checks {
+            assert!(c.max_relative_error < 1e-5, "{c:?}");
+        }
+    }
+
+    /// `file()` with a `diffuse` AOV: `directDiffuse` times `scale`.
+    fn with_diffuse(scale: f32) -> ExrContents {
+        let mut exr = file();
+        let dd = planes_of(&exr, "directDiffuse").unwrap();
+        for (ch, v) in channel_names("diffuse").into_iter().zip(&dd) {
+            exr.channels
+                .push((ch, v.iter().map(|x| x * scale).collect()));
+        }
+        exr.attributes.push((
+            naming::kind_attribute("diffuse"),
+            AovKind::Light.as_str().into(),
+        ));
+        exr.attributes
+            .push((naming::aov_attribute("diffuse"), "lpe:diffuse".into()));
+        exr
+    }
+
+    #[test]
+    fn diffuse_is_the_sum_of_its_denoised_parts_where_the_file_adds_up() {
+        // directDiffuse + the zero indirectDiffuse and subsurface: no filter run of its
+        // own, and afterwards the sum of the reconciled parts.
+        let (out, s, f) = run_box(&with_diffuse(1.0), false);
+        assert_eq!((s.derived, s.filtered, f.qualities.len()), (1, 5, 5));
+        for c in ["R", "G", "B"] {
+            let sum: Vec<f32> = ["directDiffuse", "indirectDiffuse", "subsurface"]
+                .iter()
+                .map(|p| out.channel(&format!("{p}.{c}")).unwrap())
+                .fold(vec![0.0; 30], |mut s, p| {
+                    s.iter_mut().zip(p).for_each(|(s, v)| *s += v);
+                    s
+                });
+            assert_eq!(out.channel(&format!("diffuse.{c}")).unwrap(), &sum[..]);
+        }
+        assert_ne!(
+            out.channel("diffuse.R"),
+            with_diffuse(1.0).channel("diffuse.R")
+        );
+        // A diffuse that is not that sum is filtered itself.
+        let (out, s, _) = run_box(&with_diffuse(1.01), false);
+        assert_eq!((s.derived, s.filtered), (0, 6));
+        assert_ne!(out.channel("diffuse.R"), out.channel("directDiffuse.R"));
+    }
+
+    #[test]
+    fn light_groups_of_diffuse_are_sums_and_their_partition_sums() {
+        let mut exr = with_diffuse(1.0);
+        let dd = planes_of(&exr, "directDiffuse").unwrap();
+        let mut infos = Vec::new();
+        for (group, share) in [("_key", 0.3f32), ("__default", 0.7)] {
+            for whole in ["directDiffuse", "diffuse"] {
+                let name = format!("{whole}{group}");
+                for (ch, v) in channel_names(&name).into_iter().zip(&dd) {
+                    exr.channels
+                        .push((ch, v.iter().map(|x| x * share).collect()));
+                }
+                exr.attributes.push((
+                    naming::kind_attribute(&name),
+                    AovKind::Light.as_str().into(),
+                ));
+                exr.attributes
+                    .push((naming::aov_attribute(&name), format!("lpe:{whole}")));
+                infos.push((name, whole));
+            }
+        }
+        let parts: Vec<naming::PartInfo> = infos
+            .iter()
+            .map(|(name, whole)| naming::PartInfo {
+                name,
+                definition: "lpe:diffuse",
+                split_of: Some(whole),
+            })
+            .collect();
+        exr.attributes.extend(naming::partition_attributes(&parts));
+        let (out, s, f) = run_box(&exr, false);
+        // The two directDiffuse groups are filtered; directDiffuse is their sum, diffuse
+        // and its groups are sums of those.
+        assert_eq!((s.filtered, s.summed, s.derived), (6, 1, 3));
+        assert_eq!(f.qualities.len(), 6);
+        // Reconciling diffuse's groups to it moves them by float rounding at most.
+        let (d, dd) = (
+            out.channel("diffuse_key.G").unwrap(),
+            out.channel("directDiffuse_key.G").unwrap(),
+        );
+        for (a, b) in d.iter().zip(dd) {
+            assert!((a - b).abs() <= 1e-6 * b.abs().max(1e-3), "{a} vs {b}");
+        }
+        let checks = crate::post::check_partitions(&out);
+        assert_eq!(checks.len(), 4);
         for c in &checks {
             assert!(c.max_relative_error < 1e-5, "{c:?}");
         }

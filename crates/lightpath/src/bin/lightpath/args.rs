@@ -51,8 +51,9 @@ pub(crate) enum Command {
         /// Keep each filtered AOV's input as <aov>_noisy.
         #[arg(long)]
         keep_noisy: bool,
-        /// Open Image Denoise quality of every AOV but beauty (always filtered at high):
-        /// high, balanced or fast (about half high's time).
+        /// Open Image Denoise quality of every AOV but beauty (always filtered at high) and
+        /// of the albedo and normal prefilters: high, balanced or fast (2–4× less CPU
+        /// than high).
         #[arg(long, default_value = "fast", value_parser = lightpath::post::denoise::Quality::parse)]
         quality: lightpath::post::denoise::Quality,
     },
@@ -261,7 +262,8 @@ pub(crate) struct RenderArgs {
     #[arg(long, requires = "denoise")]
     pub(crate) keep_noisy: bool,
     /// With --denoise: Open Image Denoise quality of every AOV but beauty (always filtered
-    /// at high): high, balanced or fast (about half high's time).
+    /// at high) and of the albedo and normal prefilters: high, balanced or fast (2–4× less
+    /// CPU than high).
     #[arg(long, default_value = "fast", value_parser = lightpath::post::denoise::Quality::parse)]
     pub(crate) denoise_quality: lightpath::post::denoise::Quality,
     /// What traces the rays: bvh (Lightpath's own, the default) or embree (Intel Embree 3;
