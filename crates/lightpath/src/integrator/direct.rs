@@ -405,9 +405,8 @@ impl Tracer<'_> {
                 if le == Vec3A::ZERO || !self.lit(path.prev_object, li as u32) {
                     return;
                 }
-                let w = self.bsdf_weight(path, li as u32, |light| {
-                    light.pdf_hit(path.prev_p, path.prev_n, ray.dir, t, n)
-                });
+                let w =
+                    self.bsdf_weight(path, li as u32, |light| path.pdf_of(light, ray.dir, t, n));
                 if scene.has_media {
                     let seg = Ray {
                         tmax: t - 2.0 * scene.epsilon,
@@ -429,13 +428,7 @@ impl Tracer<'_> {
                         continue;
                     }
                     let w = self.bsdf_weight(path, li, |light| {
-                        light.pdf_hit(
-                            path.prev_p,
-                            path.prev_n,
-                            ray.dir,
-                            f32::INFINITY,
-                            Vec3A::ZERO,
-                        )
+                        path.pdf_of(light, ray.dir, f32::INFINITY, Vec3A::ZERO)
                     });
                     if scene.has_media {
                         let tr = self.lights_only_transmittance(out, path, ray, u32::MAX);

@@ -7,6 +7,7 @@ use super::routing::{Origin, Via};
 use super::volume::{media_seed, Coincident, Flight, MAX_CROSSINGS};
 use super::{Sink, Tracer};
 use crate::geometry::{Hit, Ray, Visibility};
+use crate::light::Light;
 use crate::material::{Bsdf, Shading};
 use crate::media::MediumStack;
 use crate::sampler::{dim, Sampler};
@@ -65,6 +66,13 @@ pub(super) struct Vertex<'a> {
 }
 
 impl PathState {
+    /// The solid-angle pdf with which light sampling at the last scattering point would
+    /// have picked what a ray along `dir` finds on `light` at `t` with normal `ng`.
+    #[inline]
+    pub(super) fn pdf_of(&self, light: &Light, dir: Vec3A, t: f32, ng: Vec3A) -> f32 {
+        light.pdf_hit(self.prev_p, self.prev_n, dir, t, ng)
+    }
+
     /// A path at the camera, about to trace `ray`.
     /// `seeded`: whether the path draws from its own stream (`Tracer::path_rng`).
     /// Inlined: built in place, not returned through a copy.
@@ -303,13 +311,7 @@ impl Tracer<'_> {
             let le = scene.lights[li as usize].emitted_escaped(ray.dir);
             if le != Vec3A::ZERO && self.lit(path.prev_object, li) {
                 self.light_seen(out, path, li, le, |light| {
-                    light.pdf_hit(
-                        path.prev_p,
-                        path.prev_n,
-                        ray.dir,
-                        f32::INFINITY,
-                        Vec3A::ZERO,
-                    )
+                    path.pdf_of(light, ray.dir, f32::INFINITY, Vec3A::ZERO)
                 });
             }
         }
@@ -331,13 +333,7 @@ impl Tracer<'_> {
             let le = light.emitted_at(hit.ng, ray.dir);
             if le != Vec3A::ZERO && self.lit(path.prev_object, li) {
                 self.light_seen(out, path, li, le, |light| {
-                    light.pdf_hit(
-                        path.prev_p,
-                        path.prev_n,
-                        ray.dir,
-                        hit.t + path.travelled,
-                        hit.ng,
-                    )
+                    path.pdf_of(light, ray.dir, hit.t + path.travelled, hit.ng)
                 });
             }
         } else if let Some(glow) = obj.glow_class {
@@ -345,13 +341,7 @@ impl Tracer<'_> {
             let emission = obj.emission * self.glow_texture(obj, hit, ray.dir, path.cone_width);
             let weight = obj.glow_light.map_or(1.0, |li| {
                 self.bsdf_weight(path, li, |light| {
-                    light.pdf_hit(
-                        path.prev_p,
-                        path.prev_n,
-                        ray.dir,
-                        hit.t + path.travelled,
-                        hit.ng,
-                    )
+                    path.pdf_of(light, ray.dir, hit.t + path.travelled, hit.ng)
                 })
             });
             let origin = Origin {
