@@ -301,7 +301,7 @@ pub struct MaterialDesc {
     pub user_color: Option<[f32; 3]>,
     pub textures: TexturesDesc,
     /// Image maps of the base colour and the normal (OBJ `map_Kd`, `map_Bump`/`norm`),
-    /// kept for the texture support to come: not used by shading yet.
+    /// used where `textures` names none (build/materials.rs, `textures_of`).
     pub base_color_map: Option<TextureRef>,
     pub normal_map: Option<TextureRef>,
     pub origin: Origin,

@@ -576,6 +576,57 @@ fn ply_vertex_colours_multiply_the_albedo() {
     std::fs::remove_dir_all(&dir).unwrap();
 }
 
+/// An 8×8 RGB PNG, red in its top four rows and blue in the bottom four.
+fn red_over_blue_png() -> Vec<u8> {
+    let mut image = image::RgbImage::new(8, 8);
+    for (_, y, p) in image.enumerate_pixels_mut() {
+        *p = if y < 4 {
+            image::Rgb([255, 0, 0])
+        } else {
+            image::Rgb([0, 0, 255])
+        };
+    }
+    let mut png = Vec::new();
+    image
+        .write_to(&mut std::io::Cursor::new(&mut png), image::ImageFormat::Png)
+        .unwrap();
+    png
+}
+
+#[test]
+fn an_obj_texture_is_upright_as_blender_maps_it() {
+    // OBJ's vt (0, 0) is the image's bottom-left corner: the quad's top edge (vt v = 1)
+    // shows the image's top rows (red), its bottom edge the bottom rows (blue).
+    let dir = temp_dir("obj-texture");
+    write(&dir, "tex.png", red_over_blue_png());
+    write(
+        &dir,
+        "quad.mtl",
+        "newmtl m\nKd 1 1 1\nillum 1\nmap_Kd tex.png\n",
+    );
+    let obj = write(
+        &dir,
+        "quad.obj",
+        "mtllib quad.mtl\nv -1 -1 0\nv 1 -1 0\nv 1 1 0\nv -1 1 0\n\
+         vt 0 0\nvt 1 0\nvt 1 1\nvt 0 1\nvn 0 0 1\nusemtl m\nf 1/1/1 2/2/1 3/3/1 4/4/1\n",
+    );
+    let res = 17;
+    let (scene, film) = render_desc(
+        parse(&obj).unwrap(),
+        res,
+        4,
+        0,
+        vec![AovSpec::new("albedo", "lpe:albedo")],
+    );
+    let k = index(&scene, "albedo");
+    // Pixels 3 to 13 see only the quad (as in the PLY test above); row 4 is its upper
+    // part, row 12 its lower part.
+    let (top, bottom) = (film.pixel(k, res / 2, 4), film.pixel(k, res / 2, 12));
+    assert!(top.x > 0.9 && top.z < 0.01, "top {top}");
+    assert!(bottom.z > 0.9 && bottom.x < 0.01, "bottom {bottom}");
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
 #[test]
 fn a_toml_scene_includes_files_and_overrides_their_objects_by_name() {
     let dir = temp_dir("include");

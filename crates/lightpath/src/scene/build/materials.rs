@@ -433,13 +433,12 @@ fn material_textures(
 /// the material names no other.
 fn textures_of(m: &MaterialDesc) -> TexturesDesc {
     let mut t = m.textures.clone();
-    // OBJ's v grows up the image, glTF's (Lightpath's) down it: v' = 1 − v.
+    // No flip here: the OBJ reader already turned OBJ's v (up the image) into ours
+    // (down it, glTF's), obj.rs `vt`.
     let from_map = |r: &TextureRef| TextureDesc {
         image: ImageSource::File(r.path.clone()),
         wrap: [Wrap::Repeat; 2],
-        transform: UvTransform {
-            rows: [[1.0, 0.0, 0.0], [0.0, -1.0, 1.0]],
-        },
+        transform: UvTransform::default(),
         origin: r.origin.clone(),
     };
     if t.base_color.is_none() {
