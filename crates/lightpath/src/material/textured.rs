@@ -33,8 +33,9 @@ pub struct MaterialTextures {
     pub normal: Option<(Texture, f32)>,
     /// Emission colour (sRGB-decoded).
     pub emissive: Option<Texture>,
-    /// OpenPBR inputs, each with its texture and, for numbers, the channel read.
-    pub inputs: Vec<(InputRef, Texture, u8)>,
+    /// OpenPBR inputs, each with its texture, for numbers the channel read, and the power
+    /// the texel is raised to (`InputTexture::exponent`).
+    pub inputs: Vec<(InputRef, Texture, u8, f32)>,
 }
 
 /// A textured material: evaluated at each hit.
@@ -67,8 +68,11 @@ impl Textured {
             p.specular_roughness *= v.y;
             p.base_metalness *= v.z;
         }
-        for (input, tex, channel) in &t.inputs {
-            let v = tex.eval(uv, width);
+        for (input, tex, channel, exponent) in &t.inputs {
+            let mut v = tex.eval(uv, width);
+            if *exponent != 1.0 {
+                v = v.max(glam::Vec4::ZERO).powf(*exponent);
+            }
             match input(&mut p) {
                 InputMut::Scalar(x) => *x *= v[usize::from(*channel).min(3)],
                 InputMut::Color(c) => *c *= Vec3A::from(v.xyz()),

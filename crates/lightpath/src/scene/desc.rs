@@ -291,6 +291,9 @@ pub struct InputTexture {
     /// The channel a number is read from (0 red … 3 alpha); unused for colours.
     pub channel: u8,
     pub srgb: bool,
+    /// The texel is raised to this power (after decoding) before it multiplies the input:
+    /// 1, or ½ where glTF's base colour tints glass at each of a solid's two crossings.
+    pub exponent: f32,
 }
 
 #[derive(Clone, Debug)]

@@ -531,6 +531,62 @@ fn base_colour_textures_are_srgb_and_repeat() {
 }
 
 #[test]
+fn a_base_colour_texture_tints_glass_as_the_factor_does() {
+    // A glass pane in front of an emissive card, tinted once by a uniform grey: as its
+    // base colour factor, or as a texture under a white factor. Blender tints by the
+    // square root at each crossing; so must the texture, not by the whole colour.
+    let grey = 0.2158605f32; // sRGB 128 decoded
+    let mean_through = |textured: bool| {
+        let dir = temp_dir(if textured { "tglass-t" } else { "tglass-f" });
+        let mut doc = Doc::new().with_cameras();
+        let mut img = image::RgbaImage::new(2, 2);
+        for p in img.pixels_mut() {
+            *p = image::Rgba([128, 128, 128, 255]);
+        }
+        let mut png = Vec::new();
+        img.write_to(&mut std::io::Cursor::new(&mut png), image::ImageFormat::Png)
+            .unwrap();
+        let view = doc.view(&png);
+        doc.json["images"] = json!([{"bufferView": view, "mimeType": "image/png"}]);
+        doc.json["textures"] = json!([{"source": 0}]);
+        let pbr = if textured {
+            json!({"baseColorFactor": [1.0, 1.0, 1.0, 1.0], "baseColorTexture": {"index": 0},
+                   "metallicFactor": 0.0, "roughnessFactor": 0.0})
+        } else {
+            json!({"baseColorFactor": [grey, grey, grey, 1.0],
+                   "metallicFactor": 0.0, "roughnessFactor": 0.0})
+        };
+        doc.json["materials"] = json!([
+            {"name": "glass", "pbrMetallicRoughness": pbr,
+             "extensions": {"KHR_materials_transmission": {"transmissionFactor": 1.0}}},
+            {"name": "lamp", "emissiveFactor": [1.0, 1.0, 1.0]},
+        ]);
+        doc.json["extensionsUsed"] = json!(["KHR_materials_transmission"]);
+        let pane = doc.square(1.0, 1.0, Some(0));
+        let lamp = doc.square(2.0, 1.0, Some(1));
+        let g = doc.node(json!({"name": "pane", "mesh": pane}));
+        let l = doc.node(json!({"name": "card", "mesh": lamp, "translation": [0.0, 0.0, -1.0]}));
+        let cam = camera_node(&mut doc, "cam", 1.0 / 0.25f32.tan(), 0.5);
+        for n in [g, l, cam] {
+            doc.root(n);
+        }
+        let path = dir.join("glass.glb");
+        doc.write_glb(&path);
+        let (scene, film) = render_desc(&load(&path), 16, 4, vec![]);
+        let _ = std::fs::remove_dir_all(&dir);
+        aov_sum(&scene, &film, "beauty")
+    };
+    let (factor, texture) = (mean_through(false), mean_through(true));
+    assert!(factor > 0.0, "nothing seen through the pane");
+    // Same samples, same tint: equal but for the texture filter's rounding (before,
+    // the texture tinted by the whole grey: √0.216 = 0.46 of the factor's).
+    assert!(
+        (texture / factor - 1.0).abs() < 0.01,
+        "textured {texture} against factor {factor}"
+    );
+}
+
+#[test]
 fn extensions_we_lack_are_errors_when_required_and_warnings_when_used() {
     let dir = temp_dir("extensions");
     let base = || {

@@ -423,6 +423,7 @@ fn material_textures(
                     input_ref(i.input),
                     images.texture(&i.texture, space)?,
                     i.channel,
+                    i.exponent,
                 ))
             })
             .collect::<Result<_, SceneError>>()?,

@@ -751,15 +751,16 @@ impl Loader {
         let mut textures = TexturesDesc::default();
         if let Some(info) = pbr.base_color_texture() {
             let t = self.texture(&info.texture(), info.texture_transform(), &pointer)?;
-            // The base colour texture tints transmission as the factor does.
-            textures
-                .inputs
-                .push(input_texture("transmission_color", t.clone(), 0, true));
+            // The base colour texture tints transmission as the factor does: by its
+            // square root at each crossing (below).
+            textures.inputs.push(InputTexture {
+                exponent: 0.5,
+                ..input_texture("transmission_color", t.clone(), 0, true)
+            });
             textures.base_color = Some(t);
         } else {
             // Blender's Principled glass tints by √(base colour) at each crossing, so a
-            // ray through a solid takes the base colour once (textured, the texture's
-            // colour is taken at each crossing: inputs have no square root).
+            // ray through a solid takes the base colour once.
             p.transmission_color = base_color.max(Vec3A::ZERO).powf(0.5);
         }
         if let Some(info) = pbr.metallic_roughness_texture() {
@@ -1400,6 +1401,7 @@ fn input_texture(input: &str, texture: TextureDesc, channel: u8, srgb: bool) -> 
         texture,
         channel,
         srgb,
+        exponent: 1.0,
     }
 }
 

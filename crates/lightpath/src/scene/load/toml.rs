@@ -863,6 +863,7 @@ fn textures(
             // Numbers from the red channel (a grey image's every channel).
             channel: 0,
             srgb: color,
+            exponent: 1.0,
         });
     }
     Ok(d::TexturesDesc {

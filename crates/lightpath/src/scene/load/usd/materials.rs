@@ -581,5 +581,6 @@ fn input_texture(input: &str, texture: TextureDesc, channel: u8, srgb: bool) -> 
         texture,
         channel,
         srgb,
+        exponent: 1.0,
     }
 }
