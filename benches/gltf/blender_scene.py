@@ -17,6 +17,9 @@ import sys
 
 import bpy
 
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), ".."))
+from benchlib.blender import add_light, principled  # noqa: E402
+
 out_dir = os.path.abspath(sys.argv[1] if len(sys.argv) > 1 else "gltf-compare")
 spp = int(sys.argv[2]) if len(sys.argv) > 2 else 256
 os.makedirs(out_dir, exist_ok=True)
@@ -24,18 +27,6 @@ WIDTH, HEIGHT = 320, 240
 
 bpy.ops.wm.read_factory_settings(use_empty=True)
 scene = bpy.context.scene
-
-
-def principled(name, color, metallic=0.0, roughness=0.5, transmission=0.0, ior=1.5):
-    m = bpy.data.materials.new(name)
-    m.use_nodes = True
-    b = m.node_tree.nodes["Principled BSDF"]
-    b.inputs["Base Color"].default_value = (*color, 1.0)
-    b.inputs["Metallic"].default_value = metallic
-    b.inputs["Roughness"].default_value = roughness
-    b.inputs["Transmission Weight"].default_value = transmission
-    b.inputs["IOR"].default_value = ior
-    return m
 
 
 def checker_image(name, n=64, cells=8):
@@ -112,26 +103,11 @@ cam.rotation_euler = (math.radians(65.0), 0.0, 0.0)
 scene.camera = cam
 
 # Lights: point, spot and sun, each its own light group; no world light.
-def light(name, kind, energy, location, rotation=(0, 0, 0), color=(1, 1, 1)):
-    data = bpy.data.lights.new(name, kind)
-    data.energy = energy
-    data.color = color
-    if kind in ("POINT", "SPOT"):
-        data.shadow_soft_size = 0.0
-    if kind == "SUN":
-        data.angle = 0.0
-    obj = bpy.data.objects.new(name, data)
-    obj.location = location
-    obj.rotation_euler = rotation
-    scene.collection.objects.link(obj)
-    return obj
-
-
-point = light("key", "POINT", 400.0, (2.5, -1.5, 3.0), color=(1.0, 0.9, 0.8))
-spot = light("spot", "SPOT", 800.0, (-2.0, -2.0, 4.0), rotation=(math.radians(35), 0, math.radians(-45)))
+point = add_light(scene, "key", "POINT", 400.0, (2.5, -1.5, 3.0), color=(1.0, 0.9, 0.8))
+spot = add_light(scene, "spot", "SPOT", 800.0, (-2.0, -2.0, 4.0), rotation=(math.radians(35), 0, math.radians(-45)))
 spot.data.spot_size = math.radians(50)
 spot.data.spot_blend = 0.3
-sun = light("sun", "SUN", 1.5, (0, 0, 5), rotation=(math.radians(40), math.radians(20), 0), color=(0.8, 0.9, 1.0))
+sun = add_light(scene, "sun", "SUN", 1.5, (0, 0, 5), rotation=(math.radians(40), math.radians(20), 0), color=(0.8, 0.9, 1.0))
 
 world = bpy.data.worlds.new("black")
 world.use_nodes = True

@@ -53,6 +53,7 @@ def texel(x, y):
 
 def build(out_dir, res):
     import bpy
+    from benchlib.blender import image_material
 
     bpy.ops.wm.read_factory_settings(use_empty=True)
     sc = bpy.context.scene
@@ -61,14 +62,7 @@ def build(out_dir, res):
     img.filepath_raw = f"{out_dir}/patches.png"
     img.file_format = "PNG"
     img.save()
-    m = bpy.data.materials.new("patch_mat")
-    m.use_nodes = True
-    nt = m.node_tree
-    tex = nt.nodes.new("ShaderNodeTexImage")
-    tex.image = img
-    bsdf = nt.nodes["Principled BSDF"]
-    nt.links.new(tex.outputs["Color"], bsdf.inputs["Base Color"])
-    bsdf.inputs["Roughness"].default_value = 0.8
+    m = image_material("patch_mat", img, roughness=0.8)
     bpy.ops.mesh.primitive_plane_add(size=2, location=(0, 0, 0))
     bpy.context.object.name = "plane"
     bpy.context.object.data.materials.append(m)
@@ -93,6 +87,7 @@ def cycles(glb, out, spp, textures, real_shot, res):
     """Renders GLB with Cycles, its image textures as imported (`bytes`), decoded to float
     (`linear`) or point-sampled (`closest`)."""
     import bpy
+    from benchlib.blender import black_world
 
     bpy.ops.wm.read_factory_settings(use_empty=True)
     sc = bpy.context.scene
@@ -112,10 +107,7 @@ def cycles(glb, out, spp, textures, real_shot, res):
                 lin.pixels = np.concatenate([srgb_to_linear(px[:, :3]), px[:, 3:]], 1).ravel()
                 lin.pack()
                 n.image = lin
-    w = bpy.data.worlds.new("black")
-    w.use_nodes = True
-    w.node_tree.nodes["Background"].inputs["Strength"].default_value = 0.0
-    sc.world = w
+    black_world(sc)
     c = sc.cycles
     sc.render.engine = "CYCLES"
     c.device, c.samples, c.seed = "CPU", spp, 1000

@@ -94,21 +94,11 @@ SCENES = {
 def build(out_dir, name, spec):
     """Builds one shot in Blender and exports OUT_DIR/<name>.glb."""
     import bpy
+    from benchlib.blender import add_light, image_material, principled
 
     bpy.ops.wm.read_factory_settings(use_empty=True)
     scene = bpy.context.scene
     scene.render.resolution_x, scene.render.resolution_y = WIDTH, HEIGHT
-
-    def principled(mat_name, color, metallic=0.0, roughness=0.5, transmission=0.0):
-        m = bpy.data.materials.new(mat_name)
-        m.use_nodes = True
-        b = m.node_tree.nodes["Principled BSDF"]
-        b.inputs["Base Color"].default_value = (*color, 1.0)
-        b.inputs["Metallic"].default_value = metallic
-        b.inputs["Roughness"].default_value = roughness
-        b.inputs["Transmission Weight"].default_value = transmission
-        b.inputs["IOR"].default_value = 1.5
-        return m
 
     img = bpy.data.images.new(f"{name}_checker", 64, 64, alpha=False)
     px = []
@@ -120,13 +110,7 @@ def build(out_dir, name, spec):
     img.filepath_raw = os.path.join(out_dir, f"{name}_checker.png")
     img.file_format = "PNG"
     img.save()
-    crate_mat = bpy.data.materials.new("crate_mat")
-    crate_mat.use_nodes = True
-    nt = crate_mat.node_tree
-    tex = nt.nodes.new("ShaderNodeTexImage")
-    tex.image = img
-    nt.links.new(tex.outputs["Color"], nt.nodes["Principled BSDF"].inputs["Base Color"])
-    nt.nodes["Principled BSDF"].inputs["Roughness"].default_value = 0.8
+    crate_mat = image_material("crate_mat", img, roughness=0.8)
 
     def named(obj_name, mat):
         obj = bpy.context.object
@@ -163,18 +147,8 @@ def build(out_dir, name, spec):
     scene.camera = cam
 
     def light(light_name, kind, energy, location=(0, 0, 5), rotation=(0, 0, 0), color=(1, 1, 1)):
-        data = bpy.data.lights.new(light_name, kind)
-        data.energy = energy
-        data.color = color
-        if kind in ("POINT", "SPOT"):
-            data.shadow_soft_size = 0.0
-        if kind == "SUN":
-            data.angle = 0.0
-        obj = bpy.data.objects.new(light_name, data)
-        obj.location = location
-        obj.rotation_euler = tuple(math.radians(a) for a in rotation)
-        scene.collection.objects.link(obj)
-        return obj
+        radians = tuple(math.radians(a) for a in rotation)
+        return add_light(scene, light_name, kind, energy, location, radians, color)
 
     light("key", "POINT", spec["key"][0], spec["key"][1], color=(1.0, 0.9, 0.8))
     spot = light("spot", "SPOT", spec["spot"][0], spec["spot"][1], spec["spot"][2])
@@ -189,6 +163,7 @@ def cycles(glb, out, spp, seed, depth, clamp, filter_glossy, repeat):
     """Renders GLB with Cycles as a Blender user who imports it would; prints the seconds of
     each render (the last is the one to quote: the first loads the kernels)."""
     import bpy
+    from benchlib.blender import black_world
 
     bpy.ops.wm.read_factory_settings(use_empty=True)
     sc = bpy.context.scene
@@ -197,10 +172,7 @@ def cycles(glb, out, spp, seed, depth, clamp, filter_glossy, repeat):
     for o in sc.objects:
         if o.type == "LIGHT":
             print(f"light {o.name}: {o.data.type} radius {getattr(o.data, 'shadow_soft_size', 0):.3f}")
-    w = bpy.data.worlds.new("black")
-    w.use_nodes = True
-    w.node_tree.nodes["Background"].inputs["Strength"].default_value = 0.0
-    sc.world = w
+    black_world(sc)
     c = sc.cycles
     sc.render.engine = "CYCLES"
     c.device = "CPU"
