@@ -514,7 +514,7 @@ pub fn denoise_contents(
     // reconciled parts.
     let (mut remainders, waiting) =
         reconcile_partitions(exr, partitions(exr), &noisy, &mut denoised, &work, summary);
-    derive_sums(exr, &work, &mut noisy, &mut denoised);
+    insert_sums(exr, &work.derived, &mut noisy, &mut denoised);
     remainders.extend(reconcile_partitions(exr, waiting, &noisy, &mut denoised, &work, summary).0);
     for r in &mut remainders {
         attributes.extend(r.attributes());
@@ -715,14 +715,15 @@ fn adds_up(exr: &ExrContents, whole: &str, parts: &[String]) -> bool {
     })
 }
 
-/// The work's derived AOVs as the sums of their denoised parts, with their noisy input.
-fn derive_sums<'a>(
+/// Each of `sums` (an AOV and its parts) as the sum of its parts' denoised planes, with
+/// its noisy input from the file: wholes split by light group, and the derived AOVs.
+fn insert_sums<'a>(
     exr: &'a ExrContents,
-    work: &Work,
+    sums: &[(String, Vec<String>)],
     noisy: &mut NoisyPlanes<'a>,
     denoised: &mut AovPlanes,
 ) {
-    for (name, parts) in &work.derived {
+    for (name, parts) in sums {
         let Some(p) = planes_in(exr, name) else {
             continue;
         };
@@ -808,21 +809,7 @@ fn filter_aovs<'a>(
         denoised.insert(name.clone(), out);
         noisy.insert(name.clone(), p);
     }
-    for (whole, parts) in &work.summed {
-        let (Some(p), Some(first)) = (planes_in(exr, whole), parts.first()) else {
-            continue;
-        };
-        let mut sum = denoised.get(first).cloned().unwrap_or_default();
-        for part in &parts[1..] {
-            if let Some(q) = denoised.get(part) {
-                for c in 0..3 {
-                    sum[c].iter_mut().zip(&q[c]).for_each(|(s, v)| *s += v);
-                }
-            }
-        }
-        denoised.insert(whole.clone(), sum);
-        noisy.insert(whole.clone(), p);
-    }
+    insert_sums(exr, &work.summed, &mut noisy, &mut denoised);
     Ok((noisy, denoised))
 }
 
