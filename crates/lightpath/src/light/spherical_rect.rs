@@ -128,6 +128,19 @@ fn sample_linear(u: f64, a: f64, b: f64) -> f64 {
     x.min(1.0)
 }
 
+/// F(x, y) = atan(x·y / (h·r)) at the corner (x, y) of a rectangle at height h (r the
+/// corner's distance), as the complex number h·r + i·x·y whose argument it is.
+#[inline]
+fn corner_angle(h: f64, x: f64, y: f64) -> (f64, f64) {
+    (h * (x * x + y * y + h * h).sqrt(), x * y)
+}
+
+/// The difference of two such angles (each within ±π/2), as one atan2 of a·conj(b).
+#[inline]
+fn angle_diff(a: (f64, f64), b: (f64, f64)) -> f64 {
+    (a.1 * b.0 - a.0 * b.1).atan2(a.0 * b.0 + a.1 * b.1)
+}
+
 impl Rect {
     /// The rectangle with corner `p0` and edges `e1`, `e2`, or `None` when the edges are
     /// not perpendicular (a skewed parallelogram keeps area sampling) or are degenerate.
@@ -179,16 +192,14 @@ impl Rect {
         // π + F₀₀ − F₀₁. F as the argument of h·r + i·x·y; differences of two F (each
         // within ±π/2) as one atan2 of a·conj(b): three atan2 in all instead of four
         // acos of normalized cross products.
-        let corner = |x: f64, y: f64| (h * (x * x + y * y + h * h).sqrt(), x * y);
-        let diff =
-            |a: (f64, f64), b: (f64, f64)| (a.1 * b.0 - a.0 * b.1).atan2(a.0 * b.0 + a.1 * b.1);
+        let corner = |x: f64, y: f64| corner_angle(h, x, y);
         let (c00, c01, c10, c11) = (
             corner(x0, y0),
             corner(x0, y1),
             corner(x1, y0),
             corner(x1, y1),
         );
-        let solid_angle = diff(c11, c01) + diff(c00, c10);
+        let solid_angle = angle_diff(c11, c01) + angle_diff(c00, c10);
         // NaN (a degenerate frame) fails this too.
         if solid_angle.is_nan() || solid_angle < MIN_SOLID_ANGLE {
             return None;
@@ -222,7 +233,7 @@ impl Rect {
             z0,
             b0,
             b1,
-            g23: PI + diff(c00, c01),
+            g23: PI + angle_diff(c00, c01),
             solid_angle,
             warp,
         })
@@ -294,11 +305,9 @@ impl Seen {
         let xq = d.dot(self.x).clamp(self.x0, self.x1);
         let yq = d.dot(self.y).clamp(self.y0, self.y1);
         let h = -self.z0;
-        let corner = |x: f64, y: f64| (h * (x * x + y * y + h * h).sqrt(), x * y);
-        let diff =
-            |a: (f64, f64), b: (f64, f64)| (a.1 * b.0 - a.0 * b.1).atan2(a.0 * b.0 + a.1 * b.1);
-        let part = diff(corner(xq, self.y1), corner(self.x0, self.y1))
-            + diff(corner(self.x0, self.y0), corner(xq, self.y0));
+        let corner = |x: f64, y: f64| corner_angle(h, x, y);
+        let part = angle_diff(corner(xq, self.y1), corner(self.x0, self.y1))
+            + angle_diff(corner(self.x0, self.y0), corner(xq, self.y0));
         let u0 = (part / self.solid_angle).clamp(0.0, 1.0);
         let d2 = xq * xq + self.z0 * self.z0;
         let h0 = self.y0 / (d2 + self.y0 * self.y0).sqrt();
