@@ -22,20 +22,13 @@ import sys
 
 import bpy
 
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), ".."))
+from benchlib.blender import principled  # noqa: E402
+
 out_dir = os.path.abspath(sys.argv[1] if len(sys.argv) > 1 else "usd-shot")
 os.makedirs(out_dir, exist_ok=True)
 bpy.ops.wm.read_factory_settings(use_empty=True)
 scene = bpy.context.scene
-
-
-def principled(name, color, metallic=0.0, roughness=0.5):
-    m = bpy.data.materials.new(name)
-    m.use_nodes = True
-    b = m.node_tree.nodes["Principled BSDF"]
-    b.inputs["Base Color"].default_value = (*color, 1.0)
-    b.inputs["Metallic"].default_value = metallic
-    b.inputs["Roughness"].default_value = roughness
-    return m
 
 
 def checker(name, n=64, cells=8):
