@@ -6,6 +6,8 @@ available:
     from benchlib.blender import add_light, image_material
 """
 
+import math
+
 import bpy
 
 
@@ -58,3 +60,17 @@ def black_world(scene):
     w.use_nodes = True
     w.node_tree.nodes["Background"].inputs["Strength"].default_value = 0.0
     scene.world = w
+
+
+def add_camera(scene, name, fov_y_degrees, location, rotation):
+    """`scene`'s camera: a vertical field of view in degrees, `rotation` in radians."""
+    data = bpy.data.cameras.new(name)
+    data.lens_unit = "FOV"
+    data.sensor_fit = "VERTICAL"
+    data.angle_y = math.radians(fov_y_degrees)
+    cam = bpy.data.objects.new(name, data)
+    scene.collection.objects.link(cam)
+    cam.location = location
+    cam.rotation_euler = rotation
+    scene.camera = cam
+    return cam

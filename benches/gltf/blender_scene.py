@@ -18,7 +18,7 @@ import sys
 import bpy
 
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), ".."))
-from benchlib.blender import add_light, principled  # noqa: E402
+from benchlib.blender import add_camera, add_light, principled  # noqa: E402
 
 out_dir = os.path.abspath(sys.argv[1] if len(sys.argv) > 1 else "gltf-compare")
 spp = int(sys.argv[2]) if len(sys.argv) > 2 else 256
@@ -92,15 +92,7 @@ add(chrome, principled("chrome_mat", (0.9, 0.9, 0.9), metallic=1.0, roughness=0.
 chrome.location = (0.5, 0.7, 0.5)
 
 # Camera.
-cam_data = bpy.data.cameras.new("shot")
-cam_data.lens_unit = "FOV"
-cam_data.sensor_fit = "VERTICAL"
-cam_data.angle_y = math.radians(40.0)
-cam = bpy.data.objects.new("shot", cam_data)
-scene.collection.objects.link(cam)
-cam.location = (0.0, -6.0, 3.0)
-cam.rotation_euler = (math.radians(65.0), 0.0, 0.0)
-scene.camera = cam
+add_camera(scene, "shot", 40.0, (0.0, -6.0, 3.0), (math.radians(65.0), 0.0, 0.0))
 
 # Lights: point, spot and sun, each its own light group; no world light.
 point = add_light(scene, "key", "POINT", 400.0, (2.5, -1.5, 3.0), color=(1.0, 0.9, 0.8))

@@ -94,7 +94,7 @@ SCENES = {
 def build(out_dir, name, spec):
     """Builds one shot in Blender and exports OUT_DIR/<name>.glb."""
     import bpy
-    from benchlib.blender import add_light, image_material, principled
+    from benchlib.blender import add_camera, add_light, image_material, principled
 
     bpy.ops.wm.read_factory_settings(use_empty=True)
     scene = bpy.context.scene
@@ -136,15 +136,8 @@ def build(out_dir, name, spec):
     bpy.ops.object.shade_smooth()
     named("chrome", principled("chrome_mat", (0.9, 0.9, 0.9), metallic=1.0, roughness=0.0))
 
-    cam_data = bpy.data.cameras.new("shot")
-    cam_data.lens_unit = "FOV"
-    cam_data.sensor_fit = "VERTICAL"
-    cam_data.angle_y = math.radians(40.0)
-    cam = bpy.data.objects.new("shot", cam_data)
-    scene.collection.objects.link(cam)
-    cam.location = spec["camera"][0]
-    cam.rotation_euler = tuple(math.radians(a) for a in spec["camera"][1])
-    scene.camera = cam
+    add_camera(scene, "shot", 40.0, spec["camera"][0],
+               tuple(math.radians(a) for a in spec["camera"][1]))
 
     def light(light_name, kind, energy, location=(0, 0, 5), rotation=(0, 0, 0), color=(1, 1, 1)):
         radians = tuple(math.radians(a) for a in rotation)
