@@ -366,12 +366,18 @@ fn lights_only_live(automaton: &Automaton, lights: &[Light]) -> Vec<bool> {
             r.flags.contains(lpe::Prefix::Unoccluded) || r.flags.contains(lpe::Prefix::Shadows)
         })
         .collect();
+    if !wanted.contains(&true) {
+        return vec![false; automaton.states().count()];
+    }
+    // Lights share classes (a group's lights, unnamed ones): each class once.
+    let classes: std::collections::HashSet<ClassId> =
+        lights.iter().map(|l| l.classes.light).collect();
     automaton
         .states()
         .map(|s| {
-            lights.iter().any(|l| {
+            classes.iter().any(|&c| {
                 automaton
-                    .accepting(automaton.step(s, l.classes.light))
+                    .accepting(automaton.step(s, c))
                     .iter()
                     .any(|r| wanted[r.0 as usize])
             })
