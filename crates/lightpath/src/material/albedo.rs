@@ -14,12 +14,15 @@
 //! albedo of the specular layer over an opaque base, so that the base can be attenuated
 //! by what the layer reflects.
 //!
-//! Anisotropic GGX: its F = 1 albedo depends on the azimuth too, so it has its own
-//! table over (μ, azimuth folded into [0, π/2], √α_rms, αy/αx), which keeps the
-//! Kulla–Conty lobe exact. The dielectric tables stay isotropic: anisotropic lobes read
-//! them at [`directional_alpha`] (dielectric specular, η ≥ 1: within 2 % in the
-//! furnace tests) or at [`min_alpha`] (glass, and reflection under total internal
-//! reflection, where no single alpha fits: they compensate less, never too much).
+//! Anisotropic GGX reads the F = 1 table at the geometric-mean alpha √(αx·αy), as
+//! OpenPBR's MaterialX reference (`mx_average_alpha`) and Cycles
+//! (`microfacet_ggx_albedo_scaling`) do, so anisotropic metal renders as they render
+//! it: that compensates less than the lobe loses where the view sees the rough axis (a
+//! white furnace keeps 0.90–0.96 at anisotropy 0.8, as Cycles' does;
+//! benches/materials/RESULTS.md). The dielectric tables read anisotropic lobes at
+//! [`directional_alpha`] (dielectric specular, η ≥ 1: within 2 % in the furnace tests)
+//! or at [`min_alpha`] (glass, and reflection under total internal reflection, where no
+//! single alpha fits: they compensate less, never too much).
 //!
 //! Axes: μ = cos θo linear in [0, 1]; √α linear in [0, 1] (α beyond 1 reads the edge);
 //! η through √((η − 1)/(η + 1)) / √(1/2) linear in [0, 1] for η in [1, 3] (the
@@ -106,71 +109,25 @@ fn linear(table: &[f32], n: usize, x: f32) -> f32 {
     lerp(table[i], table[i + 1], t)
 }
 
-/// Points along μ, azimuth, √α_rms and αy/αx of the anisotropic F = 1 table.
-pub const N_ANISO: [usize; 4] = [16, 8, 16, 8];
-
-/// The anisotropic table's coordinates of `g`: (√α_rms axis, ratio axis, swapped),
-/// α_rms = √((αx² + αy²)/2) and the ratio of the smaller alpha to the larger, which is
-/// taken as the x axis (`swapped` when that is the bitangent).
-fn aniso_coord(g: &Ggx) -> (f32, f32, bool) {
-    let (ax, ay) = (g.alpha_x, g.alpha_y);
-    let rms = ((ax * ax + ay * ay) / 2.0).sqrt();
-    let (ratio, swapped) = if ax >= ay {
-        (ay / ax, false)
+/// The isotropic alpha at which anisotropic GGX reads the F = 1 tables: the geometric
+/// mean √(αx·αy) (module doc).
+pub fn mean_alpha(g: &Ggx) -> f32 {
+    if g.alpha_x == g.alpha_y {
+        g.alpha_x
     } else {
-        (ax / ay, true)
-    };
-    (alpha_coord(rms), ratio, swapped)
-}
-
-fn quadrilinear(w: [f32; 4]) -> f32 {
-    let [nm, np, na, nr] = N_ANISO;
-    let (r, tr) = coord(w[3], nr);
-    let (a, ta) = coord(w[2], na);
-    let (p, tp) = coord(w[1], np);
-    let (m, tm) = coord(w[0], nm);
-    let at = |r: usize, a: usize, p: usize| {
-        let i = ((r * na + a) * np + p) * nm + m;
-        lerp(t::GGX_E_ANISO[i], t::GGX_E_ANISO[i + 1], tm)
-    };
-    let ap = |r: usize, a: usize| lerp(at(r, a, p), at(r, a, p + 1), tp);
-    let ra = |r: usize| lerp(ap(r, a), ap(r, a + 1), ta);
-    lerp(ra(r), ra(r + 1), tr)
+        (g.alpha_x * g.alpha_y).sqrt()
+    }
 }
 
 /// Albedo of single-scattering GGX reflection with F = 1 towards `w` (the local frame
-/// of `g`): the isotropic table, or for unequal alphas the anisotropic one, which also
-/// depends on the azimuth of `w`.
+/// of `g`), anisotropic lobes at [`mean_alpha`].
 pub fn ggx_e_dir(g: &Ggx, w: Vec3A) -> f32 {
-    let mu = w.z.abs();
-    if g.alpha_x == g.alpha_y {
-        return ggx_e(mu, g.alpha_x);
-    }
-    let (a, r, swapped) = aniso_coord(g);
-    // The distribution is symmetric about both axes: the azimuth folds into [0, π/2].
-    let mut phi = w.y.abs().atan2(w.x.abs()) / std::f32::consts::FRAC_PI_2;
-    if swapped {
-        phi = 1.0 - phi;
-    }
-    quadrilinear([mu, phi, a, r])
+    ggx_e(w.z.abs(), mean_alpha(g))
 }
 
 /// The cosine-weighted average of [`ggx_e_dir`] over the hemisphere.
 pub fn ggx_e_avg_of(g: &Ggx) -> f32 {
-    if g.alpha_x == g.alpha_y {
-        return ggx_e_avg(g.alpha_x);
-    }
-    let (a, r, _) = aniso_coord(g);
-    let n = N_ANISO[2];
-    bilinear_rect(&t::GGX_E_AVG_ANISO, n, N_ANISO[3], r, a)
-}
-
-/// Bilinear lookup in a table of `ny` rows of `nx` entries.
-fn bilinear_rect(table: &[f32], nx: usize, ny: usize, y: f32, x: f32) -> f32 {
-    let (j, ty) = coord(y, ny);
-    let (i, tx) = coord(x, nx);
-    let row = |j: usize| lerp(table[j * nx + i], table[j * nx + i + 1], tx);
-    lerp(row(j), row(j + 1), ty)
+    ggx_e_avg(mean_alpha(g))
 }
 
 /// The isotropic alpha at which an anisotropic `g` reads the (isotropic) dielectric
@@ -396,47 +353,6 @@ pub(super) mod generator {
         (out, err)
     }
 
-    /// The anisotropic node (μ, azimuth, α_rms, ratio) `idx` as a direction and a
-    /// distribution.
-    pub fn aniso_node(idx: [usize; 4]) -> (Vec3A, Ggx) {
-        let [nm, np, na, nr] = N_ANISO;
-        let mu = node_mu(idx[0], nm);
-        let phi = idx[1] as f32 / (np - 1) as f32 * std::f32::consts::FRAC_PI_2;
-        let rms = node_alpha(idx[2], na);
-        let ratio = idx[3] as f32 / (nr - 1) as f32;
-        let ax = rms * (2.0 / (1.0 + ratio * ratio)).sqrt();
-        let s = (1.0 - mu * mu).max(0.0).sqrt();
-        let wo = Vec3A::new(s * phi.cos(), s * phi.sin(), mu);
-        (wo, Ggx::new(Vec2::new(ax, ratio * ax)))
-    }
-
-    /// The anisotropic F = 1 table [ratio][√α_rms][azimuth][μ], its averages
-    /// [ratio][√α_rms] and its largest standard error.
-    fn aniso_table(grid: usize) -> (Vec<f32>, Vec<f32>, f64) {
-        let [nm, np, na, nr] = N_ANISO;
-        let (mut out, mut avg) = (Vec::new(), Vec::new());
-        let mut err: f64 = 0.0;
-        for r in 0..nr {
-            for a in 0..na {
-                let mut mean_row = vec![0.0f32; nm];
-                for p in 0..np {
-                    for (m, mean) in mean_row.iter_mut().enumerate() {
-                        let (wo, g) = aniso_node([m, p, a, r]);
-                        let seed = 500_000 + (((r * na + a) * np + p) * nm + m) as u64;
-                        let (e, se) = integrate_dir(Kind::White, &g, wo, grid, seed);
-                        err = err.max(se);
-                        out.push(e as f32);
-                        // Trapezoid rule over the azimuth: the interpolant's exact mean.
-                        let w = if p == 0 || p == np - 1 { 0.5 } else { 1.0 };
-                        *mean += e as f32 * w / (np - 1) as f32;
-                    }
-                }
-                avg.push(row_average(&mean_row));
-            }
-        }
-        (out, avg, err)
-    }
-
     fn averages(table: &[f32], n: usize) -> Vec<f32> {
         table.chunks(n).map(row_average).collect()
     }
@@ -477,20 +393,6 @@ pub(super) mod generator {
             "GGX_E_AVG",
             "E_avg(α), F = 1: [√α].",
             &averages(&e, N_2D),
-        );
-        let (aniso, aniso_avg, err) = aniso_table(grid);
-        errors.push(err);
-        write_array(
-            &mut out,
-            "GGX_E_ANISO",
-            "E(μ, φ, α_rms, αy/αx), F = 1: [ratio][√α_rms][φ][μ].",
-            &aniso,
-        );
-        write_array(
-            &mut out,
-            "GGX_E_AVG_ANISO",
-            "E_avg(α_rms, αy/αx), F = 1: [ratio][√α_rms].",
-            &aniso_avg,
         );
         for (side, flip) in [("ENTER", false), ("EXIT", true)] {
             let eta_of = |k: usize| {

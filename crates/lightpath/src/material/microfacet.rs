@@ -122,10 +122,11 @@ pub fn kulla_conty_fms(f_avg: Vec3A, e_avg: f32) -> Vec3A {
 /// GGX reflection, single scattering with any Fresnel term plus Kulla & Conty's (2017)
 /// multiple-scattering lobe
 /// `f_ms · cos θi = F_ms (1 − E(μo)) (1 − E(μi)) μi / (π (1 − E_avg))`,
-/// E the albedo with F = 1 (tables in [`super::albedo`]; for anisotropic alphas E also
-/// depends on the azimuth, so that this remains exact). That lobe is symmetric in
+/// E the albedo with F = 1 (tables in [`super::albedo`]). That lobe is symmetric in
 /// (μo, μi), so reciprocity holds, and it returns exactly the energy
-/// (1 − E(μo)) · F_ms that single scattering loses.
+/// (1 − E(μo)) · F_ms that single scattering loses; anisotropic alphas read E at their
+/// geometric mean, as Cycles and OpenPBR's reference do, which returns less where the
+/// view sees the rough axis.
 ///
 /// Sampling draws a visible normal, or with probability `1 − E(μo)` (the multiple
 /// scattering's share with white Fresnel) a cosine-distributed direction; the pdf is

@@ -896,17 +896,6 @@ fn albedo_tables_match_fresh_integration() {
             check(format!("glass, {what}"), albedo::glass_e(mu, alpha, eta), t);
         }
     }
-    // Anisotropic entries, by the generator's own estimator on a finer grid and other
-    // random numbers.
-    for idx in [[15, 3, 12, 2], [8, 7, 15, 0], [4, 0, 9, 5]] {
-        let (wo, g) = generator::aniso_node(idx);
-        let fresh = generator::integrate_dir(generator::Kind::White, &g, wo, 128, 99);
-        check(
-            format!("anisotropic {g:?} wo {wo}"),
-            albedo::ggx_e_dir(&g, wo),
-            fresh,
-        );
-    }
     assert!(failures.is_empty(), "{failures:#?}");
     // The generator's error bound (5 standard errors, the largest over all entries) is
     // small against the energies compensated (a few % to 60 %).
@@ -977,43 +966,100 @@ fn furnace_dirs() -> Vec<Vec3A> {
 fn white_furnace_rough_white_metal_keeps_its_energy() {
     let mut failures = Vec::new();
     for roughness in [0.2, 0.5, 1.0] {
-        let alpha = roughness_to_alpha(roughness);
-        for (aniso, alpha) in [
-            ("isotropic", Vec2::splat(alpha)),
-            (
-                "anisotropic",
-                super::microfacet::roughness_anisotropy_to_alpha(roughness, 0.7),
-            ),
-        ] {
-            let lobe = Lobe::from(Conductor {
-                f0: Vec3A::ONE,
-                f82_tint: Vec3A::ONE,
-                weight: 1.0,
-                alpha,
-                lobe: 2,
-            });
-            for (k, wo) in furnace_dirs().into_iter().enumerate() {
-                let e = lobe_energy(&lobe, wo, 100_000, k as u64);
-                // Before compensation: single scattering alone.
-                let ss = super::microfacet::MicrofacetReflection::single(alpha);
-                let mut rng = Rng::for_sample(k as u64, 5, 0);
-                let before = mean_se((0..100_000).map(|_| {
-                    ss.sample(wo, 1.0, rng.next_2d()).map_or(0.0, |wi| {
-                        let (f, pdf) = ss.eval(wo, wi, |_| Vec3A::ONE);
-                        (f.x / pdf) as f64
-                    })
-                }));
-                println!(
-                    "white metal roughness {roughness} {aniso}, θo {:.0}°: {:.4} (single scattering {:.4})",
-                    wo.z.acos().to_degrees(),
-                    e.0,
-                    before.0
-                );
-                if !within(e, FURNACE.0, FURNACE.1) {
-                    failures.push(format!("roughness {roughness} {aniso} wo {wo}: {e:?}"));
-                }
+        let alpha = Vec2::splat(roughness_to_alpha(roughness));
+        let lobe = white_metal(alpha);
+        for (k, wo) in furnace_dirs().into_iter().enumerate() {
+            let e = lobe_energy(&lobe, wo, 100_000, k as u64);
+            // Before compensation: single scattering alone.
+            let ss = super::microfacet::MicrofacetReflection::single(alpha);
+            let mut rng = Rng::for_sample(k as u64, 5, 0);
+            let before = mean_se((0..100_000).map(|_| {
+                ss.sample(wo, 1.0, rng.next_2d()).map_or(0.0, |wi| {
+                    let (f, pdf) = ss.eval(wo, wi, |_| Vec3A::ONE);
+                    (f.x / pdf) as f64
+                })
+            }));
+            println!(
+                "white metal roughness {roughness}, θo {:.0}°: {:.4} (single scattering {:.4})",
+                wo.z.acos().to_degrees(),
+                e.0,
+                before.0
+            );
+            if !within(e, FURNACE.0, FURNACE.1) {
+                failures.push(format!("roughness {roughness} wo {wo}: {e:?}"));
             }
         }
+    }
+    assert!(failures.is_empty(), "{failures:#?}");
+}
+
+fn white_metal(alpha: Vec2) -> Lobe {
+    Lobe::from(Conductor {
+        f0: Vec3A::ONE,
+        f82_tint: Vec3A::ONE,
+        weight: 1.0,
+        alpha,
+        lobe: 2,
+    })
+}
+
+/// Anisotropic metal is compensated at its geometric-mean alpha, as Cycles and OpenPBR's
+/// MaterialX reference do (albedo.rs): its white-furnace energy from `wo` is the lobe's
+/// own single scattering, integrated here by the table generator's independent
+/// estimator, plus the 1 − E(μo, √(αx·αy)) of the isotropic table. Printed beside it, a
+/// white sphere's mean (what `benches/materials/cycles_furnace.py` renders): Cycles
+/// 5.0.1 keeps 0.8975 at Blender's roughness 0.55, anisotropy 0.8, and 0.9572 at 0.4
+/// (its compensation scales by 1/E where Kulla–Conty adds 1 − E; RESULTS.md).
+#[test]
+fn white_furnace_anisotropic_metal_is_compensated_at_the_mean_alpha() {
+    use super::albedo::{self, generator};
+    use super::albedo_tables::GENERATOR_ERROR;
+    let mut failures = Vec::new();
+    for (i, (roughness, cycles)) in [(0.55f32, 0.8975), (0.4, 0.9572)].into_iter().enumerate() {
+        // Blender's Principled anisotropy: α/ρ and α·ρ, ρ = √(1 − 0.9 s).
+        let a = roughness * roughness;
+        let rho = (1.0f32 - 0.9 * 0.8).sqrt();
+        let alpha = Vec2::new(a / rho, a * rho);
+        let lobe = white_metal(alpha);
+        let g = super::microfacet::Ggx::new(alpha);
+        for (k, wo) in [
+            dir(0.0, 0.0),
+            dir(40.0, 0.0),
+            dir(40.0, 90.0),
+            dir(75.0, 30.0),
+            dir(75.0, 80.0),
+        ]
+        .into_iter()
+        .enumerate()
+        {
+            let seed = (10 * i + k) as u64;
+            let e = lobe_energy(&lobe, wo, 100_000, seed);
+            let single = generator::integrate_dir(generator::Kind::White, &g, wo, 128, 900 + seed);
+            let expected = single.0 + 1.0 - albedo::ggx_e(wo.z, albedo::mean_alpha(&g)) as f64;
+            let tol = 5.0 * (e.1 + single.1) + GENERATOR_ERROR as f64 + ROUNDING;
+            println!("anisotropic white metal roughness {roughness}, wo {wo}: {e:?}, expected {expected:.4}");
+            if (e.0 - expected).abs() > tol {
+                failures.push(format!(
+                    "roughness {roughness} wo {wo}: {e:?} against {expected}"
+                ));
+            }
+            // Compensation only adds energy, and never beyond what arrives.
+            if e.0 < single.0 - tol || e.0 > FURNACE.1 + tol {
+                failures.push(format!(
+                    "roughness {roughness} wo {wo}: {e:?}, single {single:?}"
+                ));
+            }
+        }
+        // The sphere's mean: view directions cosine-distributed about the normal
+        // (orthographic view), tangents at every azimuth.
+        let mut rng = Rng::for_sample(7, i as u64, 0);
+        let sphere = mean_se((0..256).map(|k| {
+            let wo = crate::sampling::cosine_hemisphere(rng.next_2d());
+            lobe_energy(&lobe, wo, 4000, 1000 + k).0
+        }));
+        println!(
+            "anisotropic white metal roughness {roughness}: sphere {sphere:?}, Cycles {cycles}"
+        );
     }
     assert!(failures.is_empty(), "{failures:#?}");
 }
