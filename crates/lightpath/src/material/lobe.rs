@@ -9,8 +9,9 @@
 use super::fuzz::Fuzz;
 use super::iridescence::Iridescence;
 use super::{
-    coat::Coat, conductor::Conductor, dielectric::Dielectric, lambert::Lambert, specular::Specular,
-    subsurface::Subsurface, translucent::DiffuseTransmission,
+    coat::Coat, conductor::Conductor, dielectric::Dielectric, lambert::Lambert,
+    rough_diffuse::RoughDiffuse, specular::Specular, subsurface::Subsurface,
+    translucent::DiffuseTransmission,
 };
 use glam::{Vec2, Vec3A};
 use lpe::Scatter;
@@ -119,6 +120,7 @@ macro_rules! lobes {
 
 lobes!(
     Lambert,
+    RoughDiffuse,
     DiffuseTransmission,
     Conductor,
     Dielectric,

@@ -11,7 +11,7 @@
 //! | transmission (glass) | `Dielectric` | `RS8`, `TS8` |
 //! | subsurface (`subsurface_*`) | `Subsurface` (random walk) | `TD3` |
 //! | translucency (thin-walled subsurface) | `DiffuseTransmission` | `TD2` |
-//! | diffuse | `Lambert` | `RD2` |
+//! | diffuse, `base_diffuse_roughness` 0 / above 0 or textured | `Lambert` / `RoughDiffuse` (EON) | `RD2` |
 //!
 //! Which lobes a material has is fixed when the scene is built ([`LobeSet`]): a lobe whose
 //! weight is zero and untextured is left out, so a plain diffuse material is one Lambert
@@ -27,7 +27,7 @@ use super::lobe::Lobe;
 use super::microfacet::roughness_anisotropy_to_alpha;
 use super::{
     roughness_to_alpha, Bsdf, Coat, Conductor, Dielectric, DiffuseTransmission, Fuzz, Lambert,
-    Specular, Subsurface,
+    RoughDiffuse, Specular, Subsurface,
 };
 use glam::Vec3A;
 
@@ -107,7 +107,7 @@ openpbr_inputs! {
     base_weight: Scalar(1.0, 0.0, 1.0) "Multiplier on the base (diffuse, subsurface and metal).";
     base_color: Color(0.8, 0.8, 0.8) "Diffuse albedo, and the metal's reflectance at normal incidence.";
     base_metalness: Scalar(0.0, 0.0, 1.0) "Mix from dielectric (0) to metal (1).";
-    base_diffuse_roughness: Scalar(0.0, 0.0, 1.0) "Roughness of the diffuse lobe (Lambertian here: read, not used).";
+    base_diffuse_roughness: Scalar(0.0, 0.0, 1.0) "Roughness of the diffuse lobe: σ of the energy-preserving Oren–Nayar model (EON); 0 is Lambertian.";
     specular_weight: Scalar(1.0, 0.0, BIG) "Multiplier on the dielectric's reflectance at normal incidence, through its IOR (above 1 raises it); the metal's whole reflection, up to 1.";
     specular_color: Color(1.0, 1.0, 1.0) "Tint of the dielectric's reflection; the metal's edge tint (F82).";
     specular_roughness: Scalar(0.3, 0.0, 1.0) "Roughness of the specular reflection and of transmission.";
@@ -162,6 +162,8 @@ pub struct LobeSet {
     pub subsurface: bool,
     pub translucency: bool,
     pub diffuse: bool,
+    /// The diffuse is rough (EON) rather than Lambertian.
+    pub rough_diffuse: bool,
     /// Filmed (`RS5`) copies of the specular and metal lobes.
     pub film: bool,
 }
@@ -187,6 +189,7 @@ impl LobeSet {
             subsurface: sss && !p.geometry_thin_walled,
             translucency: sss && p.geometry_thin_walled,
             diffuse: base && diffuse_part,
+            rough_diffuse: live(p.base_diffuse_roughness, "base_diffuse_roughness"),
             film: live(p.thin_film_weight, "thin_film_weight"),
         }
     }
@@ -215,7 +218,13 @@ impl Bsdf {
             roughness_anisotropy_to_alpha(p.specular_roughness, p.specular_roughness_anisotropy);
         let eta = modulated_ior(p.specular_ior.max(1.0), p.specular_weight);
         // The opaque dielectric base: diffuse, and subsurface (translucency when thin).
-        if set.diffuse {
+        if set.diffuse && set.rough_diffuse {
+            b.push(RoughDiffuse {
+                color: p.base_color,
+                weight: base_w * opaque * (1.0 - sss),
+                roughness: p.base_diffuse_roughness,
+            });
+        } else if set.diffuse {
             b.push(Lambert {
                 albedo: p.base_color * (base_w * opaque * (1.0 - sss)),
             });

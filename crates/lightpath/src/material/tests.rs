@@ -157,6 +157,16 @@ fn rough_lobe_cases() -> Vec<(String, Lobe, Vec<Vec3A>)> {
             .into(),
             up.clone(),
         ),
+        (
+            "rough diffuse (EON)".into(),
+            RoughDiffuse {
+                color: Vec3A::new(0.8, 0.5, 0.2),
+                weight: 0.9,
+                roughness: 0.7,
+            }
+            .into(),
+            up.clone(),
+        ),
     ];
     for (ax, ay) in [(0.1, 0.5), (0.6, 0.05), (1.0, 1.0)] {
         let alpha = Vec2::new(ax, ay);
@@ -1216,6 +1226,73 @@ fn passive_lobes_never_create_energy() {
         }
     }
     assert!(failures.is_empty(), "{failures:#?}");
+}
+
+/// EON keeps a white surface white at every roughness (its Fujii albedo and average in
+/// closed form against this Monte Carlo integral of the lobe), reflects less than its
+/// colour otherwise, is reciprocal, and is Lambert at roughness 0.
+#[test]
+fn rough_diffuse_keeps_its_energy_and_is_lambert_when_smooth() {
+    let mut failures = Vec::new();
+    for (i, sigma) in [0.3f32, 0.7, 1.0].into_iter().enumerate() {
+        let white = Lobe::from(RoughDiffuse {
+            color: Vec3A::ONE,
+            weight: 1.0,
+            roughness: sigma,
+        });
+        for (k, wo) in furnace_dirs().into_iter().enumerate() {
+            let e = lobe_energy(&white, wo, 100_000, (10 * i + k) as u64);
+            println!(
+                "white EON σ {sigma}, θo {:.0}°: {:.4}",
+                wo.z.acos().to_degrees(),
+                e.0
+            );
+            if !within(e, 1.0, 1.0) {
+                failures.push(format!("white σ {sigma} wo {wo}: {e:?}"));
+            }
+            let grey = Lobe::from(RoughDiffuse {
+                color: Vec3A::splat(0.5),
+                weight: 1.0,
+                roughness: sigma,
+            });
+            let e = lobe_energy(&grey, wo, 100_000, (10 * i + k) as u64);
+            if !within(e, 0.0, 0.5) {
+                failures.push(format!("grey σ {sigma} wo {wo}: {e:?}"));
+            }
+        }
+    }
+    assert!(failures.is_empty(), "{failures:#?}");
+    let mut rng = Rng::for_sample(29, 0, 0);
+    let rough = Lobe::from(RoughDiffuse {
+        color: Vec3A::new(0.9, 0.4, 0.1),
+        weight: 0.8,
+        roughness: 0.6,
+    });
+    let smooth = Lobe::from(RoughDiffuse {
+        color: Vec3A::new(0.9, 0.4, 0.1),
+        weight: 0.8,
+        roughness: 0.0,
+    });
+    let lambert = Lobe::from(Lambert {
+        albedo: Vec3A::new(0.9, 0.4, 0.1) * 0.8,
+    });
+    for _ in 0..500 {
+        let mut wo = uniform_sphere(rng.next_2d());
+        let mut wi = uniform_sphere(rng.next_2d());
+        wo.z = wo.z.abs();
+        wi.z = wi.z.abs();
+        let a = rough.eval(0, wo, wi, 1.0).0 / wi.z;
+        let b = rough.eval(0, wi, wo, 1.0).0 / wo.z;
+        assert!(
+            (a - b).abs().max_element() <= 1e-4 * a.max_element().max(1e-6),
+            "{wo} {wi}: {a} vs {b}"
+        );
+        let (s, l) = (smooth.eval(0, wo, wi, 1.0), lambert.eval(0, wo, wi, 1.0));
+        assert!(
+            (s.0 - l.0).abs().max_element() <= 1e-5 && s.1 == l.1,
+            "{wo} {wi}: {s:?} vs {l:?}"
+        );
+    }
 }
 
 #[test]
