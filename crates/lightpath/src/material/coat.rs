@@ -11,8 +11,9 @@ use lpe::Scatter;
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Coat {
     pub eta: f32,
-    /// GGX alpha; 0 is a smooth coat.
-    pub alpha: f32,
+    /// GGX alphas along the shading frame's tangent and bitangent (OpenPBR's
+    /// `coat_roughness_anisotropy` stretches them as the specular's); zero is a smooth coat.
+    pub alpha: Vec2,
     /// How much of the surface the coat covers, in [0, 1].
     pub weight: f32,
 }
@@ -29,17 +30,17 @@ impl LobeModel for Coat {
     fn tags(&self) -> &'static [LobeTag] {
         const SMOOTH: [LobeTag; 1] = [tag(false, Scatter::specular(4), true)];
         const ROUGH: [LobeTag; 1] = [tag(false, Scatter::specular(4), false)];
-        if self.alpha == 0.0 {
+        if self.alpha == Vec2::ZERO {
             &SMOOTH
         } else {
             &ROUGH
         }
     }
     fn eval(&self, _: usize, wo: Vec3A, wi: Vec3A, sel: f32) -> (Vec3A, f32) {
-        if self.alpha == 0.0 || wo.z <= 0.0 || wi.z <= 0.0 {
+        if self.alpha == Vec2::ZERO || wo.z <= 0.0 || wi.z <= 0.0 {
             return (Vec3A::ZERO, 0.0);
         }
-        let g = Ggx::isotropic(self.alpha);
+        let g = Ggx::new(self.alpha);
         let m = (wo + wi).normalize();
         let f = self.weight * fresnel_dielectric(wi.dot(m), self.eta) * g.d(m) * g.g(wo, wi)
             / (4.0 * wo.z);
@@ -52,7 +53,7 @@ impl LobeModel for Coat {
         if wo.z <= 0.0 {
             return None;
         }
-        if self.alpha == 0.0 {
+        if self.alpha == Vec2::ZERO {
             let f = self.weight * fresnel_dielectric(wo.z, self.eta);
             return Some(LobeSample {
                 sub: 0,
@@ -61,7 +62,7 @@ impl LobeModel for Coat {
                 value: Some((Vec3A::splat(f / ctx.sel), ctx.sel, true)),
             });
         }
-        let m = Ggx::isotropic(self.alpha).sample_visible(wo, u);
+        let m = Ggx::new(self.alpha).sample_visible(wo, u);
         let wi = reflect(wo, m);
         if wi.z <= 0.0 {
             return None;

@@ -274,7 +274,7 @@ impl Bsdf {
             &[Lambert { albedo }.into()],
             Some(Coat {
                 eta,
-                alpha,
+                alpha: Vec2::splat(alpha),
                 weight: 1.0,
             }),
             albedo,

@@ -26,8 +26,8 @@ use super::layer::Layer;
 use super::lobe::Lobe;
 use super::microfacet::roughness_anisotropy_to_alpha;
 use super::{
-    roughness_to_alpha, Bsdf, Coat, Conductor, Dielectric, DiffuseTransmission, Fuzz, Lambert,
-    RoughDiffuse, Specular, Subsurface,
+    Bsdf, Coat, Conductor, Dielectric, DiffuseTransmission, Fuzz, Lambert, RoughDiffuse, Specular,
+    Subsurface,
 };
 use glam::Vec3A;
 
@@ -361,7 +361,7 @@ fn push_layers(b: &mut BsdfBuilder, p: &OpenPbr, set: &LobeSet) {
         let below = b.len();
         let coat = Coat {
             eta: p.coat_ior.max(1.0),
-            alpha: roughness_to_alpha(p.coat_roughness),
+            alpha: roughness_anisotropy_to_alpha(p.coat_roughness, p.coat_roughness_anisotropy),
             weight: p.coat_weight.clamp(0.0, 1.0),
         };
         let base_albedo = crate::light::luminance(p.base_color * base_w);

@@ -14,7 +14,7 @@
 //! dielectric lobe alone); partial transmission is not blended.
 
 use super::{Bsdf, Coat, Conductor, Dielectric, Lambert};
-use glam::Vec3A;
+use glam::{Vec2, Vec3A};
 
 /// Roughness below which a textured material's lobes stay rough (their events must not
 /// change from hit to hit): GGX alpha never goes under this square.
@@ -48,7 +48,7 @@ impl Bsdf {
         let base = p.base.clamp(Vec3A::ZERO, Vec3A::ONE);
         let coat = (p.clearcoat > 0.0).then_some(Coat {
             eta: 1.5,
-            alpha: p.clearcoat_alpha,
+            alpha: Vec2::splat(p.clearcoat_alpha),
             weight: p.clearcoat.min(1.0),
         });
         if p.glass {

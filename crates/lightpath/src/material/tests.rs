@@ -231,7 +231,7 @@ fn rough_lobe_cases() -> Vec<(String, Lobe, Vec<Vec3A>)> {
             format!("coat alpha {alpha}"),
             Coat {
                 eta: 1.5,
-                alpha,
+                alpha: Vec2::splat(alpha),
                 weight: 1.0,
             }
             .into(),
@@ -241,8 +241,18 @@ fn rough_lobe_cases() -> Vec<(String, Lobe, Vec<Vec3A>)> {
             format!("half coat alpha {alpha}"),
             Coat {
                 eta: 1.5,
-                alpha,
+                alpha: Vec2::splat(alpha),
                 weight: 0.5,
+            }
+            .into(),
+            up.clone(),
+        ));
+        cases.push((
+            format!("anisotropic coat alpha {alpha}"),
+            Coat {
+                eta: 1.5,
+                alpha: Vec2::new(alpha, 0.3 * alpha),
+                weight: 1.0,
             }
             .into(),
             up.clone(),
@@ -530,7 +540,7 @@ fn chi2_sampled_directions_follow_each_material_pdf() {
                 ],
                 Some(Coat {
                     eta: 1.5,
-                    alpha: 0.3,
+                    alpha: Vec2::splat(0.3),
                     weight: 1.0,
                 }),
                 Vec3A::splat(0.5),
@@ -670,7 +680,7 @@ fn smooth_lobes_reflect_their_fresnel_and_glass_conserves_energy() {
 
         let coat = Lobe::from(Coat {
             eta: 1.5,
-            alpha: 0.0,
+            alpha: Vec2::ZERO,
             weight: 1.0,
         });
         let want = (fresnel_dielectric(wo.z, 1.5) as f64, 0.0);
