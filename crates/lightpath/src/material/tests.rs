@@ -138,16 +138,16 @@ pub(super) fn dir(theta_deg: f32, phi_deg: f32) -> Vec3A {
 
 /// Every non-delta lobe kind at several roughnesses, with the outgoing directions to
 /// test (glass also from inside).
-fn rough_lobe_cases() -> Vec<(String, Lobe, Vec<Vec3A>)> {
-    let up = vec![dir(10.0, 0.0), dir(50.0, 30.0), dir(80.0, 200.0)];
-    let mut cases: Vec<(String, Lobe, Vec<Vec3A>)> = vec![
+/// The diffuse lobes' cases of [`rough_lobe_cases`].
+fn diffuse_lobe_cases(up: &[Vec3A]) -> Vec<(String, Lobe, Vec<Vec3A>)> {
+    vec![
         (
             "lambert".into(),
             Lambert {
                 albedo: Vec3A::new(0.8, 0.5, 0.2),
             }
             .into(),
-            up.clone(),
+            up.to_vec(),
         ),
         (
             "diffuse transmission".into(),
@@ -155,7 +155,7 @@ fn rough_lobe_cases() -> Vec<(String, Lobe, Vec<Vec3A>)> {
                 transmit: Vec3A::new(0.3, 0.6, 0.4),
             }
             .into(),
-            up.clone(),
+            up.to_vec(),
         ),
         (
             "rough diffuse (EON)".into(),
@@ -165,9 +165,14 @@ fn rough_lobe_cases() -> Vec<(String, Lobe, Vec<Vec3A>)> {
                 roughness: 0.7,
             }
             .into(),
-            up.clone(),
+            up.to_vec(),
         ),
-    ];
+    ]
+}
+
+fn rough_lobe_cases() -> Vec<(String, Lobe, Vec<Vec3A>)> {
+    let up = vec![dir(10.0, 0.0), dir(50.0, 30.0), dir(80.0, 200.0)];
+    let mut cases = diffuse_lobe_cases(&up);
     for (ax, ay) in [(0.1, 0.5), (0.6, 0.05), (1.0, 1.0)] {
         let alpha = Vec2::new(ax, ay);
         cases.push((
