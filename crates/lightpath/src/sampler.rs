@@ -291,6 +291,27 @@ impl Source {
     }
 }
 
+impl Source {
+    /// `dim`'s source if `dim + 1` reads the next lane of the same set of numbers.
+    fn pair(dim: u32) -> Option<Source> {
+        match (Source::of(dim), Source::of(dim + 1)) {
+            (
+                Source::Padded { sequence, lane },
+                Source::Padded {
+                    sequence: s,
+                    lane: l,
+                },
+            ) if s == sequence && l == lane + 1 => Some(Source::Padded { sequence, lane }),
+            (Source::Direction(k), Source::Direction(j))
+                if j == k + 1 && k % 4 != 3 && j < SOBOL_DIMENSIONS =>
+            {
+                Some(Source::Direction(k))
+            }
+            _ => None,
+        }
+    }
+}
+
 /// Layout dimensions whose `Source` `SobolTables` keeps (those of the first 128
 /// bounces); deeper ones are worked out on each call.
 const TABLED_DIMENSIONS: u32 = dim::bounce(128);
@@ -344,6 +365,10 @@ pub struct SobolTables {
     /// Each layout dimension's source, below `TABLED_DIMENSIONS` (one load instead of
     /// a division and a match per number).
     sources: Vec<Source>,
+    /// Per layout dimension below `TABLED_DIMENSIONS`, its source if the next dimension
+    /// is the next lane of the same set (every 2D pair of the layout: filter, lens,
+    /// light point, direction), so that `get_2d` looks up and checks its set once.
+    pairs: Vec<Option<Source>>,
     /// Whether the CPU has SSE4.1 (`scrambled_numbers`).
     sse41: bool,
 }
@@ -363,6 +388,7 @@ impl SobolTables {
                 })
                 .collect(),
             sources: (0..TABLED_DIMENSIONS).map(Source::of).collect(),
+            pairs: (0..TABLED_DIMENSIONS).map(Source::pair).collect(),
             #[cfg(target_arch = "x86_64")]
             sse41: is_x86_feature_detected!("sse4.1"),
             #[cfg(not(target_arch = "x86_64"))]
@@ -480,9 +506,9 @@ impl PixelSampler for SobolPixel {
 }
 
 impl SobolSampler<'_> {
-    /// Number `lane` (0–3) of padded sequence `sequence`: its first dimension set.
+    /// The four numbers of padded sequence `sequence`: its first dimension set.
     #[inline(always)]
-    fn padded(&mut self, sequence: u32, lane: u8) -> f32 {
+    fn padded(&mut self, sequence: u32) -> &[f32; 4] {
         if self.sequence != sequence {
             self.sequence = sequence;
             let h = self.pixel.hashes(sequence);
@@ -490,7 +516,21 @@ impl SobolSampler<'_> {
             let sobol = self.pixel.tables.sobol_rev(index_rev, 0);
             self.cached = scrambled_numbers(sobol, h.scramble, self.pixel.tables.sse41);
         }
-        self.cached[lane as usize]
+        &self.cached
+    }
+
+    /// The four numbers of the directions sequence's dimension set `set` (below
+    /// `SOBOL_DIMENSIONS / 4`).
+    #[inline(always)]
+    fn directions(&mut self, set: u32) -> &[f32; 4] {
+        if set != self.directions_set {
+            self.directions_set = set;
+            let set = set as usize;
+            let sobol = self.pixel.tables.sobol_rev(self.directions_index, set);
+            let scramble = self.pixel.directions_scramble(set);
+            self.directions = scrambled_numbers(sobol, scramble, self.pixel.tables.sse41);
+        }
+        &self.directions
     }
 
     /// Dimension `k` of the directions sequence.
@@ -500,15 +540,7 @@ impl SobolSampler<'_> {
             let h = splitmix64(self.hash ^ (k as u64).wrapping_mul(0x9e37_79b9_7f4a_7c15));
             return (h >> 40) as f32 * (1.0 / (1u32 << 24) as f32);
         }
-        let set = k / 4;
-        if set != self.directions_set {
-            self.directions_set = set;
-            let set = set as usize;
-            let sobol = self.pixel.tables.sobol_rev(self.directions_index, set);
-            let scramble = self.pixel.directions_scramble(set);
-            self.directions = scrambled_numbers(sobol, scramble, self.pixel.tables.sse41);
-        }
-        self.directions[(k % 4) as usize]
+        self.directions(k / 4)[(k % 4) as usize]
     }
 
     /// Layout dimension `dim`, from the sequence and dimension `SobolPixel`'s table gives
@@ -520,9 +552,23 @@ impl SobolSampler<'_> {
             None => Source::of(dim),
         };
         match source {
-            Source::Padded { sequence, lane } => self.padded(sequence, lane),
+            Source::Padded { sequence, lane } => self.padded(sequence)[lane as usize],
             Source::Direction(k) => self.direction(k),
         }
+    }
+
+    /// Layout dimensions `dim` and `dim + 1`: from one set with one lookup where they
+    /// are adjacent lanes of it (`SobolTables::pairs`), else one by one.
+    #[inline(always)]
+    fn pair(&mut self, dim: u32) -> Vec2 {
+        let (lanes, i) = match self.pixel.tables.pairs.get(dim as usize) {
+            Some(&Some(Source::Padded { sequence, lane })) => {
+                (self.padded(sequence), lane as usize)
+            }
+            Some(&Some(Source::Direction(k))) => (self.directions(k / 4), (k % 4) as usize),
+            _ => return Vec2::new(self.value(dim), self.value(dim + 1)),
+        };
+        Vec2::new(lanes[i], lanes[i + 1])
     }
 }
 
@@ -590,7 +636,7 @@ impl Sampler for SobolSampler<'_> {
 
     #[inline(always)]
     fn get_2d(&mut self, dim: u32) -> Vec2 {
-        Vec2::new(self.value(dim), self.value(dim + 1))
+        self.pair(dim)
     }
 }
 
@@ -806,6 +852,22 @@ mod tests {
                     }
                 }
                 assert!(compared > dims as usize, "most dimensions are Sobol");
+            }
+        }
+    }
+
+    /// `get_2d` reads each pair from one set where it can (`SobolTables::pairs`): the
+    /// same numbers as two `get_1d`, for every layout dimension, the tabled and the
+    /// deeper ones, inside and past the directions sequence's dimensions.
+    #[test]
+    fn sobol_pairs_are_their_two_numbers() {
+        let mut px = SobolPixel::new(11, 3);
+        for sample in [0u64, 5, 1000] {
+            for dim in 0..dim::bounce(140) {
+                let pair = px.sample(sample).get_2d(dim);
+                let mut s = px.sample(sample);
+                let (x, y) = (s.get_1d(dim), s.get_1d(dim + 1));
+                assert_eq!((pair.x, pair.y), (x, y), "sample {sample} dim {dim}");
             }
         }
     }
