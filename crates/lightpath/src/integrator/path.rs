@@ -389,7 +389,7 @@ impl Tracer<'_> {
                 scatters: path.depth + 1,
                 part: self.default_part,
             };
-            self.contribute(out, s2, path.throughput, value, 1.0, origin);
+            self.contribute_inlined(out, s2, path.throughput, value, 1.0, origin);
         }
     }
 

@@ -198,6 +198,24 @@ impl Tracer<'_> {
         mis: f32,
         origin: Origin,
     ) {
+        self.contribute_inlined(out, state, throughput, local, mis, origin)
+    }
+
+    /// `contribute`, inlined: where the caller's `Via` and weight are constants (a data
+    /// lobe's), the way's row and the weighted values fold away. Through the call a data
+    /// lobe's contribution cost ~150 instructions, inlined ~75 fewer (indirect box with
+    /// the standard AOVs, whose albedo, normal and depth are three per camera path:
+    /// 8.6 % of the render's instructions before, 5.9 % after; callgrind).
+    #[inline(always)]
+    pub(super) fn contribute_inlined(
+        &self,
+        out: &mut Sink,
+        state: StateId,
+        throughput: Vec3A,
+        local: Vec3A,
+        mis: f32,
+        origin: Origin,
+    ) {
         if self.learn {
             // A training pass keeps only what its path records for the guide; its film
             // is thrown away (guided.rs, `train`), so nothing is routed to AOVs.
