@@ -328,8 +328,10 @@ const CACHED_SEQUENCES: usize = 64;
 /// The numbers of one camera sample of a [`SobolPixel`].
 pub struct SobolSampler<'p> {
     pixel: &'p mut SobolPixel,
-    /// Seed, pixel and sample hashed, for the dimensions past the crate's.
-    hash: u64,
+    /// The sample's number, hashed with the seed and pixel for the dimensions past the
+    /// crate's only when a path gets there (past 128 bounces: hardly ever, so not per
+    /// sample).
+    sample: u64,
     /// The index with its bits reversed, before any sequence's shuffle.
     index_rev: u32,
     /// The padded sequence whose four numbers are in `cached` (`u32::MAX`: none yet).
@@ -508,7 +510,7 @@ impl PixelSampler for SobolPixel {
         let index_rev = ((sample & 0xffff) as u32).reverse_bits();
         SobolSampler {
             index_rev,
-            hash: splitmix64(self.block_hash ^ sample),
+            sample,
             directions_index: parts::owen_scramble_rev(index_rev, self.directions_shuffle),
             pixel: self,
             sequence: u32::MAX,
@@ -552,7 +554,8 @@ impl SobolSampler<'_> {
     #[inline(always)]
     fn direction(&mut self, k: u32) -> f32 {
         if k >= SOBOL_DIMENSIONS {
-            let h = splitmix64(self.hash ^ (k as u64).wrapping_mul(0x9e37_79b9_7f4a_7c15));
+            let hash = splitmix64(self.pixel.block_hash ^ self.sample);
+            let h = splitmix64(hash ^ (k as u64).wrapping_mul(0x9e37_79b9_7f4a_7c15));
             return (h >> 40) as f32 * (1.0 / (1u32 << 24) as f32);
         }
         self.directions(k / 4)[(k % 4) as usize]
