@@ -291,6 +291,27 @@ impl Source {
     }
 }
 
+impl Source {
+    /// `dim`'s source if `dim + 1` reads the next lane of the same set of numbers.
+    fn pair(dim: u32) -> Option<Source> {
+        match (Source::of(dim), Source::of(dim + 1)) {
+            (
+                Source::Padded { sequence, lane },
+                Source::Padded {
+                    sequence: s,
+                    lane: l,
+                },
+            ) if s == sequence && l == lane + 1 => Some(Source::Padded { sequence, lane }),
+            (Source::Direction(k), Source::Direction(j))
+                if j == k + 1 && k % 4 != 3 && j < SOBOL_DIMENSIONS =>
+            {
+                Some(Source::Direction(k))
+            }
+            _ => None,
+        }
+    }
+}
+
 /// Layout dimensions whose `Source` `SobolTables` keeps (those of the first 128
 /// bounces); deeper ones are worked out on each call.
 const TABLED_DIMENSIONS: u32 = dim::bounce(128);
@@ -307,8 +328,10 @@ const CACHED_SEQUENCES: usize = 64;
 /// The numbers of one camera sample of a [`SobolPixel`].
 pub struct SobolSampler<'p> {
     pixel: &'p mut SobolPixel,
-    /// Seed, pixel and sample hashed, for the dimensions past the crate's.
-    hash: u64,
+    /// The sample's number, hashed with the seed and pixel for the dimensions past the
+    /// crate's only when a path gets there (past 128 bounces: hardly ever, so not per
+    /// sample).
+    sample: u64,
     /// The index with its bits reversed, before any sequence's shuffle.
     index_rev: u32,
     /// The padded sequence whose four numbers are in `cached` (`u32::MAX`: none yet).
@@ -344,6 +367,10 @@ pub struct SobolTables {
     /// Each layout dimension's source, below `TABLED_DIMENSIONS` (one load instead of
     /// a division and a match per number).
     sources: Vec<Source>,
+    /// Per layout dimension below `TABLED_DIMENSIONS`, its source if the next dimension
+    /// is the next lane of the same set (every 2D pair of the layout: filter, lens,
+    /// light point, direction), so that `get_2d` looks up and checks its set once.
+    pairs: Vec<Option<Source>>,
     /// Whether the CPU has SSE4.1 (`scrambled_numbers`).
     sse41: bool,
 }
@@ -363,6 +390,7 @@ impl SobolTables {
                 })
                 .collect(),
             sources: (0..TABLED_DIMENSIONS).map(Source::of).collect(),
+            pairs: (0..TABLED_DIMENSIONS).map(Source::pair).collect(),
             #[cfg(target_arch = "x86_64")]
             sse41: is_x86_feature_detected!("sse4.1"),
             #[cfg(not(target_arch = "x86_64"))]
@@ -379,6 +407,20 @@ impl SobolTables {
             ^ Int4::from(t[1][(index_rev >> 24 & 15) as usize])
             ^ Int4::from(t[2][(index_rev >> 20 & 15) as usize])
             ^ Int4::from(t[3][(index_rev >> 16 & 15) as usize])
+    }
+
+    /// Set `set`'s four numbers for reversed index `index_rev` under Owen scramble
+    /// `scramble`: `scrambled_numbers` of `sobol_rev`. With SSE4.1 the table rows are
+    /// loaded inside the one call (`numbers_sse41`): the point stays in a register
+    /// instead of going through memory into the call.
+    #[inline(always)]
+    fn numbers(&self, index_rev: u32, set: usize, scramble: Int4) -> [f32; 4] {
+        #[cfg(target_arch = "x86_64")]
+        if self.sse41 {
+            // SAFETY: `sse41` is `is_x86_feature_detected!("sse4.1")`.
+            return unsafe { numbers_sse41(&self.sets[set], index_rev, scramble.into()) };
+        }
+        scrambled_numbers(self.sobol_rev(index_rev, set), scramble, false)
     }
 }
 
@@ -468,7 +510,7 @@ impl PixelSampler for SobolPixel {
         let index_rev = ((sample & 0xffff) as u32).reverse_bits();
         SobolSampler {
             index_rev,
-            hash: splitmix64(self.block_hash ^ sample),
+            sample,
             directions_index: parts::owen_scramble_rev(index_rev, self.directions_shuffle),
             pixel: self,
             sequence: u32::MAX,
@@ -480,35 +522,43 @@ impl PixelSampler for SobolPixel {
 }
 
 impl SobolSampler<'_> {
-    /// Number `lane` (0–3) of padded sequence `sequence`: its first dimension set.
+    /// The four numbers of padded sequence `sequence`: its first dimension set.
     #[inline(always)]
-    fn padded(&mut self, sequence: u32, lane: u8) -> f32 {
+    fn padded(&mut self, sequence: u32) -> &[f32; 4] {
         if self.sequence != sequence {
             self.sequence = sequence;
             let h = self.pixel.hashes(sequence);
             let index_rev = parts::owen_scramble_rev(self.index_rev, h.shuffle);
-            let sobol = self.pixel.tables.sobol_rev(index_rev, 0);
-            self.cached = scrambled_numbers(sobol, h.scramble, self.pixel.tables.sse41);
+            self.cached = self.pixel.tables.numbers(index_rev, 0, h.scramble);
         }
-        self.cached[lane as usize]
+        &self.cached
+    }
+
+    /// The four numbers of the directions sequence's dimension set `set` (below
+    /// `SOBOL_DIMENSIONS / 4`).
+    #[inline(always)]
+    fn directions(&mut self, set: u32) -> &[f32; 4] {
+        if set != self.directions_set {
+            self.directions_set = set;
+            let set = set as usize;
+            let scramble = self.pixel.directions_scramble(set);
+            self.directions = self
+                .pixel
+                .tables
+                .numbers(self.directions_index, set, scramble);
+        }
+        &self.directions
     }
 
     /// Dimension `k` of the directions sequence.
     #[inline(always)]
     fn direction(&mut self, k: u32) -> f32 {
         if k >= SOBOL_DIMENSIONS {
-            let h = splitmix64(self.hash ^ (k as u64).wrapping_mul(0x9e37_79b9_7f4a_7c15));
+            let hash = splitmix64(self.pixel.block_hash ^ self.sample);
+            let h = splitmix64(hash ^ (k as u64).wrapping_mul(0x9e37_79b9_7f4a_7c15));
             return (h >> 40) as f32 * (1.0 / (1u32 << 24) as f32);
         }
-        let set = k / 4;
-        if set != self.directions_set {
-            self.directions_set = set;
-            let set = set as usize;
-            let sobol = self.pixel.tables.sobol_rev(self.directions_index, set);
-            let scramble = self.pixel.directions_scramble(set);
-            self.directions = scrambled_numbers(sobol, scramble, self.pixel.tables.sse41);
-        }
-        self.directions[(k % 4) as usize]
+        self.directions(k / 4)[(k % 4) as usize]
     }
 
     /// Layout dimension `dim`, from the sequence and dimension `SobolPixel`'s table gives
@@ -520,9 +570,23 @@ impl SobolSampler<'_> {
             None => Source::of(dim),
         };
         match source {
-            Source::Padded { sequence, lane } => self.padded(sequence, lane),
+            Source::Padded { sequence, lane } => self.padded(sequence)[lane as usize],
             Source::Direction(k) => self.direction(k),
         }
+    }
+
+    /// Layout dimensions `dim` and `dim + 1`: from one set with one lookup where they
+    /// are adjacent lanes of it (`SobolTables::pairs`), else one by one.
+    #[inline(always)]
+    fn pair(&mut self, dim: u32) -> Vec2 {
+        let (lanes, i) = match self.pixel.tables.pairs.get(dim as usize) {
+            Some(&Some(Source::Padded { sequence, lane })) => {
+                (self.padded(sequence), lane as usize)
+            }
+            Some(&Some(Source::Direction(k))) => (self.directions(k / 4), (k % 4) as usize),
+            _ => return Vec2::new(self.value(dim), self.value(dim + 1)),
+        };
+        Vec2::new(lanes[i], lanes[i + 1])
     }
 }
 
@@ -549,14 +613,40 @@ fn scrambled_numbers(sobol: Int4, scramble: Int4, sse41: bool) -> [f32; 4] {
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "sse4.1")]
 fn scrambled_numbers_sse41(sobol: [u32; 4], scramble: [u32; 4]) -> [f32; 4] {
-    use std::arch::x86_64::*;
+    use std::arch::x86_64::__m128i;
     // SAFETY: `[u32; 4]` and `__m128i` are the same 16 bytes; any bits are valid.
-    let (mut n, s) = unsafe {
+    let (n, s) = unsafe {
         (
             std::mem::transmute::<[u32; 4], __m128i>(sobol),
             std::mem::transmute::<[u32; 4], __m128i>(scramble),
         )
     };
+    scrambled_sse41(n, s)
+}
+
+/// `SobolTables::numbers` with SSE4.1: the Sobol point's four table rows (`sobol_rev`)
+/// loaded and XORed in a register, then `scrambled_sse41`.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "sse4.1")]
+fn numbers_sse41(table: &[[[u32; 4]; 16]; 4], index_rev: u32, scramble: [u32; 4]) -> [f32; 4] {
+    use std::arch::x86_64::*;
+    let row = |q: usize| {
+        let r = &table[q][(index_rev >> (28 - 4 * q) & 15) as usize];
+        // SAFETY: `r` is 16 readable bytes; an unaligned load takes any address.
+        unsafe { _mm_loadu_si128(r.as_ptr().cast()) }
+    };
+    let sobol = _mm_xor_si128(_mm_xor_si128(row(0), row(1)), _mm_xor_si128(row(2), row(3)));
+    // SAFETY: as `row`'s.
+    let s = unsafe { _mm_loadu_si128(scramble.as_ptr().cast()) };
+    scrambled_sse41(sobol, s)
+}
+
+/// `scrambled_numbers_sse41` on registers.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "sse4.1")]
+#[inline]
+fn scrambled_sse41(mut n: std::arch::x86_64::__m128i, s: std::arch::x86_64::__m128i) -> [f32; 4] {
+    use std::arch::x86_64::*;
     // parts::owen_scramble_int4_rev.
     n = _mm_xor_si128(n, _mm_mullo_epi32(n, _mm_set1_epi32(0x3d20_adea)));
     n = _mm_add_epi32(n, s);
@@ -578,7 +668,7 @@ fn scrambled_numbers_sse41(sobol: [u32; 4], scramble: [u32; 4]) -> [f32; 4] {
     // parts' to_f32_norm: the top 23 bits as a float in [1, 2), minus one.
     let one_to_two = _mm_or_si128(_mm_srli_epi32(n, 9), _mm_set1_epi32(0x3f80_0000));
     let x = _mm_sub_ps(_mm_castsi128_ps(one_to_two), _mm_set1_ps(1.0));
-    // SAFETY: as above.
+    // SAFETY: `__m128` and `[f32; 4]` are the same 16 bytes; any bits are valid.
     unsafe { std::mem::transmute::<__m128, [f32; 4]>(x) }
 }
 
@@ -590,7 +680,7 @@ impl Sampler for SobolSampler<'_> {
 
     #[inline(always)]
     fn get_2d(&mut self, dim: u32) -> Vec2 {
-        Vec2::new(self.value(dim), self.value(dim + 1))
+        self.pair(dim)
     }
 }
 
@@ -806,6 +896,22 @@ mod tests {
                     }
                 }
                 assert!(compared > dims as usize, "most dimensions are Sobol");
+            }
+        }
+    }
+
+    /// `get_2d` reads each pair from one set where it can (`SobolTables::pairs`): the
+    /// same numbers as two `get_1d`, for every layout dimension, the tabled and the
+    /// deeper ones, inside and past the directions sequence's dimensions.
+    #[test]
+    fn sobol_pairs_are_their_two_numbers() {
+        let mut px = SobolPixel::new(11, 3);
+        for sample in [0u64, 5, 1000] {
+            for dim in 0..dim::bounce(140) {
+                let pair = px.sample(sample).get_2d(dim);
+                let mut s = px.sample(sample);
+                let (x, y) = (s.get_1d(dim), s.get_1d(dim + 1));
+                assert_eq!((pair.x, pair.y), (x, y), "sample {sample} dim {dim}");
             }
         }
     }

@@ -69,10 +69,13 @@ impl Tracer<'_> {
     /// Whether light `light` lights surfaces of `object` (`u32::MAX`: the camera).
     #[inline]
     pub(super) fn lit(&self, object: u32, light: u32) -> bool {
-        object == u32::MAX
-            || !self.scene.objects[object as usize]
-                .unlit_by
-                .contains(&light)
+        // Most objects are lit by every light: the empty list is tested first, as
+        // `contains`' vectorised search took ~30 instructions to find nothing in it
+        // (twice per scattering vertex).
+        object == u32::MAX || {
+            let unlit = &self.scene.objects[object as usize].unlit_by;
+            unlit.is_empty() || !unlit.contains(&light)
+        }
     }
 
     /// Whether `object` casts no shadow from light `light` (shadow linking).

@@ -136,9 +136,9 @@ pub(super) fn take(unoccluded: bool, shadows: bool, via: Via) -> Take {
 #[derive(Clone, Copy, Debug, Default)]
 pub(super) struct Route {
     /// What the rule takes of a contribution, by `Via::index`, outside holdouts (row 0)
-    /// and inside (row 1): a lookup instead of the prefix logic per rule.
-    take: [[Take; Via::COUNT]; 2],
-    nothruput: bool,
+    /// and inside (row 1), with `nothruput` folded in: which of its four values
+    /// (`Route::value_index`), or `SKIP`. One lookup instead of the prefix logic per rule.
+    pick: [[u8; Via::COUNT]; 2],
     overwrite: bool,
     noclamp: bool,
     noinfinitecheck: bool,
@@ -164,9 +164,9 @@ impl Route {
                 }
             })
         };
+        let nothruput = a.flags.contains(Prefix::NoThruput);
         Route {
-            take: [row(false), row(true)],
-            nothruput: a.flags.contains(Prefix::NoThruput),
+            pick: [row(false), row(true)].map(|row| row.map(|t| Route::value_index(nothruput, t))),
             overwrite: a.flags.contains(Prefix::Overwrite),
             noclamp: a.flags.contains(Prefix::NoClamp),
             noinfinitecheck: a.flags.contains(Prefix::NoInfiniteCheck),
@@ -174,7 +174,19 @@ impl Route {
             split_parts: scene.light_groups.len() as u32 + 1,
         }
     }
+
+    /// Where in `[local, local × mis, full, full × mis]` (`contribute`'s values, `full`
+    /// with the throughput) a rule with `nothruput` that takes `take` finds its value.
+    fn value_index(nothruput: bool, take: Take) -> u8 {
+        match take {
+            Take::Skip => SKIP,
+            Take::Whole | Take::Weighted => 2 * !nothruput as u8 + (take == Take::Weighted) as u8,
+        }
+    }
 }
+
+/// `Route::pick`'s "takes nothing".
+const SKIP: u8 = u8::MAX;
 
 /// What one contribution carries besides its value.
 #[derive(Clone, Copy)]
@@ -190,6 +202,24 @@ impl Tracer<'_> {
     /// Adds `throughput × local × weight` to every AOV whose rule accepts `state`.
     #[inline]
     pub(super) fn contribute(
+        &self,
+        out: &mut Sink,
+        state: StateId,
+        throughput: Vec3A,
+        local: Vec3A,
+        mis: f32,
+        origin: Origin,
+    ) {
+        self.contribute_inlined(out, state, throughput, local, mis, origin)
+    }
+
+    /// `contribute`, inlined: where the caller's `Via` and weight are constants (a data
+    /// lobe's), the way's row and the weighted values fold away. Through the call a data
+    /// lobe's contribution cost ~150 instructions, inlined ~75 fewer (indirect box with
+    /// the standard AOVs, whose albedo, normal and depth are three per camera path:
+    /// 8.6 % of the render's instructions before, 5.9 % after; callgrind).
+    #[inline(always)]
+    pub(super) fn contribute_inlined(
         &self,
         out: &mut Sink,
         state: StateId,
@@ -224,26 +254,24 @@ impl Tracer<'_> {
         let mut dropped = false;
         let takes = out.holdout as usize;
         let case = origin.via.index();
-        // The four values a rule can take: with or without the throughput, whole or
-        // weighted.
+        // The four values a rule can take: without or with the throughput, whole or
+        // weighted (`Route::value_index`).
         let full = throughput * local;
-        let values = [[local, local * mis], [full, full * mis]];
-        // Data (`overwrite`) AOVs take emission as its colour, no channel above 1: an
-        // emitter's albedo is its base colour, not its radiance.
-        let data_scale = match origin.via {
-            Via::Hit { .. } | Via::Glow => 1.0 / local.max_element().max(1.0),
-            _ => 1.0,
-        };
+        let values = [local, local * mis, full, full * mis];
         for rule in rules {
             let k = rule.0 as usize;
             let r = &self.routes[k];
-            let take = r.take[takes][case];
-            if take == Take::Skip {
+            let pick = r.pick[takes][case];
+            if pick == SKIP {
                 continue;
             }
-            let mut v = values[!r.nothruput as usize][(take == Take::Weighted) as usize];
+            let mut v = values[pick as usize & 3];
             if r.overwrite {
-                v *= data_scale;
+                // Data (`overwrite`) AOVs take emission as its colour, no channel above
+                // 1: an emitter's albedo is its base colour, not its radiance.
+                if let Via::Hit { .. } | Via::Glow = origin.via {
+                    v *= 1.0 / local.max_element().max(1.0);
+                }
             }
             if !r.noinfinitecheck && !v.is_finite() {
                 dropped = true;
@@ -285,6 +313,30 @@ mod tests {
     fn every_via_has_its_own_row() {
         for (i, via) in Via::ALL.iter().enumerate() {
             assert_eq!(via.index(), i, "{via:?}");
+        }
+    }
+
+    /// `pick` is `take` with `nothruput` folded in: the value a rule finds is the one
+    /// `take` and `nothruput` name, for every way and prefix.
+    #[test]
+    fn picks_name_the_value_take_and_nothruput_give() {
+        for nothruput in [false, true] {
+            for unoccluded in [false, true] {
+                for shadows in [false, true] {
+                    for via in Via::ALL {
+                        let t = take(unoccluded, shadows, via);
+                        let pick = Route::value_index(nothruput, t);
+                        match t {
+                            Take::Skip => assert_eq!(pick, SKIP),
+                            _ => assert_eq!(
+                                (pick >> 1 == 1, pick & 1 == 1),
+                                (!nothruput, t == Take::Weighted),
+                                "{via:?}"
+                            ),
+                        }
+                    }
+                }
+            }
         }
     }
 

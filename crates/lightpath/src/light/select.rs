@@ -63,9 +63,13 @@ impl LightSelection {
 /// The light sampler of a scene.
 #[derive(Clone, Debug)]
 pub enum LightSelector {
-    /// Every light with probability `1 / count`.
+    /// Every light with probability `pmf = 1 / count`; `scale` is `count as f32`
+    /// (both kept: the conversions and the division were most of a single-light
+    /// scene's light choice).
     Uniform {
         count: usize,
+        scale: f32,
+        pmf: f32,
     },
     /// One distribution over all lights.
     Power(Distribution1D),
@@ -73,6 +77,15 @@ pub enum LightSelector {
 }
 
 impl LightSelector {
+    /// Uniform selection among `count` lights.
+    fn uniform(count: usize) -> LightSelector {
+        LightSelector::Uniform {
+            count,
+            scale: count as f32,
+            pmf: 1.0 / count as f32,
+        }
+    }
+
     /// The selector `selection` asks for over `lights` (`scene_radius`: the radius of the
     /// scene's bounding sphere, for the power of lights at infinity).
     pub fn build(
@@ -82,24 +95,20 @@ impl LightSelector {
         scene_radius: f32,
     ) -> LightSelector {
         match selection {
-            LightSelection::Uniform => LightSelector::Uniform {
-                count: lights.len(),
-            },
+            LightSelection::Uniform => LightSelector::uniform(lights.len()),
             LightSelection::Power => {
                 let w: Vec<f32> = lights.iter().map(|l| l.power(scene_radius)).collect();
                 if w.iter().sum::<f32>() > 0.0 {
                     LightSelector::Power(Distribution1D::new(&w))
                 } else {
-                    LightSelector::Uniform {
-                        count: lights.len(),
-                    }
+                    LightSelector::uniform(lights.len())
                 }
             }
             // One light needs no tree: its probability is 1 wherever it can reach, and
             // where the tree would find that it cannot (behind a one-sided emitter,
             // outside a spot's cone), its light sample finds no light anyway. The tree
             // walk was 5 % of a `cornell-classic` render's instructions.
-            LightSelection::Tree if lights.len() == 1 => LightSelector::Uniform { count: 1 },
+            LightSelection::Tree if lights.len() == 1 => LightSelector::uniform(1),
             LightSelection::Tree => LightSelector::Tree(LightTree::build(lights, prims)),
         }
     }
@@ -109,12 +118,12 @@ impl LightSelector {
     #[inline]
     pub fn sample(&self, u: f32, p: Vec3A, n: Vec3A) -> Option<(usize, f32)> {
         match self {
-            LightSelector::Uniform { count } => {
-                if *count == 0 {
+            &LightSelector::Uniform { count, scale, pmf } => {
+                if count == 0 {
                     return None;
                 }
-                let i = ((u * *count as f32) as usize).min(count - 1);
-                Some((i, 1.0 / *count as f32))
+                let i = ((u * scale) as usize).min(count - 1);
+                Some((i, pmf))
             }
             LightSelector::Power(d) => {
                 if d.is_empty() {
@@ -131,7 +140,7 @@ impl LightSelector {
     #[inline]
     pub fn pmf(&self, light: usize, p: Vec3A, n: Vec3A) -> f32 {
         match self {
-            LightSelector::Uniform { count } => 1.0 / *count as f32,
+            LightSelector::Uniform { pmf, .. } => *pmf,
             LightSelector::Power(d) => d.pmf(light),
             LightSelector::Tree(t) => t.pmf(light, p, n),
         }
