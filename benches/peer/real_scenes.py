@@ -5,6 +5,7 @@ error measured against its own converged image.
     /work/venv311/bin/python benches/peer/real_scenes.py OUT_DIR LIGHTPATH_BINARY
         [--spp 64] [--ref-spp 4096] [--seeds 3] [--scenes shot_a,shot_b,heldout]
         [--clamp-indirect 0] [--filter-glossy 1] [--regularize 0]
+        [--filter-width 1.5] [--lightpath-filter blackman-harris]
 
 Needs Blender as a Python module, numpy and OpenEXR (pip install bpy==5.0.1 OpenEXR numpy,
 Python 3.11); not a CI dependency. Steps, each skipped when its output exists:
@@ -22,7 +23,12 @@ blurs glossy lobes after rough bounces, a regularisation), clamps at --clamp-ind
 one process (the first loads the kernels). Lightpath: `render --max-depth DEPTH+1` (Mitsuba's count of
 segments), `--regularize` (default 0, Lightpath's own; 0.65 matches Filter Glossy 1
 after a diffuse bounce), its defaults otherwise (guiding auto), the same clamp; its time
-is the whole process's wall time (loading the .glb included). docs/performance.md,
+is the whole process's wall time (loading the .glb included).
+
+Both renderers use the same pixel filter: Cycles' default, Blackman-Harris of
+--filter-width (default 1.5, Cycles'), which Lightpath has as `--filter blackman-harris`.
+`--lightpath-filter box` gives Lightpath its own default instead (the comparison before
+Lightpath had the filter: plain MSE then compares the filters at the sun's glints). docs/performance.md,
 "Real scenes against Cycles", has the figures.
 
 Prints per scene and seed: wall and CPU seconds, MSE, relMSE (squared error over
@@ -34,7 +40,7 @@ and where Lightpath's 64-spp squared error sits (per object, and the share of it
 worst pixels). Writes OUT_DIR/results_<settings>.json; --reuse reports again from the
 images and timings already there. The scene `heldout` is reported apart.
 
-`python real_scenes.py cycles FILE.glb OUT.exr SPP SEED DEPTH CLAMP FILTER_GLOSSY REPEAT` is the Cycles
+`python real_scenes.py cycles FILE.glb OUT.exr SPP SEED DEPTH CLAMP FILTER_GLOSSY FILTER_WIDTH REPEAT` is the Cycles
 step alone (the script runs it in a subprocess, one Blender session per render).
 """
 
@@ -58,9 +64,10 @@ DEPTH = 16  # Cycles' bounces; Lightpath's max-depth is DEPTH + 1 segments
 # Pixels brighter than this (luminance) in either reference are the sun's glints in the
 # chrome and glass balls: a 0.526° disc of radiance ~2e4 covering a sliver of a pixel,
 # which 64 samples either miss or hit. They hold nearly all of both renderers' MSE, and
-# how much depends on the pixel filter (Cycles' 1.5-pixel Blackman-Harris spreads a
-# glint over ~9 pixels, Lightpath's box keeps it in one), so the MSE off them (and two
-# pixels round them) is reported too. The brightest lit surfaces here reach ~3.
+# how much depends on the pixel filter (a 1.5-pixel Blackman-Harris spreads a glint
+# over ~9 pixels, a box keeps it in one: hence the same filter for both), so the MSE off
+# them (and two pixels round them) is reported too. The brightest lit surfaces here
+# reach ~3.
 GLINT = 8.0
 HELD_OUT = "heldout"
 
@@ -152,7 +159,7 @@ def build(out_dir, name, spec):
                               export_cameras=True, export_lights=True, export_yup=True)
 
 
-def cycles(glb, out, spp, seed, depth, clamp, filter_glossy, repeat):
+def cycles(glb, out, spp, seed, depth, clamp, filter_glossy, filter_width, repeat):
     """Renders GLB with Cycles as a Blender user who imports it would; prints the seconds of
     each render (the last is the one to quote: the first loads the kernels)."""
     import bpy
@@ -176,6 +183,8 @@ def cycles(glb, out, spp, seed, depth, clamp, filter_glossy, repeat):
     c.sample_clamp_direct = 0.0
     c.sample_clamp_indirect = clamp
     c.blur_glossy = filter_glossy
+    c.pixel_filter_type = "BLACKMAN_HARRIS"
+    c.filter_width = filter_width
     c.caustics_reflective = True
     c.caustics_refractive = True
     for k in ("max_bounces", "diffuse_bounces", "glossy_bounces", "transmission_bounces",
@@ -204,7 +213,7 @@ def cycles(glb, out, spp, seed, depth, clamp, filter_glossy, repeat):
 def run_cycles(glb, out, spp, seed, args, repeat):
     p = subprocess.run([sys.executable, os.path.abspath(__file__), "cycles", glb, out, str(spp),
                         str(seed), str(DEPTH), str(args.clamp_indirect), str(args.filter_glossy),
-                        str(repeat)],
+                        str(args.filter_width), str(repeat)],
                        check=True, capture_output=True, text=True)
     secs = [(float(line.split()[1]), float(line.split()[2])) for line in p.stdout.splitlines()
             if line.startswith("CYCLES_SECONDS")]
@@ -219,7 +228,8 @@ def run_lightpath(glb, out, spp, seed, args):
     subprocess.run([args.binary, "render", glb, "-o", out, "--quiet", "--aovs", "none", "--threads", "2",
                     "--resolution", f"{WIDTH}x{HEIGHT}", "--spp", str(spp), "--seed", str(seed),
                     "--max-depth", str(DEPTH + 1), "--clamp-indirect", str(args.clamp_indirect),
-                    "--regularize", str(args.regularize)],
+                    "--regularize", str(args.regularize), "--filter", args.lightpath_filter,
+                    "--filter-width", str(args.filter_width)],
                    check=True, capture_output=True)
     return time.time() - t, children_cpu() - cpu
 
@@ -255,6 +265,10 @@ def main():
     ap.add_argument("--clamp-indirect", type=float, default=0.0, help="both renderers")
     ap.add_argument("--filter-glossy", type=float, default=1.0, help="Cycles' (its default: 1)")
     ap.add_argument("--regularize", type=float, default=0.0, help="Lightpath's (its default: 0)")
+    ap.add_argument("--filter-width", type=float, default=1.5,
+                    help="both renderers' Blackman-Harris width (Cycles' default: 1.5)")
+    ap.add_argument("--lightpath-filter", choices=["blackman-harris", "box"], default="blackman-harris",
+                    help="Lightpath's pixel filter (box: its own default, unlike Cycles')")
     ap.add_argument("--reuse", action="store_true",
                     help="reuse the renders (and their timings in results_*.json) made before")
     ap.add_argument("--refs-only", choices=["cycles", "lightpath"],
@@ -265,8 +279,12 @@ def main():
     names = args.scenes.split(",")
     # Each renderer's images are named by the settings that decide them, so that runs
     # with other settings of the other renderer reuse its references.
-    tags = {"cycles": f"c{args.clamp_indirect:g}_fg{args.filter_glossy:g}",
-            "lightpath": f"c{args.clamp_indirect:g}_r{args.regularize:g}"}
+    # Images with a renderer's default filter (Cycles' Blackman-Harris 1.5, Lightpath's
+    # box) have no filter in their names.
+    width = "" if args.filter_width == 1.5 else f"_bh{args.filter_width:g}"
+    lp_filter = "" if args.lightpath_filter == "box" else f"_bh{args.filter_width:g}"
+    tags = {"cycles": f"c{args.clamp_indirect:g}_fg{args.filter_glossy:g}{width}",
+            "lightpath": f"c{args.clamp_indirect:g}_r{args.regularize:g}{lp_filter}"}
     args.tags = tags
 
     for name in names:
@@ -345,7 +363,8 @@ def report(runs, refs, objects, masks, names, out, args):
     summary = {}
     print(f"\n{args.spp} spp, {WIDTH}x{HEIGHT}, depth {DEPTH}, clamp-indirect {args.clamp_indirect:g}, "
           f"Cycles filter glossy {args.filter_glossy:g}, Lightpath regularize {args.regularize:g}, "
-          f"references {args.ref_spp} spp")
+          f"pixel filters Cycles blackman-harris {args.filter_width:g}, Lightpath "
+          f"{args.lightpath_filter}, references {args.ref_spp} spp")
     for group in ([n for n in names if n != HELD_OUT], [n for n in names if n == HELD_OUT]):
         for name in group:
             rs = [r for r in runs if r["scene"] == name]
@@ -420,7 +439,8 @@ if __name__ == "__main__":
     if len(sys.argv) > 1 and sys.argv[1] == "build":
         build(sys.argv[2], sys.argv[3], SCENES[sys.argv[3]])
     elif len(sys.argv) > 1 and sys.argv[1] == "cycles":
-        glb, out, spp, seed, depth, clamp, filter_glossy, repeat = sys.argv[2:10]
-        cycles(glb, out, int(spp), int(seed), int(depth), float(clamp), float(filter_glossy), int(repeat))
+        glb, out, spp, seed, depth, clamp, filter_glossy, filter_width, repeat = sys.argv[2:11]
+        cycles(glb, out, int(spp), int(seed), int(depth), float(clamp), float(filter_glossy),
+               float(filter_width), int(repeat))
     else:
         main()

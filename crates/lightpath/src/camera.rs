@@ -16,6 +16,8 @@ use crate::geometry::Ray;
 use crate::sampling::square_to_disk;
 use glam::{Vec2, Vec3A};
 
+mod blackman_harris;
+
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum PixelFilter {
     /// Uniform over the pixel (each sample counts only for its own pixel).
@@ -23,24 +25,29 @@ pub enum PixelFilter {
     /// Samples offset by a Gaussian of this standard deviation in pixels (filter
     /// importance sampling, so samples still land in one pixel each).
     Gaussian { stddev: f32 },
+    /// Samples offset by a Blackman–Harris window reaching ±`width` pixels (Cycles'
+    /// default pixel filter at width 1.5).
+    BlackmanHarris { width: f32 },
 }
 
 /// The pixel filter a scene names (`[film] filter`); a Gaussian's width is a setting of
-/// its own (`filter_stddev`).
+/// its own (`filter_stddev`), as is a Blackman–Harris window's (`filter_width`).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum FilterKind {
     #[default]
     Box,
     Gaussian,
+    BlackmanHarris,
 }
 
 impl FilterKind {
-    pub const NAMES: [&'static str; 2] = ["box", "gaussian"];
+    pub const NAMES: [&'static str; 3] = ["box", "gaussian", "blackman-harris"];
 
     pub fn parse(s: &str) -> Option<FilterKind> {
         match s {
             "box" => Some(FilterKind::Box),
             "gaussian" => Some(FilterKind::Gaussian),
+            "blackman-harris" => Some(FilterKind::BlackmanHarris),
             _ => None,
         }
     }
@@ -49,16 +56,19 @@ impl FilterKind {
         match self {
             FilterKind::Box => "box",
             FilterKind::Gaussian => "gaussian",
+            FilterKind::BlackmanHarris => "blackman-harris",
         }
     }
 }
 
 impl PixelFilter {
-    /// The filter of a kind, with the Gaussian's standard deviation in pixels.
-    pub fn new(kind: FilterKind, stddev: f32) -> PixelFilter {
+    /// The filter of a kind, with the Gaussian's standard deviation and the
+    /// Blackman–Harris window's half-width in pixels.
+    pub fn new(kind: FilterKind, stddev: f32, width: f32) -> PixelFilter {
         match kind {
             FilterKind::Box => PixelFilter::Box,
             FilterKind::Gaussian => PixelFilter::Gaussian { stddev },
+            FilterKind::BlackmanHarris => PixelFilter::BlackmanHarris { width },
         }
     }
 
@@ -72,6 +82,7 @@ impl PixelFilter {
                 let (sin, cos) = crate::sampling::sin_cos_turns(u.y);
                 Vec2::new(r * cos, r * sin)
             }
+            PixelFilter::BlackmanHarris { width } => blackman_harris::offset(u, width),
         }
     }
 }

@@ -283,9 +283,11 @@ settings! {
         show: |r: &RenderDesc| match r.filter {
             FilterKind::Box => "box".to_string(),
             FilterKind::Gaussian => format!("gaussian {}", r.filter_stddev),
+            FilterKind::BlackmanHarris => format!("blackman-harris {}", r.filter_width),
         },
-        help: "Pixel filter: box (each sample counts for its own pixel) or gaussian \
-               (samples offset by a Gaussian of --filter-stddev pixels).",
+        help: "Pixel filter: box (each sample counts for its own pixel), gaussian \
+               (samples offset by a Gaussian of --filter-stddev pixels) or blackman-harris \
+               (by a Blackman-Harris window reaching --filter-width pixels, Cycles' default).",
     }
     filter_stddev: f32 = 0.5, {
         section: Film,
@@ -294,6 +296,15 @@ settings! {
         role: Identity,
         header: Header::Within("filter"),
         help: "Standard deviation of the gaussian filter, in pixels.",
+    }
+    filter_width: f32 = 1.5, {
+        section: Film,
+        flag: "filter-width",
+        range: Range::Above(0.0),
+        role: Identity,
+        header: Header::Within("filter"),
+        help: "Half-width of the blackman-harris filter in pixels (Cycles' Filter Width: \
+               its default 1.5 reaches 1.5 pixels either side of the pixel centre).",
     }
 }
 

@@ -429,7 +429,7 @@ fn chi2_survival_matches_known_values() {
 
 /// p-value of observed vs expected counts; bins expecting fewer than 5 samples are
 /// pooled. Err if a sample fell where the pdf integrates to zero.
-pub(super) fn chi2_p_value(observed: &[u64], expected: &[f64]) -> Result<f64, String> {
+pub(crate) fn chi2_p_value(observed: &[u64], expected: &[f64]) -> Result<f64, String> {
     let mut order: Vec<usize> = (0..expected.len()).collect();
     order.sort_by(|&a, &b| expected[a].total_cmp(&expected[b]));
     let (mut chi2, mut dof) = (0.0, 0usize);

@@ -59,8 +59,13 @@ const EXAMPLES: &[Example] = &[
         ("Settings", "\"Settings\""),
     ),
     ex("resolution", ("64x32", "[64, 32]"), ("0x32", "[0, 32]")),
-    ex("filter", ("gaussian", "\"gaussian\""), ("tent", "\"tent\"")),
+    ex(
+        "filter",
+        ("blackman-harris", "\"blackman-harris\""),
+        ("tent", "\"tent\""),
+    ),
     ex("filter_stddev", ("0.7", "0.7"), ("0", "0")),
+    ex("filter_width", ("2", "2"), ("-1", "-1")),
 ];
 
 fn setting(key: &str) -> &'static Setting {

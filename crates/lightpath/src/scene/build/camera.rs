@@ -59,7 +59,11 @@ pub fn camera(desc: &SceneDesc) -> Result<Camera, SceneError> {
 }
 
 pub fn filter(desc: &SceneDesc) -> PixelFilter {
-    PixelFilter::new(desc.render.filter, desc.render.filter_stddev)
+    PixelFilter::new(
+        desc.render.filter,
+        desc.render.filter_stddev,
+        desc.render.filter_width,
+    )
 }
 
 /// The settings, checked: a description built by code rather than read from a file
