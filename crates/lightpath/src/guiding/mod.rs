@@ -216,6 +216,8 @@ pub struct SdTree {
     /// chosen fraction (guided vertices' cost included) over BSDF sampling's alone;
     /// 1 before anything was measured.
     pub gain: f64,
+    /// How many path vertices the last pass recorded.
+    pub vertices: u64,
 }
 
 impl SdTree {
@@ -239,6 +241,7 @@ impl SdTree {
             leaves: (0..ORIENTATIONS).map(|_| Leaf::new()).collect(),
             alphas: vec![0.0; ORIENTATIONS],
             gain: 1.0,
+            vertices: 0,
         }
     }
 
@@ -298,6 +301,11 @@ impl SdTree {
             (chosen, bsdf) = (chosen + m, bsdf + m0);
         }
         self.gain = if bsdf > 0.0 { bsdf / chosen } else { 1.0 };
+        self.vertices = self
+            .leaves
+            .iter()
+            .map(|l| l.count.load(Ordering::Relaxed))
+            .sum();
         let threshold = SPATIAL_C * 2f64.powi(k as i32).sqrt();
         // Breadth over the node list: the children a split appends are visited too.
         let mut n = 0;
