@@ -4,13 +4,15 @@
 //! radiance there. Training makes passes of 1, 2, 4, … samples a pixel; each pass
 //! samples from the trees the previous one froze and records into a refined copy:
 //! a spatial leaf is split in two (cycling x, y, z) when it saw more than
-//! c·√(2^k) path vertices in pass k (c = 12000, the paper's), a directional quadrant
-//! while it holds more than ρ = 1 % of its tree's energy.
+//! c·√(2^k) path vertices in pass k (c = 3000, a quarter of the paper's), a directional
+//! quadrant while it holds more than ρ = 1 % of its tree's energy. Unlike the paper,
+//! the spatial tree has one root per orientation of the shading normal
+//! ([`ORIENTATIONS`]).
 //!
 //! What one pass records is a sum of integers (fixed point, quadtree.rs), so the trees
 //! do not depend on the number of threads or the order rows finish in. The integrator
 //! (integrator/guided.rs) mixes BSDF and guide sampling one sample at a time with a
-//! fixed probability, the paper's baseline (docs/performance.md, "Path guiding").
+//! probability each leaf learns (docs/performance.md, "Path guiding").
 
 pub mod quadtree;
 
@@ -175,6 +177,29 @@ enum SNode {
     Leaf(u32),
 }
 
+/// The spatial tree's roots: one per orientation class of the shading normal (its
+/// dominant axis and that axis's sign, [`orientation`]), so that surfaces a few
+/// millimetres apart but facing apart (a ceiling and the baffle below it, a baffle's
+/// top and bottom) never share a leaf. The paper keys leaves by position alone; in
+/// cells that mixed facing surfaces half of the guide's samples went below the surface
+/// and no leaf there chose to guide (docs/performance.md, "Path guiding").
+pub const ORIENTATIONS: usize = 6;
+
+/// The orientation class of unit normal `n`: 2 × its dominant axis, + 1 if that
+/// component is negative.
+#[inline]
+pub fn orientation(n: Vec3A) -> usize {
+    let a = n.abs();
+    let axis = if a.x >= a.y && a.x >= a.z {
+        0
+    } else if a.y >= a.z {
+        1
+    } else {
+        2
+    };
+    2 * axis + (n[axis] < 0.0) as usize
+}
+
 /// The SD-tree.
 #[derive(Clone, Debug)]
 pub struct SdTree {
@@ -191,11 +216,13 @@ pub struct SdTree {
     /// chosen fraction (guided vertices' cost included) over BSDF sampling's alone;
     /// 1 before anything was measured.
     pub gain: f64,
+    /// How many path vertices the last pass recorded.
+    pub vertices: u64,
 }
 
 impl SdTree {
-    /// One leaf over the cube around `(lo, hi)` (the scene's box; a unit cube if it is
-    /// empty or not finite).
+    /// One leaf per orientation over the cube around `(lo, hi)` (the scene's box; a unit
+    /// cube if it is empty or not finite).
     pub fn new(lo: Vec3A, hi: Vec3A) -> SdTree {
         let (lo, hi) = if lo.is_finite() && hi.is_finite() && lo.cmple(hi).all() {
             (lo, hi)
@@ -209,20 +236,21 @@ impl SdTree {
         SdTree {
             lo: centre - Vec3A::splat(extent * 0.5),
             size: Vec3A::splat(extent),
-            nodes: vec![SNode::Leaf(0)],
-            depth: vec![0],
-            leaves: vec![Leaf::new()],
-            alphas: vec![0.0],
+            nodes: (0..ORIENTATIONS as u32).map(SNode::Leaf).collect(),
+            depth: vec![0; ORIENTATIONS],
+            leaves: (0..ORIENTATIONS).map(|_| Leaf::new()).collect(),
+            alphas: vec![0.0; ORIENTATIONS],
             gain: 1.0,
+            vertices: 0,
         }
     }
 
-    /// The index of the leaf whose cell holds `p` (a point outside goes to the nearest
-    /// cell across the split planes).
+    /// The index of the leaf whose cell holds `p` among those of normal `normal`'s
+    /// orientation (a point outside goes to the nearest cell across the split planes).
     #[inline]
-    pub fn leaf_index(&self, p: Vec3A) -> u32 {
+    pub fn leaf_index(&self, p: Vec3A, normal: Vec3A) -> u32 {
         let mut p = ((p - self.lo) / self.size).clamp(Vec3A::ZERO, Vec3A::ONE);
-        let mut n = 0usize;
+        let mut n = orientation(normal);
         loop {
             match self.nodes[n] {
                 SNode::Leaf(l) => return l,
@@ -273,6 +301,11 @@ impl SdTree {
             (chosen, bsdf) = (chosen + m, bsdf + m0);
         }
         self.gain = if bsdf > 0.0 { bsdf / chosen } else { 1.0 };
+        self.vertices = self
+            .leaves
+            .iter()
+            .map(|l| l.count.load(Ordering::Relaxed))
+            .sum();
         let threshold = SPATIAL_C * 2f64.powi(k as i32).sqrt();
         // Breadth over the node list: the children a split appends are visited too.
         let mut n = 0;
@@ -328,24 +361,25 @@ mod tests {
         // further.
         for _ in 0..100_000 {
             let p = Vec3A::new(rng.next_f32(), rng.next_f32(), rng.next_f32()) * 0.5;
-            let l = tree.leaf_index(p);
+            let l = tree.leaf_index(p, Vec3A::Z);
             tree.leaf(l).record(Vec3A::Z, 1.0);
         }
         tree.end_pass(0);
         // Every leaf split from the root inherited what the root learnt.
-        let far = tree.leaf_index(Vec3A::splat(1.9));
+        let far = tree.leaf_index(Vec3A::splat(1.9), Vec3A::Z);
         assert!(tree.leaf(far).sampling.total() > 0.0);
         // A second pass, recorded into the split tree, splits it further.
         for _ in 0..100_000 {
             let p = Vec3A::new(rng.next_f32(), rng.next_f32(), rng.next_f32()) * 0.5;
-            tree.leaf(tree.leaf_index(p)).record(Vec3A::Z, 1.0);
+            tree.leaf(tree.leaf_index(p, Vec3A::Z))
+                .record(Vec3A::Z, 1.0);
         }
         let before = tree.leaf_count();
         tree.end_pass(1);
         assert!(tree.leaf_count() > before, "{before}");
         assert!(tree.leaf_count() > 4, "{}", tree.leaf_count());
-        let far = tree.leaf_index(Vec3A::splat(1.9));
-        let near = tree.leaf_index(Vec3A::splat(0.1));
+        let far = tree.leaf_index(Vec3A::splat(1.9), Vec3A::Z);
+        let near = tree.leaf_index(Vec3A::splat(0.1), Vec3A::Z);
         assert_ne!(far, near);
         // The corner's leaves learnt the +z records of the second pass.
         assert!(tree.leaf(near).sampling.pdf(Vec3A::Z) > 1.0);
@@ -373,9 +407,39 @@ mod tests {
         assert_eq!(Leaf::new().best_fraction().0, DEFAULT_FRACTION);
     }
 
+    /// Points a millimetre apart on surfaces facing apart (a ceiling and a plate under
+    /// it) land in different leaves however coarse the tree, and learn apart.
+    #[test]
+    fn opposite_orientations_never_share_a_leaf() {
+        let mut tree = SdTree::new(Vec3A::splat(-1.0), Vec3A::ONE);
+        let (p, q) = (Vec3A::new(0.1, 0.8, 0.1), Vec3A::new(0.1, 0.801, 0.1));
+        let (up, down) = (tree.leaf_index(p, Vec3A::Y), tree.leaf_index(q, -Vec3A::Y));
+        assert_ne!(up, down);
+        tree.leaf(up).record(Vec3A::Y, 1.0);
+        tree.leaf(down).record(-Vec3A::Y, 1.0);
+        tree.end_pass(0);
+        let up = tree.leaf(tree.leaf_index(p, Vec3A::Y));
+        assert!(up.sampling.pdf(Vec3A::Y) > 0.3);
+        assert_eq!(up.sampling.pdf(-Vec3A::Y), 0.0);
+        // Each of the six classes is the dominant axis and its sign.
+        let classes: Vec<usize> = [
+            Vec3A::X,
+            -Vec3A::X,
+            Vec3A::Y,
+            -Vec3A::Y,
+            Vec3A::Z,
+            -Vec3A::Z,
+        ]
+        .iter()
+        .map(|&n| orientation(n))
+        .collect();
+        assert_eq!(classes, [0, 1, 2, 3, 4, 5]);
+        assert_eq!(orientation(Vec3A::new(0.3, -0.9, 0.3).normalize()), 3);
+    }
+
     #[test]
     fn bad_bounds_give_a_unit_cube() {
         let tree = SdTree::new(Vec3A::splat(f32::INFINITY), Vec3A::splat(f32::NEG_INFINITY));
-        assert_eq!(tree.leaf_index(Vec3A::splat(f32::NAN)), 0);
+        assert_eq!(tree.leaf_index(Vec3A::splat(f32::NAN), Vec3A::Z), 4);
     }
 }

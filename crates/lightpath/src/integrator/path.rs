@@ -223,7 +223,7 @@ impl Tracer<'_> {
                 bsdf,
                 sh,
                 dir: ray.dir,
-                guide: RICH.then(|| self.guide_at(bsdf, hit.p)).flatten(),
+                guide: RICH.then(|| self.guide_at(bsdf, hit.p, &sh)).flatten(),
             };
             self.data_lobes(out, &path, &v);
             self.direct_light::<S, RICH>(out, &mut path, &v, sampler);
