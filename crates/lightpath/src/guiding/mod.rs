@@ -6,8 +6,10 @@
 //! a spatial leaf is split in two (cycling x, y, z) when it saw more than
 //! c·√(2^k) path vertices in pass k (c = 3000, a quarter of the paper's), a directional
 //! quadrant while it holds more than ρ = 1 % of its tree's energy. Unlike the paper,
-//! the spatial tree has one root per orientation of the shading normal
-//! ([`ORIENTATIONS`]).
+//! the spatial tree has one root per orientation of the shading normal and one for
+//! scattering vertices in media ([`ORIENTATIONS`]): the quadtrees cover the whole
+//! sphere, so a medium vertex samples them as a surface does (Cycles guides volume
+//! scattering through Open PGL likewise, `use_volume_guiding`).
 //!
 //! What one pass records is a sum of integers (fixed point, quadtree.rs), so the trees
 //! do not depend on the number of threads or the order rows finish in. The integrator
@@ -180,15 +182,23 @@ enum SNode {
 /// The spatial tree's roots: one per orientation class of the shading normal (its
 /// dominant axis and that axis's sign, [`orientation`]), so that surfaces a few
 /// millimetres apart but facing apart (a ceiling and the baffle below it, a baffle's
-/// top and bottom) never share a leaf. The paper keys leaves by position alone; in
-/// cells that mixed facing surfaces half of the guide's samples went below the surface
-/// and no leaf there chose to guide (docs/performance.md, "Path guiding").
-pub const ORIENTATIONS: usize = 6;
+/// top and bottom) never share a leaf, and one for scattering vertices in media
+/// ([`MEDIUM`]), whose incident light comes from the whole sphere and whose records
+/// carry no cosine. The paper keys leaves by position alone; in cells that mixed facing
+/// surfaces half of the guide's samples went below the surface and no leaf there chose
+/// to guide (docs/performance.md, "Path guiding").
+pub const ORIENTATIONS: usize = 7;
+
+/// The root of medium vertices: what [`orientation`] gives the zero normal.
+pub const MEDIUM: usize = 6;
 
 /// The orientation class of unit normal `n`: 2 × its dominant axis, + 1 if that
-/// component is negative.
+/// component is negative; [`MEDIUM`] for the zero normal (a vertex in a medium).
 #[inline]
 pub fn orientation(n: Vec3A) -> usize {
+    if n == Vec3A::ZERO {
+        return MEDIUM;
+    }
     let a = n.abs();
     let axis = if a.x >= a.y && a.x >= a.z {
         0
@@ -435,6 +445,37 @@ mod tests {
         .collect();
         assert_eq!(classes, [0, 1, 2, 3, 4, 5]);
         assert_eq!(orientation(Vec3A::new(0.3, -0.9, 0.3).normalize()), 3);
+    }
+
+    /// A point in a medium (zero normal) has leaves of its own: fog right above a floor
+    /// never shares the floor's guide, whose records are cosine-weighted and hemispherical.
+    #[test]
+    fn medium_vertices_have_a_root_of_their_own() {
+        let mut tree = SdTree::new(Vec3A::splat(-1.0), Vec3A::ONE);
+        let p = Vec3A::new(0.2, -0.99, 0.1);
+        let fog = tree.leaf_index(p, Vec3A::ZERO);
+        let surfaces: Vec<u32> = [
+            Vec3A::X,
+            -Vec3A::X,
+            Vec3A::Y,
+            -Vec3A::Y,
+            Vec3A::Z,
+            -Vec3A::Z,
+        ]
+        .iter()
+        .map(|&n| tree.leaf_index(p, n))
+        .collect();
+        assert!(!surfaces.contains(&fog), "{fog} {surfaces:?}");
+        assert_eq!(orientation(Vec3A::ZERO), MEDIUM);
+        // Records from below the floor's plane stay the fog's.
+        for _ in 0..10 {
+            tree.leaf(fog).record(-Vec3A::Y, 1.0);
+        }
+        tree.end_pass(0);
+        let fog = tree.leaf(tree.leaf_index(p, Vec3A::ZERO));
+        assert!(fog.sampling.pdf(-Vec3A::Y) > 0.3);
+        let floor = tree.leaf(tree.leaf_index(p, Vec3A::Y));
+        assert_eq!(floor.sampling.total(), 0.0);
     }
 
     #[test]

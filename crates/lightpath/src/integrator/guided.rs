@@ -9,12 +9,17 @@
 //! (lobe, direction) pair mixes BSDF sampling's (`eval_lobe`) and the guide's; every
 //! lobe's estimate stays unbiased on its own, so partitions still sum to the beauty.
 //! Light sampling weighs its samples against the same mixture.
+//!
+//! A scattering vertex in a medium mixes the phase function and the medium root's guide
+//! the same way (its one lobe is the `V` event), and its light samples, free-flight and
+//! equiangular alike, weigh against that mixture (volume.rs).
 
 use super::path::{PathState, Vertex};
 use super::{Sink, Tracer};
 use crate::guiding::{GuidingMode, SdTree};
 use crate::light::luminance;
 use crate::material::{Bsdf, BsdfSample, Shading, MAX_LOBES};
+use crate::media::phase::HenyeyGreenstein;
 use glam::{Vec2, Vec3A};
 use lpe::ScatterClass;
 use rayon::prelude::*;
@@ -197,6 +202,63 @@ impl Tracer<'_> {
         })
     }
 
+    /// Guiding at a scattering vertex in a medium at `p` (the medium root's leaves), if
+    /// the render guides.
+    #[inline(always)]
+    pub(super) fn guide_in_medium(&self, p: Vec3A) -> Option<GuideAt> {
+        let tree = self.guide?;
+        let leaf = tree.leaf_index(p, Vec3A::ZERO);
+        let alpha = tree.alpha(leaf);
+        let trained = alpha > 0.0 || (self.learn && tree.leaf(leaf).sampling.total() > 0.0);
+        Some(GuideAt {
+            leaf,
+            trained,
+            alpha,
+        })
+    }
+
+    /// The density with which a medium vertex at guide `g` samples direction `wi`, the
+    /// phase function's own density there being `phase`: the mixture's where the leaf
+    /// guides. Light sampling weighs against this, so MIS stays exact.
+    #[inline]
+    pub(super) fn medium_pdf(&self, g: Option<GuideAt>, phase: f32, wi: Vec3A) -> f32 {
+        match (g, self.guide) {
+            (Some(g), Some(tree)) if g.alpha > 0.0 => {
+                let guide = tree.leaf(g.leaf).sampling.pdf(wi);
+                (1.0 - g.alpha) * phase + g.alpha * guide
+            }
+            _ => phase,
+        }
+    }
+
+    /// One-sample MIS of phase and guide sampling at a medium vertex travelling along
+    /// `dir` (`g.trained`; with `g.alpha` 0, a training pass's phase sample that also
+    /// measures the guide): the direction, the mixture's pdf, the phase function's value
+    /// and the two densities mixed.
+    pub(super) fn sample_medium_guided(
+        &self,
+        g: GuideAt,
+        phase: &HenyeyGreenstein,
+        dir: Vec3A,
+        u_choice: f32,
+        u_dir: Vec2,
+    ) -> Option<(Vec3A, f32, f32, GuidedPdfs)> {
+        let tree = self.guide?;
+        let quad = &tree.leaf(g.leaf).sampling;
+        let wi = if u_choice < 1.0 - g.alpha {
+            phase.sample(dir, u_dir).0
+        } else {
+            quad.sample(u_dir)?
+        };
+        let f = phase.eval(dir, wi);
+        let pdfs = GuidedPdfs {
+            bsdf: f,
+            guide: quad.pdf(wi),
+        };
+        let pdf = (1.0 - g.alpha) * pdfs.bsdf + g.alpha * pdfs.guide;
+        (pdf > 0.0 && f > 0.0).then_some((wi, pdf, f, pdfs))
+    }
+
     /// One-sample MIS of BSDF and guide sampling at a guided vertex (`g.trained`; with
     /// `g.alpha` 0, a training pass's BSDF sample that also measures the guide), and
     /// the densities it mixed (none for a delta lobe's sample).
@@ -294,7 +356,12 @@ impl Tracer<'_> {
             leaf: g.leaf,
             dir: bs.wi,
             pdf,
-            cos: bs.wi.dot(path.prev_n).abs(),
+            // A medium vertex (no normal) records the radiance itself.
+            cos: if path.prev_n == Vec3A::ZERO {
+                1.0
+            } else {
+                bs.wi.dot(path.prev_n).abs()
+            },
             f: bs.weight * pdf,
             pdfs,
             before: luminance(before),
@@ -409,4 +476,151 @@ pub(super) fn train(scene: &crate::scene::Scene) -> Option<SdTree> {
     }
     // Where no leaf chose to guide, the render is the unguided one, without lookups.
     tree.guides().then_some(tree)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::aov;
+    use crate::media::phase::HenyeyGreenstein;
+    use crate::sampling::Rng;
+    use crate::scene::{Scene, Source};
+    use std::f32::consts::PI;
+
+    /// Fog in a room whose lamp a plate hides from below: the fog under the plate is lit
+    /// only by light that bounced, which its guide learns.
+    const FOG: &str = r#"
+[camera]
+position = [0, 0, 3.5]
+look_at = [0, 0, 0]
+fov = 40
+[film]
+resolution = [48, 48]
+[render]
+max_depth = 6
+atmosphere = "fog"
+guiding = "on"
+guiding_passes = 5
+[media.fog]
+sigma_s = [0.8, 0.8, 0.8]
+g = 0.3
+[materials.white]
+type = "diffuse"
+albedo = [0.8, 0.8, 0.8]
+[[objects]]
+name = "floor"
+shape = "quad"
+material = "white"
+corners = [[-1, -1, 1], [1, -1, 1], [1, -1, -1], [-1, -1, -1]]
+[[objects]]
+name = "ceiling"
+shape = "quad"
+material = "white"
+corners = [[-1, 1, -1], [1, 1, -1], [1, 1, 1], [-1, 1, 1]]
+[[objects]]
+name = "back"
+shape = "quad"
+material = "white"
+corners = [[-1, -1, -1], [1, -1, -1], [1, 1, -1], [-1, 1, -1]]
+[[objects]]
+name = "plate"
+shape = "quad"
+material = "white"
+corners = [[-0.4, 0.6, -0.4], [0.4, 0.6, -0.4], [0.4, 0.6, 0.4], [-0.4, 0.6, 0.4]]
+[[lights]]
+type = "quad"
+name = "lamp"
+radiance = [30, 30, 30]
+corners = [[-0.2, 0.62, -0.2], [-0.2, 0.62, 0.2], [0.2, 0.62, 0.2], [0.2, 0.62, -0.2]]
+"#;
+
+    /// A medium vertex in a leaf that guides samples directions with exactly the density
+    /// light sampling weighs against (`medium_pdf`): the pdf it returns is that density,
+    /// the density integrates to one over the sphere, and a histogram of 400,000 samples
+    /// over 16 × 32 cells of (cos θ, φ) matches its integral over each cell.
+    #[test]
+    fn guided_medium_vertices_sample_the_density_light_sampling_weighs_against() {
+        let desc = Source {
+            name: "fog.toml".into(),
+            text: FOG.into(),
+            dir: Default::default(),
+        }
+        .parse()
+        .unwrap();
+        let scene = Scene::build(&desc, &aov::assemble(vec![])).unwrap();
+        let tree = train(&scene).expect("the fog under the plate guides");
+        let mut tracer = Tracer::new(&scene);
+        tracer.guide = Some(&tree);
+        // A point in the fog whose leaf guides, the most strongly found on a grid.
+        let mut best: Option<(GuideAt, Vec3A)> = None;
+        for i in 0..9 {
+            for j in 0..9 {
+                for k in 0..9 {
+                    let p = Vec3A::new(i as f32, j as f32, k as f32) * 0.2 - Vec3A::splat(0.8);
+                    let g = tracer.guide_in_medium(p).unwrap();
+                    if g.alpha > best.map_or(0.0, |b| b.0.alpha) {
+                        best = Some((g, p));
+                    }
+                }
+            }
+        }
+        let (g, _) = best.expect("some fog leaf guides");
+        let phase = HenyeyGreenstein::new(0.3);
+        let dir = Vec3A::new(0.3, -0.8, 0.2).normalize();
+        let density = |wi: Vec3A| tracer.medium_pdf(Some(g), phase.eval(dir, wi), wi);
+        let to_dir = |c: f32, phi: f32| {
+            let s = (1.0 - c * c).max(0.0).sqrt();
+            Vec3A::new(s * phi.cos(), s * phi.sin(), c)
+        };
+        let (nc, np) = (16usize, 32usize);
+        // Each cell's probability: the density on a 12 × 12 grid inside it.
+        let sub = 12;
+        let mut expected = vec![0.0f64; nc * np];
+        for (cell, e) in expected.iter_mut().enumerate() {
+            let (ci, pi) = (cell / np, cell % np);
+            for a in 0..sub {
+                for b in 0..sub {
+                    let c = -1.0 + 2.0 * (ci as f32 + (a as f32 + 0.5) / sub as f32) / nc as f32;
+                    let phi = 2.0 * PI * (pi as f32 + (b as f32 + 0.5) / sub as f32) / np as f32;
+                    *e += density(to_dir(c, phi)) as f64;
+                }
+            }
+            *e *= (2.0 / nc as f64) * (2.0 * std::f64::consts::PI / np as f64) / (sub * sub) as f64;
+        }
+        let total: f64 = expected.iter().sum();
+        assert!((total - 1.0).abs() < 0.01, "∫ pdf = {total}");
+        let n = 400_000;
+        let mut counts = vec![0u32; nc * np];
+        let mut rng = Rng::for_sample(17, 0, 0);
+        for _ in 0..n {
+            let u = Vec2::new(rng.next_f32(), rng.next_f32());
+            let Some((wi, pdf, f, _)) =
+                tracer.sample_medium_guided(g, &phase, dir, rng.next_f32(), u)
+            else {
+                continue;
+            };
+            assert!(
+                (pdf - density(wi)).abs() <= 1e-4 * pdf,
+                "{pdf} {}",
+                density(wi)
+            );
+            assert!((f - phase.eval(dir, wi)).abs() <= 1e-6 * f);
+            let ci = (((wi.z + 1.0) * 0.5 * nc as f32) as usize).min(nc - 1);
+            let phi = wi.y.atan2(wi.x).rem_euclid(2.0 * PI);
+            let pi = ((phi / (2.0 * PI) * np as f32) as usize).min(np - 1);
+            counts[ci * np + pi] += 1;
+        }
+        // Pearson's statistic over the cells expecting at least 5 samples.
+        let (mut chi2, mut dof) = (0.0, 0);
+        for (c, e) in counts.iter().zip(&expected) {
+            let e = e * n as f64;
+            if e >= 5.0 {
+                chi2 += (*c as f64 - e).powi(2) / e;
+                dof += 1;
+            }
+        }
+        // The 1e-6 quantile of χ² with dof ≈ 500 lies near dof + 5.3·√(2·dof).
+        let limit = dof as f64 + 5.3 * (2.0 * dof as f64).sqrt();
+        assert!(chi2 < limit, "χ² {chi2} over {dof} cells (limit {limit})");
+    }
 }

@@ -1,6 +1,7 @@
 //! Paths through participating media (media/): the medium a path is in, free flights
 //! that end at a scattering vertex (a `V` event, light sampled there with MIS against
-//! the phase function, the next direction from the phase function), single scattering
+//! the phase function, the next direction from the phase function, or where the render
+//! guides from its mixture with the guide, guided.rs), single scattering
 //! towards point, spot and small sphere lights (rect, quad and disk lights too with
 //! `volume_sampling = "mis-area"`) at equiangularly sampled distances (Kulla &
 //! Fajardo 2012, "Importance Sampling Techniques for Path Tracing in Participating
@@ -25,11 +26,13 @@
 //! same with and without media.
 
 use super::direct::power_heuristic;
+use super::guided::GuideAt;
 use super::path::PathState;
 use super::routing::{Origin, Via};
 use super::{Sink, Tracer};
 use crate::geometry::{Hit, Prim, Ray, Visibility};
 use crate::light::{Light, LightSample, LightShape};
+use crate::material::BsdfSample;
 use crate::media::equiangular::Equiangular;
 use crate::media::{Collision, Medium, MediumStack, VolumeSampling};
 use crate::sampler::{dim, Sampler};
@@ -423,19 +426,44 @@ impl Tracer<'_> {
         if a.is_dead(s_v) {
             return None;
         }
-        self.medium_light(out, path, s_v, v, sampler);
+        let guide = self.guide_in_medium(v.p);
+        self.medium_light(out, path, s_v, v, guide, sampler);
         let bounce = dim::bounce(path.depth);
         let volume = &scene.volumes[v.medium.volume as usize];
-        let (wi, pdf) = volume
-            .phase
-            .sample(v.dir, sampler.get_2d(bounce + dim::DIRECTION));
-        // The phase function is sampled exactly: its weight is one.
+        let u_dir = sampler.get_2d(bounce + dim::DIRECTION);
+        let before = path.throughput;
+        let (wi, pdf, weight, pdfs) = match guide {
+            // A phase function has one lobe: the lobe's number picks phase or guide.
+            Some(g) if g.alpha > 0.0 || (self.learn && g.trained) => {
+                let u_choice = sampler.get_1d(bounce + dim::LOBE_CHOICE);
+                let (wi, pdf, f, pdfs) =
+                    self.sample_medium_guided(g, &volume.phase, v.dir, u_choice, u_dir)?;
+                (wi, pdf, f / pdf, Some(pdfs))
+            }
+            // The phase function is sampled exactly: its weight is one.
+            _ => {
+                let (wi, pdf) = volume.phase.sample(v.dir, u_dir);
+                (wi, pdf, 1.0, None)
+            }
+        };
+        path.throughput *= weight;
         path.state = s_v;
         path.prev_p = v.p;
         path.prev_n = Vec3A::ZERO;
         path.prev_pdf = pdf;
         path.prev_delta = false;
         path.prev_object = v.object;
+        if let Some(g) = guide {
+            let bs = BsdfSample {
+                lobe: 0,
+                wi,
+                weight: Vec3A::splat(weight),
+                pdf,
+                delta: false,
+                eta: 1.0,
+            };
+            self.record_vertex(out, path, g, &bs, pdfs, before);
+        }
         path.travelled = 0.0;
         path.cone_spread = path.cone_spread.max(super::shading::SCATTERED_SPREAD);
         path.depth += 1;
@@ -455,6 +483,7 @@ impl Tracer<'_> {
         path: &mut PathState,
         s_v: StateId,
         v: &MediumVertex,
+        guide: Option<GuideAt>,
         sampler: &mut S,
     ) {
         let scene = self.scene;
@@ -485,7 +514,7 @@ impl Tracer<'_> {
             return;
         }
         let light_pdf = select_pmf * ls.pdf;
-        let share = light_share(light, &ls, light_pdf, f);
+        let share = light_share(light, &ls, light_pdf, self.medium_pdf(guide, f, ls.wi));
         let w = match self.equiangular_pdf(&v.seg, li, v.p) {
             // The flight also aims at this light: the free-flight and equiangular
             // distances split light sampling's share (its pdf the same for both).
@@ -590,7 +619,9 @@ impl Tracer<'_> {
             return;
         }
         let pmf_p = scene.light_select.pmf(li, p, Vec3A::ZERO);
-        let share = light_share(light, &ls, pmf_p * ls.pdf, f);
+        // Against the direction density a free-flight vertex at p would sample with.
+        let guide = self.guide_in_medium(p);
+        let share = light_share(light, &ls, pmf_p * ls.pdf, self.medium_pdf(guide, f, ls.wi));
         let w = share * pdf_d.map_or(1.0, |pdf_d| power_heuristic(pdf_e, pdf_d * pmf_p));
         let shadow = Ray {
             origin: p,
