@@ -201,6 +201,20 @@ fn guided_renders_are_bit_identical_for_any_thread_count() {
     };
     let auto = run_in(1, GuidingMode::Auto);
     assert_eq!(auto, run_in(2, GuidingMode::Auto));
+    // The fog's guide too (its medium vertices' records and their free flights).
+    let fog_in = |threads: usize| {
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .unwrap();
+        let s = scene_in(FOG_ROOM, 32, GuidingMode::On, 5, 3, vec![]);
+        pool.install(|| render_spp(&s, 2, 0).planes.concat())
+    };
+    let fog = fog_in(1);
+    assert!(fog
+        .iter()
+        .zip(&fog_in(2))
+        .all(|(a, b)| a.to_bits() == b.to_bits()));
     let run = |threads: usize| run_in(threads, GuidingMode::On);
     let one = run(1);
     let two = run(2);
@@ -218,8 +232,12 @@ fn guided_renders_are_bit_identical_for_any_thread_count() {
 /// decision, so they merge into the whole.
 #[test]
 fn guided_sample_ranges_merge_into_the_whole_render() {
-    for mode in [GuidingMode::On, GuidingMode::Auto] {
-        let s = scene_in(ROOM, 48, mode, 5, 5, vec![]);
+    for (text, mode) in [
+        (ROOM, GuidingMode::On),
+        (ROOM, GuidingMode::Auto),
+        (FOG_ROOM, GuidingMode::On),
+    ] {
+        let s = scene_in(text, 48, mode, 5, 5, vec![]);
         let whole = render_spp(&s, 4, 0);
         let mut a = render_spp(&s, 2, 0);
         a.merge(&render_spp(&s, 2, 2)).unwrap();
