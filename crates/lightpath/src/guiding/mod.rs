@@ -363,6 +363,16 @@ mod tests {
     use super::*;
     use crate::sampling::Rng;
 
+    /// A normal of each surface orientation class, in class order.
+    const AXES: [Vec3A; 6] = [
+        Vec3A::X,
+        Vec3A::NEG_X,
+        Vec3A::Y,
+        Vec3A::NEG_Y,
+        Vec3A::Z,
+        Vec3A::NEG_Z,
+    ];
+
     #[test]
     fn busy_leaves_split_and_lookups_land_in_their_cells() {
         let mut tree = SdTree::new(Vec3A::ZERO, Vec3A::splat(2.0));
@@ -432,17 +442,7 @@ mod tests {
         assert!(up.sampling.pdf(Vec3A::Y) > 0.3);
         assert_eq!(up.sampling.pdf(-Vec3A::Y), 0.0);
         // Each of the six classes is the dominant axis and its sign.
-        let classes: Vec<usize> = [
-            Vec3A::X,
-            -Vec3A::X,
-            Vec3A::Y,
-            -Vec3A::Y,
-            Vec3A::Z,
-            -Vec3A::Z,
-        ]
-        .iter()
-        .map(|&n| orientation(n))
-        .collect();
+        let classes: Vec<usize> = AXES.iter().map(|&n| orientation(n)).collect();
         assert_eq!(classes, [0, 1, 2, 3, 4, 5]);
         assert_eq!(orientation(Vec3A::new(0.3, -0.9, 0.3).normalize()), 3);
     }
@@ -454,17 +454,7 @@ mod tests {
         let mut tree = SdTree::new(Vec3A::splat(-1.0), Vec3A::ONE);
         let p = Vec3A::new(0.2, -0.99, 0.1);
         let fog = tree.leaf_index(p, Vec3A::ZERO);
-        let surfaces: Vec<u32> = [
-            Vec3A::X,
-            -Vec3A::X,
-            Vec3A::Y,
-            -Vec3A::Y,
-            Vec3A::Z,
-            -Vec3A::Z,
-        ]
-        .iter()
-        .map(|&n| tree.leaf_index(p, n))
-        .collect();
+        let surfaces: Vec<u32> = AXES.iter().map(|&n| tree.leaf_index(p, n)).collect();
         assert!(!surfaces.contains(&fog), "{fog} {surfaces:?}");
         assert_eq!(orientation(Vec3A::ZERO), MEDIUM);
         // Records from below the floor's plane stay the fog's.
