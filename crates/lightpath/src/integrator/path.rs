@@ -212,7 +212,9 @@ impl Tracer<'_> {
                 (None, Some(rough)) if path.diffuse > 0 => (rough, hit.ns),
                 (None, _) => (&material.bsdf, hit.ns),
             };
-            let sh = self.oriented(Shading::new(bsdf, ns, hit.ng, -ray.dir), material, &hit);
+            let sh = self
+                .oriented(Shading::new(bsdf, ns, hit.ng, -ray.dir), material, &hit)
+                .with_bsdf(bsdf);
             if sh.wo.z == 0.0 {
                 break;
             }

@@ -74,6 +74,18 @@ impl Layer {
         }
     }
 
+    /// [`attenuation`](Self::attenuation), given what [`transmission_towards`]
+    /// (Self::transmission_towards) gave for `wo`: the specular and fuzz layers'
+    /// attenuation is that number, the coat's depends on `wi` too.
+    #[inline]
+    pub fn attenuation_through(&self, through: f32, wo: Vec3A, wi: Vec3A) -> Vec3A {
+        match *self {
+            Layer::Specular(_) => Vec3A::splat(through.max(0.0)),
+            Layer::Coat { .. } => self.attenuation(wo, wi),
+            Layer::Fuzz(_) => Vec3A::splat(through),
+        }
+    }
+
     /// What the layer leaves for the lobes beneath towards `wo`, as one number (for
     /// choosing between lobes).
     pub fn transmission_towards(&self, wo: Vec3A) -> f32 {

@@ -111,6 +111,20 @@ pub struct Shading {
     pub frame: Frame,
     /// The outgoing direction in the local frame.
     pub wo: Vec3A,
+    /// The Bsdf's terms that depend on `wo` alone, worked out once a vertex
+    /// ([`Shading::with_bsdf`]); `None`: each use works them out again.
+    pub at_wo: Option<AtWo>,
+}
+
+/// What a Bsdf of several lobes makes of the outgoing direction alone: its lobe choice
+/// and what each layer lets through towards `wo` (a specular layer's or a fuzz's
+/// directional albedo, from tables). Every light sample, BSDF sample and pdf at a vertex
+/// needs them for the same `wo`; looked up at each of those they were 36 % of the
+/// instructions of a glTF shot of layered materials (docs/performance.md).
+#[derive(Clone, Copy, Debug)]
+pub struct AtWo {
+    selection: [f32; MAX_LOBES],
+    through: [f32; MAX_LAYERS],
 }
 
 impl Shading {
@@ -127,6 +141,17 @@ impl Shading {
         Shading {
             frame,
             wo: frame.to_local(wo_world),
+            at_wo: None,
+        }
+    }
+
+    /// This shading point with `bsdf`'s terms at `wo` worked out once: the Bsdf it is
+    /// then used with must be `bsdf`.
+    #[inline]
+    pub fn with_bsdf(self, bsdf: &Bsdf) -> Shading {
+        Shading {
+            at_wo: (bsdf.n_lobes > 1).then(|| bsdf.at_wo(self.wo)),
+            ..self
         }
     }
 
@@ -147,9 +172,11 @@ impl Shading {
             t: n.cross(s),
             n,
         };
+        // A new `wo` in the turned frame: its terms are worked out again.
         Shading {
             frame,
             wo: frame.to_local(self.frame.to_world(self.wo)),
+            at_wo: None,
         }
     }
 }
@@ -308,7 +335,33 @@ impl Bsdf {
     /// Probability of choosing each lobe when sampling: in proportion to each lobe's
     /// selection weight times what the layers above it let through towards `wo`, mixed
     /// with a uniform choice (one tenth) so that no lobe with a small estimate starves.
-    fn selection(&self, wo: Vec3A) -> [f32; MAX_LOBES] {
+    fn selection(&self, sh: &Shading) -> [f32; MAX_LOBES] {
+        match &sh.at_wo {
+            Some(at) => at.selection,
+            None => self.selection_through(sh.wo, &self.through(sh.wo)),
+        }
+    }
+
+    /// What each layer lets through towards `wo`.
+    fn through(&self, wo: Vec3A) -> [f32; MAX_LAYERS] {
+        let mut through = [1.0; MAX_LAYERS];
+        for (t, layer) in through.iter_mut().zip(&self.layers[..self.n_layers]) {
+            *t = layer.transmission_towards(wo);
+        }
+        through
+    }
+
+    /// The terms of `wo` alone (see [`AtWo`]).
+    fn at_wo(&self, wo: Vec3A) -> AtWo {
+        let through = self.through(wo);
+        AtWo {
+            selection: self.selection_through(wo, &through),
+            through,
+        }
+    }
+
+    /// [`selection`](Self::selection), the layers letting `through` through.
+    fn selection_through(&self, wo: Vec3A, through: &[f32; MAX_LAYERS]) -> [f32; MAX_LOBES] {
         let mut p = [0.0; MAX_LOBES];
         let n = self.n_lobes;
         if n == 1 {
@@ -318,9 +371,9 @@ impl Bsdf {
         let mut sum = 0.0;
         for (l, (pk, lobe)) in p.iter_mut().zip(&self.lobes[..n]).enumerate() {
             let mut w = lobe.selection_weight(wo);
-            for j in 0..self.n_layers {
+            for (j, t) in through.iter().enumerate().take(self.n_layers) {
                 if l < self.layer_at[j] as usize {
-                    w *= self.layers[j].transmission_towards(wo);
+                    w *= t;
                 }
             }
             *pk = w.max(0.0);
@@ -338,11 +391,14 @@ impl Bsdf {
     }
 
     /// The product of the attenuations of the layers above lobe `l`.
-    fn attenuation(&self, l: usize, wo: Vec3A, wi: Vec3A) -> Vec3A {
+    fn attenuation(&self, l: usize, sh: &Shading, wi: Vec3A) -> Vec3A {
         let mut a = Vec3A::ONE;
         for j in 0..self.n_layers {
             if l < self.layer_at[j] as usize {
-                a *= self.layers[j].attenuation(wo, wi);
+                a *= match &sh.at_wo {
+                    Some(at) => self.layers[j].attenuation_through(at.through[j], sh.wo, wi),
+                    None => self.layers[j].attenuation(sh.wo, wi),
+                };
             }
         }
         a
@@ -357,10 +413,10 @@ impl Bsdf {
         if self.n_lobes == 1 {
             return self.lobes[0].eval(sub as usize, wo, wi, 1.0);
         }
-        let sel = self.selection(wo);
+        let sel = self.selection(sh);
         let l = l as usize;
         let (f, pdf) = self.lobes[l].eval(sub as usize, wo, wi, sel[l]);
-        (f * self.attenuation(l, wo, wi), pdf)
+        (f * self.attenuation(l, sh, wi), pdf)
     }
 
     /// Samples a lobe and a direction: `u_lobe` chooses the lobe, `u` the direction.
@@ -369,7 +425,7 @@ impl Bsdf {
         let (l, u_rest, sel_l) = if self.n_lobes == 1 {
             (0, u_lobe, 1.0)
         } else {
-            let sel = self.selection(wo);
+            let sel = self.selection(sh);
             let mut lo = 0.0;
             let mut l = self.n_lobes - 1;
             for (k, &pk) in sel[..self.n_lobes - 1].iter().enumerate() {
@@ -400,7 +456,7 @@ impl Bsdf {
             return Some(BsdfSample {
                 lobe: k,
                 wi: sh.frame.to_world(s.wi),
-                weight: weight * self.attenuation(l, wo, wi_layers),
+                weight: weight * self.attenuation(l, sh, wi_layers),
                 pdf,
                 delta,
                 eta: s.eta,

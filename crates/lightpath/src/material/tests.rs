@@ -8,6 +8,7 @@ pub(super) fn local(wo: Vec3A) -> Shading {
     Shading {
         frame: Frame::new(Vec3A::Z),
         wo,
+        at_wo: None,
     }
 }
 
@@ -1516,5 +1517,55 @@ fn glass_tints_what_it_transmits_and_not_what_it_reflects() {
             reflected > 100 && transmitted > 100,
             "{reflected} {transmitted}"
         );
+    }
+}
+
+/// A shading point with its Bsdf's terms at `wo` worked out once (`Shading::with_bsdf`,
+/// what the integrator uses) evaluates and samples every material bit for bit as one
+/// that works them out at each use: an OpenPBR stack of fuzz over coat over specular
+/// over diffuse and metal, the layered and glTF materials, and a single lobe.
+#[test]
+fn terms_worked_out_once_a_vertex_change_nothing() {
+    use crate::material::openpbr::{LobeSet, OpenPbr};
+    let mut stack = OpenPbr::default();
+    stack.base_metalness = 0.3;
+    stack.specular_roughness = 0.4;
+    stack.coat_weight = 0.6;
+    stack.coat_roughness = 0.2;
+    stack.coat_color = Vec3A::new(0.9, 0.7, 0.6);
+    stack.fuzz_weight = 0.7;
+    stack.fuzz_roughness = 0.4;
+    let materials = [
+        Bsdf::openpbr(&stack, &LobeSet::of(&stack, |_| false)),
+        Bsdf::plastic(Vec3A::splat(0.5), 1.5, 0.4),
+        Bsdf::pbr(&pbr(0.7, 0.2, 1.0)),
+        Bsdf::pbr(&pbr(0.0, 0.5, 0.0)),
+        Bsdf::diffuse(Vec3A::splat(0.6)),
+    ];
+    let mut rng = Rng::for_sample(21, 0, 0);
+    for bsdf in &materials {
+        for _ in 0..40 {
+            let mut wo = uniform_sphere(rng.next_2d());
+            wo.z = wo.z.abs();
+            let (plain, once) = (local(wo), local(wo).with_bsdf(bsdf));
+            for _ in 0..20 {
+                let wi = uniform_sphere(rng.next_2d());
+                for k in 0..bsdf.lobes().len() {
+                    let (a, b) = (bsdf.eval_lobe(k, &plain, wi), bsdf.eval_lobe(k, &once, wi));
+                    assert!(a.0.to_array().map(f32::to_bits) == b.0.to_array().map(f32::to_bits));
+                    assert_eq!(a.1.to_bits(), b.1.to_bits(), "{bsdf:?} {wo} {wi}");
+                }
+                let (u, uv) = (rng.next_f32(), rng.next_2d());
+                let (a, b) = (bsdf.sample(&plain, u, uv), bsdf.sample(&once, u, uv));
+                assert_eq!(a.is_some(), b.is_some());
+                if let (Some(a), Some(b)) = (a, b) {
+                    assert_eq!((a.lobe, a.pdf.to_bits()), (b.lobe, b.pdf.to_bits()));
+                    assert!(
+                        a.weight.to_array().map(f32::to_bits)
+                            == b.weight.to_array().map(f32::to_bits)
+                    );
+                }
+            }
+        }
     }
 }
