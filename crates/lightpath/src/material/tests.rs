@@ -1527,14 +1527,16 @@ fn glass_tints_what_it_transmits_and_not_what_it_reflects() {
 #[test]
 fn terms_worked_out_once_a_vertex_change_nothing() {
     use crate::material::openpbr::{LobeSet, OpenPbr};
-    let mut stack = OpenPbr::default();
-    stack.base_metalness = 0.3;
-    stack.specular_roughness = 0.4;
-    stack.coat_weight = 0.6;
-    stack.coat_roughness = 0.2;
-    stack.coat_color = Vec3A::new(0.9, 0.7, 0.6);
-    stack.fuzz_weight = 0.7;
-    stack.fuzz_roughness = 0.4;
+    let stack = OpenPbr {
+        base_metalness: 0.3,
+        specular_roughness: 0.4,
+        coat_weight: 0.6,
+        coat_roughness: 0.2,
+        coat_color: Vec3A::new(0.9, 0.7, 0.6),
+        fuzz_weight: 0.7,
+        fuzz_roughness: 0.4,
+        ..Default::default()
+    };
     let materials = [
         Bsdf::openpbr(&stack, &LobeSet::of(&stack, |_| false)),
         Bsdf::plastic(Vec3A::splat(0.5), 1.5, 0.4),
