@@ -199,7 +199,7 @@ impl Tracer<'_> {
         let mixture = match (v.guide, self.guide) {
             (Some(g), Some(tree)) if RICH && g.alpha > 0.0 => Some((
                 g.alpha,
-                LobeValues::at(bsdf, &v.sh, wi),
+                LobeValues::at(bsdf, &v.sh, v.at_wo.as_ref(), wi),
                 tree.leaf(g.leaf).sampling.pdf(ls.wi),
             )),
             _ => None,
@@ -220,7 +220,7 @@ impl Tracer<'_> {
                 Some((alpha, lv, guide_pdf)) => {
                     (lv.f[k], lv.mixed_pdf(bsdf, k, *alpha, *guide_pdf))
                 }
-                None => bsdf.eval_lobe(k, &v.sh, wi),
+                None => bsdf.eval_lobe_at(k, &v.sh, v.at_wo.as_ref(), wi),
             };
             if f == Vec3A::ZERO {
                 continue;

@@ -18,7 +18,7 @@ use super::path::{PathState, Vertex};
 use super::{Sink, Tracer};
 use crate::guiding::{GuidingMode, SdTree};
 use crate::light::luminance;
-use crate::material::{Bsdf, BsdfSample, Shading, MAX_LOBES};
+use crate::material::{AtWo, Bsdf, BsdfSample, Shading, MAX_LOBES};
 use crate::media::phase::HenyeyGreenstein;
 use glam::{Vec2, Vec3A};
 use lpe::ScatterClass;
@@ -135,7 +135,7 @@ pub(super) struct LobeValues {
 }
 
 impl LobeValues {
-    pub fn at(bsdf: &Bsdf, sh: &Shading, wi: Vec3A) -> LobeValues {
+    pub fn at(bsdf: &Bsdf, sh: &Shading, at: Option<&AtWo>, wi: Vec3A) -> LobeValues {
         let mut lv = LobeValues {
             f: [Vec3A::ZERO; MAX_EVENTS],
             pdf: [0.0; MAX_EVENTS],
@@ -145,7 +145,7 @@ impl LobeValues {
             if tag.delta {
                 continue;
             }
-            let (f, pdf) = bsdf.eval_lobe(k, sh, wi);
+            let (f, pdf) = bsdf.eval_lobe_at(k, sh, at, wi);
             lv.f[k] = f;
             lv.pdf[k] = pdf;
             if eligible(bsdf, k) {
@@ -275,7 +275,7 @@ impl Tracer<'_> {
         let keep = 1.0 - g.alpha;
         let (lobe, wi_world, wi) = if u_lobe < keep {
             let u = (u_lobe / keep).min(1.0 - f32::EPSILON / 2.0);
-            let bs = bsdf.sample(&v.sh, u, u_dir)?;
+            let bs = bsdf.sample_at(&v.sh, v.at_wo.as_ref(), u, u_dir)?;
             if bs.delta {
                 // The guide never samples a delta lobe's direction.
                 let bs = BsdfSample {
@@ -293,7 +293,7 @@ impl Tracer<'_> {
             let d = quad.sample(u_dir)?;
             (None, d, v.sh.frame.to_local(d))
         };
-        let lv = LobeValues::at(bsdf, &v.sh, wi);
+        let lv = LobeValues::at(bsdf, &v.sh, v.at_wo.as_ref(), wi);
         let lobe = match lobe {
             Some(k) => k,
             None => {

@@ -127,7 +127,7 @@ impl Tracer<'_> {
         let mut f = Vec3A::ZERO;
         for (k, tag) in v.bsdf.lobes().iter().enumerate() {
             if !tag.delta {
-                f += v.bsdf.eval_lobe(k, &v.sh, c.wi).0;
+                f += v.bsdf.eval_lobe_at(k, &v.sh, v.at_wo.as_ref(), c.wi).0;
             }
         }
         luminance(f * c.ls.radiance)

@@ -8,7 +8,7 @@ use super::volume::{media_seed, Coincident, Flight, MAX_CROSSINGS};
 use super::{Sink, Tracer};
 use crate::geometry::{Hit, Ray, Visibility};
 use crate::light::Light;
-use crate::material::{Bsdf, Shading};
+use crate::material::{AtWo, Bsdf, Shading};
 use crate::media::MediumStack;
 use crate::sampler::{dim, Sampler};
 use crate::sampling::Rng;
@@ -59,6 +59,9 @@ pub(super) struct Vertex<'a> {
     /// or its regularised one after a diffuse bounce.
     pub bsdf: &'a Bsdf,
     pub sh: Shading,
+    /// The Bsdf's terms of `sh.wo` alone, worked out once here for every evaluation
+    /// and sample at this vertex.
+    pub at_wo: Option<AtWo>,
     /// The direction the path arrived along (world space).
     pub dir: Vec3A,
     /// Path guiding here, if the render guides and the Bsdf is guided (guided.rs).
@@ -212,9 +215,7 @@ impl Tracer<'_> {
                 (None, Some(rough)) if path.diffuse > 0 => (rough, hit.ns),
                 (None, _) => (&material.bsdf, hit.ns),
             };
-            let sh = self
-                .oriented(Shading::new(bsdf, ns, hit.ng, -ray.dir), material, &hit)
-                .with_bsdf(bsdf);
+            let sh = self.oriented(Shading::new(bsdf, ns, hit.ng, -ray.dir), material, &hit);
             if sh.wo.z == 0.0 {
                 break;
             }
@@ -224,6 +225,7 @@ impl Tracer<'_> {
                 material,
                 bsdf,
                 sh,
+                at_wo: bsdf.at_wo(sh.wo),
                 dir: ray.dir,
                 guide: RICH.then(|| self.guide_at(bsdf, hit.p, &sh)).flatten(),
             };
@@ -425,7 +427,10 @@ impl Tracer<'_> {
             Some(g) if g.alpha > 0.0 || (self.learn && g.trained) => {
                 self.sample_guided(v, g, u_lobe, u_dir)?
             }
-            _ => (v.bsdf.sample(&v.sh, u_lobe, u_dir)?, None),
+            _ => (
+                v.bsdf.sample_at(&v.sh, v.at_wo.as_ref(), u_lobe, u_dir)?,
+                None,
+            ),
         };
         match v.bsdf.lobes()[bs.lobe].scatter.class {
             ScatterClass::Diffuse => {

@@ -111,16 +111,16 @@ pub struct Shading {
     pub frame: Frame,
     /// The outgoing direction in the local frame.
     pub wo: Vec3A,
-    /// The Bsdf's terms that depend on `wo` alone, worked out once a vertex
-    /// ([`Shading::with_bsdf`]); `None`: each use works them out again.
-    pub at_wo: Option<AtWo>,
 }
 
 /// What a Bsdf of several lobes makes of the outgoing direction alone: its lobe choice
 /// and what each layer lets through towards `wo` (a specular layer's or a fuzz's
 /// directional albedo, from tables). Every light sample, BSDF sample and pdf at a vertex
 /// needs them for the same `wo`; looked up at each of those they were 36 % of the
-/// instructions of a glTF shot of layered materials (docs/performance.md).
+/// instructions of a glTF shot of layered materials (docs/performance.md). The
+/// integrator works them out once a vertex ([`Bsdf::at_wo`]) and passes them to the
+/// `_at` forms of `eval_lobe` and `sample`; kept out of [`Shading`], whose copies every
+/// vertex makes.
 #[derive(Clone, Copy, Debug)]
 pub struct AtWo {
     selection: [f32; MAX_LOBES],
@@ -141,17 +141,6 @@ impl Shading {
         Shading {
             frame,
             wo: frame.to_local(wo_world),
-            at_wo: None,
-        }
-    }
-
-    /// This shading point with `bsdf`'s terms at `wo` worked out once: the Bsdf it is
-    /// then used with must be `bsdf`.
-    #[inline]
-    pub fn with_bsdf(self, bsdf: &Bsdf) -> Shading {
-        Shading {
-            at_wo: (bsdf.n_lobes > 1).then(|| bsdf.at_wo(self.wo)),
-            ..self
         }
     }
 
@@ -172,11 +161,9 @@ impl Shading {
             t: n.cross(s),
             n,
         };
-        // A new `wo` in the turned frame: its terms are worked out again.
         Shading {
             frame,
             wo: frame.to_local(self.frame.to_world(self.wo)),
-            at_wo: None,
         }
     }
 }
@@ -335,8 +322,8 @@ impl Bsdf {
     /// Probability of choosing each lobe when sampling: in proportion to each lobe's
     /// selection weight times what the layers above it let through towards `wo`, mixed
     /// with a uniform choice (one tenth) so that no lobe with a small estimate starves.
-    fn selection(&self, sh: &Shading) -> [f32; MAX_LOBES] {
-        match &sh.at_wo {
+    fn selection(&self, sh: &Shading, at: Option<&AtWo>) -> [f32; MAX_LOBES] {
+        match at {
             Some(at) => at.selection,
             None => self.selection_through(sh.wo, &self.through(sh.wo)),
         }
@@ -351,8 +338,16 @@ impl Bsdf {
         through
     }
 
-    /// The terms of `wo` alone (see [`AtWo`]).
-    fn at_wo(&self, wo: Vec3A) -> AtWo {
+    /// The terms of the local outgoing direction `wo` alone (see [`AtWo`]), for the
+    /// `_at` forms of [`eval_lobe`](Self::eval_lobe) and [`sample`](Self::sample) at
+    /// that `wo`; `None` for one lobe (no choice, no layer).
+    #[inline]
+    pub fn at_wo(&self, wo: Vec3A) -> Option<AtWo> {
+        (self.n_lobes > 1).then(|| self.work_out(wo))
+    }
+
+    #[inline(never)]
+    fn work_out(&self, wo: Vec3A) -> AtWo {
         let through = self.through(wo);
         AtWo {
             selection: self.selection_through(wo, &through),
@@ -391,11 +386,19 @@ impl Bsdf {
     }
 
     /// The product of the attenuations of the layers above lobe `l`.
-    fn attenuation(&self, l: usize, sh: &Shading, wi: Vec3A) -> Vec3A {
+    #[inline(always)]
+    fn attenuation(&self, l: usize, sh: &Shading, at: Option<&AtWo>, wi: Vec3A) -> Vec3A {
+        if self.n_layers == 0 {
+            return Vec3A::ONE;
+        }
+        self.layered_attenuation(l, sh, at, wi)
+    }
+
+    fn layered_attenuation(&self, l: usize, sh: &Shading, at: Option<&AtWo>, wi: Vec3A) -> Vec3A {
         let mut a = Vec3A::ONE;
         for j in 0..self.n_layers {
             if l < self.layer_at[j] as usize {
-                a *= match &sh.at_wo {
+                a *= match at {
                     Some(at) => self.layers[j].attenuation_through(at.through[j], sh.wo, wi),
                     None => self.layers[j].attenuation(sh.wo, wi),
                 };
@@ -407,25 +410,49 @@ impl Bsdf {
     /// `f · |cos θi|` of lobe event `k` for the local directions, and its pdf
     /// (selection included). Delta lobes evaluate to zero.
     pub fn eval_lobe(&self, k: usize, sh: &Shading, wi: Vec3A) -> (Vec3A, f32) {
+        self.eval_lobe_at(k, sh, None, wi)
+    }
+
+    /// [`eval_lobe`](Self::eval_lobe) with the terms of `sh.wo` worked out (`at`, from
+    /// [`at_wo`](Self::at_wo)).
+    #[inline]
+    pub fn eval_lobe_at(
+        &self,
+        k: usize,
+        sh: &Shading,
+        at: Option<&AtWo>,
+        wi: Vec3A,
+    ) -> (Vec3A, f32) {
         let wo = sh.wo;
         let (l, sub) = self.tag_lobe[k];
         // One lobe (no layer without a second): chosen always, attenuated by nothing.
         if self.n_lobes == 1 {
             return self.lobes[0].eval(sub as usize, wo, wi, 1.0);
         }
-        let sel = self.selection(sh);
+        let sel = self.selection(sh, at);
         let l = l as usize;
         let (f, pdf) = self.lobes[l].eval(sub as usize, wo, wi, sel[l]);
-        (f * self.attenuation(l, sh, wi), pdf)
+        (f * self.attenuation(l, sh, at, wi), pdf)
     }
 
     /// Samples a lobe and a direction: `u_lobe` chooses the lobe, `u` the direction.
     pub fn sample(&self, sh: &Shading, u_lobe: f32, u: Vec2) -> Option<BsdfSample> {
+        self.sample_at(sh, None, u_lobe, u)
+    }
+
+    /// [`sample`](Self::sample) with the terms of `sh.wo` worked out (`at`).
+    pub fn sample_at(
+        &self,
+        sh: &Shading,
+        at: Option<&AtWo>,
+        u_lobe: f32,
+        u: Vec2,
+    ) -> Option<BsdfSample> {
         let wo = sh.wo;
         let (l, u_rest, sel_l) = if self.n_lobes == 1 {
             (0, u_lobe, 1.0)
         } else {
-            let sel = self.selection(sh);
+            let sel = self.selection(sh, at);
             let mut lo = 0.0;
             let mut l = self.n_lobes - 1;
             for (k, &pk) in sel[..self.n_lobes - 1].iter().enumerate() {
@@ -456,13 +483,13 @@ impl Bsdf {
             return Some(BsdfSample {
                 lobe: k,
                 wi: sh.frame.to_world(s.wi),
-                weight: weight * self.attenuation(l, sh, wi_layers),
+                weight: weight * self.attenuation(l, sh, at, wi_layers),
                 pdf,
                 delta,
                 eta: s.eta,
             });
         }
-        let (f, pdf) = self.eval_lobe(k, sh, s.wi);
+        let (f, pdf) = self.eval_lobe_at(k, sh, at, s.wi);
         if pdf <= 0.0 || f == Vec3A::ZERO {
             return None;
         }

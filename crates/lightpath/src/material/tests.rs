@@ -8,7 +8,6 @@ pub(super) fn local(wo: Vec3A) -> Shading {
     Shading {
         frame: Frame::new(Vec3A::Z),
         wo,
-        at_wo: None,
     }
 }
 
@@ -1520,9 +1519,9 @@ fn glass_tints_what_it_transmits_and_not_what_it_reflects() {
     }
 }
 
-/// A shading point with its Bsdf's terms at `wo` worked out once (`Shading::with_bsdf`,
-/// what the integrator uses) evaluates and samples every material bit for bit as one
-/// that works them out at each use: an OpenPBR stack of fuzz over coat over specular
+/// With its terms at `wo` worked out once (`Bsdf::at_wo`, what the integrator does at
+/// each vertex) every material evaluates and samples bit for bit as when each use works
+/// them out: an OpenPBR stack of fuzz over coat over specular
 /// over diffuse and metal, the layered and glTF materials, and a single lobe.
 #[test]
 fn terms_worked_out_once_a_vertex_change_nothing() {
@@ -1549,16 +1548,23 @@ fn terms_worked_out_once_a_vertex_change_nothing() {
         for _ in 0..40 {
             let mut wo = uniform_sphere(rng.next_2d());
             wo.z = wo.z.abs();
-            let (plain, once) = (local(wo), local(wo).with_bsdf(bsdf));
+            let sh = local(wo);
+            let at = bsdf.at_wo(wo);
             for _ in 0..20 {
                 let wi = uniform_sphere(rng.next_2d());
                 for k in 0..bsdf.lobes().len() {
-                    let (a, b) = (bsdf.eval_lobe(k, &plain, wi), bsdf.eval_lobe(k, &once, wi));
+                    let (a, b) = (
+                        bsdf.eval_lobe(k, &sh, wi),
+                        bsdf.eval_lobe_at(k, &sh, at.as_ref(), wi),
+                    );
                     assert!(a.0.to_array().map(f32::to_bits) == b.0.to_array().map(f32::to_bits));
                     assert_eq!(a.1.to_bits(), b.1.to_bits(), "{bsdf:?} {wo} {wi}");
                 }
                 let (u, uv) = (rng.next_f32(), rng.next_2d());
-                let (a, b) = (bsdf.sample(&plain, u, uv), bsdf.sample(&once, u, uv));
+                let (a, b) = (
+                    bsdf.sample(&sh, u, uv),
+                    bsdf.sample_at(&sh, at.as_ref(), u, uv),
+                );
                 assert_eq!(a.is_some(), b.is_some());
                 if let (Some(a), Some(b)) = (a, b) {
                     assert_eq!((a.lobe, a.pdf.to_bits()), (b.lobe, b.pdf.to_bits()));
