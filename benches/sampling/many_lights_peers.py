@@ -2,7 +2,7 @@
 (path guiding off and on), each on the same scenes and each against its own reference.
 
     /work/venv311/bin/python benches/sampling/many_lights_peers.py LIGHTPATH OUT_DIR \
-        [--spp 16] [--seeds 2] [--recipes sky_key_lamps,corridor] [--ref-spp 4096]
+        [--spp 16] [--seeds 2] [--recipes sky_key_lamps,corridor] [--ref-spp 4096] [--repeat 5]
 
 Needs, in the Python that runs it, bpy 5.0.1 (Blender as a module), numpy and OpenEXR;
 Mitsuba 3 runs in a subprocess under $MITSUBA_PYTHON (default `python3`, which must
@@ -38,7 +38,12 @@ cone_softness -> Mitsuba cutoff = cone/2, beam width = cone/2 - softness (linear
 the cosine, as Lightpath). Conductor f0, roughness r -> roughconductor (`none`, reflectance
 f0, alpha r^2) / Principled metallic (base colour f0, roughness r).
 
-Prints per scene each renderer's median wall seconds, MSE against its own reference, and
+With --repeat R each timed render is run R times (the same image) and its fastest time is
+kept: on a shared machine the minimum is the least disturbed. References that exist in
+OUT_DIR are reused, so a re-run with another --spp, --seeds or --repeat renders only those.
+
+Prints per scene each renderer's median wall seconds (and CPU seconds: Lightpath's whole
+process, the peers' process time over the render call), MSE against its own reference, and
 efficiency 1 / (MSE x s), Lightpath's efficiency over each peer's, and each reference's mean
 over Lightpath's; writes OUT_DIR/results.json.
 """
@@ -86,7 +91,7 @@ def write_ply(path, verts, faces):
         f.write(header.encode("ascii") + verts.tobytes() + rec.tobytes())
 
 
-def mitsuba_main(desc_path, out_prefix, ref_spp, spp, seeds):
+def mitsuba_main(desc_path, out_prefix, ref_spp, spp, seeds, repeat=1):
     for cand in ("/usr/lib/x86_64-linux-gnu/libLLVM.so.19.1", "/usr/lib/x86_64-linux-gnu/libLLVM-19.so"):
         if "DRJIT_LIBLLVM_PATH" not in os.environ and os.path.exists(cand):
             os.environ["DRJIT_LIBLLVM_PATH"] = cand
@@ -185,10 +190,13 @@ def mitsuba_main(desc_path, out_prefix, ref_spp, spp, seeds):
         res["ref_seconds"] = time.time() - t
     render(spp, 0)  # warm-up: compiles (or loads) the kernel of this size
     for seed in range(1, seeds + 1):
-        load = os.getloadavg()[0]
-        t = time.time()
-        img = render(spp, seed * 1000)
-        res[f"seed{seed}"] = {"seconds": time.time() - t, "load": load}
+        load, times, cpus = os.getloadavg()[0], [], []
+        for _ in range(repeat):
+            t, cpu = time.time(), time.process_time()
+            img = render(spp, seed * 1000)
+            times.append(time.time() - t)
+            cpus.append(time.process_time() - cpu)
+        res[f"seed{seed}"] = {"seconds": min(times), "cpu": min(cpus), "times": times, "load": load}
         save(img, f"{out_prefix}_{spp}_{seed}.exr")
     print("RESULT " + json.dumps(res), flush=True)
 
@@ -209,7 +217,7 @@ def look_at_matrix(pos, target, up=(0, 1, 0)):
     return m
 
 
-def cycles_main(desc_path, out_prefix, ref_spp, spp, seeds):
+def cycles_main(desc_path, out_prefix, ref_spp, spp, seeds, repeat=1):
     import bpy
     from mathutils import Matrix
     with open(desc_path) as f:
@@ -365,14 +373,14 @@ def cycles_main(desc_path, out_prefix, ref_spp, spp, seeds):
         c.use_guiding = guiding
         c.use_surface_guiding = guiding
         r.filepath = path
-        t = time.time()
+        t, cpu = time.time(), time.process_time()
         bpy.ops.render.render(write_still=True)
-        return time.time() - t
+        return time.time() - t, time.process_time() - cpu
 
     res = {}
     ref = f"{out_prefix}_ref.exr"
     if not os.path.exists(ref):
-        res["ref_seconds"] = render(ref, ref_spp, 10_000_000, False)
+        res["ref_seconds"] = render(ref, ref_spp, 10_000_000, False)[0]
     tmp = f"{out_prefix}_warmup.exr"
     render(tmp, spp, 0, False)
     render(tmp, spp, 0, True)
@@ -380,8 +388,10 @@ def cycles_main(desc_path, out_prefix, ref_spp, spp, seeds):
         for guiding in (False, True):
             load = os.getloadavg()[0]
             tag = "guided" if guiding else "plain"
-            secs = render(f"{out_prefix}_{tag}_{spp}_{seed}.exr", spp, seed, guiding)
-            res[f"{tag}{seed}"] = {"seconds": secs, "load": load}
+            runs = [render(f"{out_prefix}_{tag}_{spp}_{seed}.exr", spp, seed, guiding) for _ in range(repeat)]
+            times = [t for t, _ in runs]
+            res[f"{tag}{seed}"] = {"seconds": min(times), "cpu": min(c for _, c in runs), "times": times,
+                                   "load": load}
     print("RESULT " + json.dumps(res), flush=True)
 
 
@@ -391,20 +401,29 @@ def result_line(stdout):
     return json.loads([ln for ln in stdout.splitlines() if ln.startswith("RESULT ")][-1][7:])
 
 
-def lightpath(binary, scene, img, spp, seed):
+def lightpath(binary, scene, img, spp, seed, repeat=1):
     args = [binary, "render", scene, "-o", img, "--aovs", "none", "--resolution", f"{SIZE}x{SIZE}",
             "--spp", str(spp), "--seed", str(seed), "--light-selection", "tree", "--clamp-indirect", "0",
             "--threads", "2", "--quiet"]
-    load = os.getloadavg()[0]
-    t = time.time()
-    subprocess.run(args, check=True, stdout=subprocess.DEVNULL)
-    return {"seconds": time.time() - t, "load": load}
+    load, times, cpus = os.getloadavg()[0], [], []
+    for _ in range(repeat):
+        t, cpu = time.time(), children_cpu()
+        subprocess.run(args, check=True, stdout=subprocess.DEVNULL)
+        times.append(time.time() - t)
+        cpus.append(children_cpu() - cpu)
+    return {"seconds": min(times), "cpu": min(cpus), "times": times, "load": load}
+
+
+def children_cpu():
+    import resource
+    r = resource.getrusage(resource.RUSAGE_CHILDREN)
+    return r.ru_utime + r.ru_stime
 
 
 def main():
     if len(sys.argv) > 1 and sys.argv[1] in ("mitsuba", "cycles"):
         fn = mitsuba_main if sys.argv[1] == "mitsuba" else cycles_main
-        fn(sys.argv[2], sys.argv[3], int(sys.argv[4]), int(sys.argv[5]), int(sys.argv[6]))
+        fn(sys.argv[2], sys.argv[3], *(int(a) for a in sys.argv[4:8]))
         return
     import numpy as np
     sys.path.insert(0, os.path.join(HERE, ".."))
@@ -419,6 +438,8 @@ def main():
     ap.add_argument("--ref-spp", default="4096",
                     help="reference spp: one number, or lightpath=N,mitsuba=N,cycles=N")
     ap.add_argument("--renderers", default="lightpath,mitsuba,cycles")
+    ap.add_argument("--repeat", type=int, default=1,
+                    help="time each 16-spp render this many times and keep the fastest (a loaded machine)")
     args = ap.parse_args()
     out = os.path.abspath(args.out_dir)
     os.makedirs(out, exist_ok=True)
@@ -443,17 +464,18 @@ def main():
                 runs["lightpath_ref"] = lightpath(args.binary, base + ".toml", ref, ref_spp["lightpath"], 99)
             for seed in range(1, args.seeds + 1):
                 runs[f"lightpath{seed}"] = lightpath(args.binary, base + ".toml",
-                                                     f"{base}_lightpath_{args.spp}_{seed}.exr", args.spp, seed)
+                                                     f"{base}_lightpath_{args.spp}_{seed}.exr", args.spp, seed,
+                                                     args.repeat)
         if "mitsuba" in renderers:
             p = subprocess.run([mpy, os.path.abspath(__file__), "mitsuba", base + ".json", base + "_mitsuba",
-                                str(ref_spp["mitsuba"]), str(args.spp), str(args.seeds)],
+                                str(ref_spp["mitsuba"]), str(args.spp), str(args.seeds), str(args.repeat)],
                                check=True, capture_output=True, text=True)
             for k, v in result_line(p.stdout).items():
                 runs["mitsuba_ref" if k == "ref_seconds" else f"mitsuba{k[4:]}"] = \
                     {"seconds": v} if k == "ref_seconds" else v
         if "cycles" in renderers:
             p = subprocess.run([sys.executable, os.path.abspath(__file__), "cycles", base + ".json", base + "_cycles",
-                                str(ref_spp["cycles"]), str(args.spp), str(args.seeds)],
+                                str(ref_spp["cycles"]), str(args.spp), str(args.seeds), str(args.repeat)],
                                check=True, capture_output=True, text=True)
             for k, v in result_line(p.stdout).items():
                 if k == "ref_seconds":
@@ -477,15 +499,18 @@ def main():
             if not os.path.exists(ref) or f"{who}1" not in runs:
                 continue
             r = img(ref)
-            mses, secs, loads, means = [], [], [], []
+            mses, secs, cpus, loads, means = [], [], [], [], []
             for seed in range(1, args.seeds + 1):
                 x = img(files[who].format(seed))
                 mses.append(float(((x - r) ** 2).mean()))
                 means.append(float(x.mean()))
                 secs.append(runs[f"{who}{seed}"]["seconds"])
+                cpus.append(runs[f"{who}{seed}"].get("cpu", float("nan")))
                 loads.append(runs[f"{who}{seed}"]["load"])
             mse, s = statistics.median(mses), statistics.median(secs)
-            summary[who] = dict(mse=mse, seconds=s, eff=1 / (mse * s), ref_mean=float(r.mean()),
+            c = statistics.median(cpus)
+            summary[who] = dict(mse=mse, seconds=s, eff=1 / (mse * s), cpu=c, eff_cpu=1 / (mse * c),
+                                ref_mean=float(r.mean()),
                                 mean16=statistics.mean(means), load=max(loads),
                                 ref_seconds=runs.get(who.split("_")[0] + "_ref", {}).get("seconds"))
         runs["summary"] = summary
@@ -495,10 +520,10 @@ def main():
         for who, v in summary.items():
             extra = ""
             if lp and who != "lightpath":
-                extra = (f"  LP eff / this {lp['eff'] / v['eff']:6.2f}x  ref mean / LP's "
-                         f"{v['ref_mean'] / lp['ref_mean']:.3f}")
-            print(f"{name:14s} {who:13s} {v['seconds']:6.3f} s  MSE {v['mse']:.3e}  eff {v['eff']:10.4g}  "
-                  f"ref mean {v['ref_mean']:.4f} (16-spp mean {v['mean16']:.4f})  load {v['load']:.2f}{extra}",
+                extra = (f"  LP eff / this {lp['eff'] / v['eff']:6.2f}x (CPU {lp['eff_cpu'] / v['eff_cpu']:6.2f}x)"
+                         f"  ref mean / LP's {v['ref_mean'] / lp['ref_mean']:.3f}")
+            print(f"{name:14s} {who:13s} {v['seconds']:6.3f} s ({v['cpu']:6.3f} CPU s)  MSE {v['mse']:.3e}  "
+                  f"eff {v['eff']:10.4g}  ref mean {v['ref_mean']:.4f} (16-spp mean {v['mean16']:.4f})  load {v['load']:.2f}{extra}",
                   flush=True)
 
 
