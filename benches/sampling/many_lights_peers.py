@@ -425,7 +425,6 @@ def main():
         fn = mitsuba_main if sys.argv[1] == "mitsuba" else cycles_main
         fn(sys.argv[2], sys.argv[3], *(int(a) for a in sys.argv[4:8]))
         return
-    import numpy as np
     sys.path.insert(0, os.path.join(HERE, ".."))
     from benchlib.exr import channels, rgb
 
