@@ -19,6 +19,11 @@
 #   e.g. benches/guiding/cycles_guiding.sh /tmp/cyg target/dist/lightpath "64 256" 1 2 3
 #   PY311=/path/to/python   a Python with bpy 5.0.1, numpy and OpenEXR (default /work/venv311/bin/python)
 #   CYCLES_REF, MITSUBA_REF, LIGHTPATH_REF   existing converged images to use instead
+#     (CYCLES_REF_SPP, MITSUBA_REF_SPP, LIGHTPATH_REF_SPP: their spp if not 4096, 8192, 4096)
+#   RENDERERS="cycles_off cycles_on mitsuba lightpath_off lightpath_on"   the default list; Cycles
+#     variants: cycles_on_nodet (use_deterministic_guiding off), cycles_on_trainN
+#     (guiding_training_samples N; 0 trains to the last sample), e.g. cycles_on_nodet_train0
+#   APPEND=1   add to OUT/results.txt instead of starting it afresh (the summary then covers both)
 set -u
 out=$1; lp=$2; spps=$3; shift 3
 here="$(cd "$(dirname "$0")" && pwd)"
@@ -28,7 +33,8 @@ box_json="$here/indirect_box.json"
 box_toml="$here/indirect_box.toml"
 mkdir -p "$out"
 res="$out/results.txt"
-: > "$res"
+[ "${APPEND:-0}" = 1 ] || : > "$res"
+renderers="${RENDERERS:-cycles_off cycles_on mitsuba lightpath_off lightpath_on}"
 load() { cut -d' ' -f1-3 /proc/loadavg | tr ' ' '/'; }
 
 cycles_ref="${CYCLES_REF:-$out/cycles_ref.exr}"
@@ -52,14 +58,17 @@ fi
 
 for spp in $spps; do
   for i in "$@"; do
-    for r in cycles_off cycles_on mitsuba lightpath_off lightpath_on; do
+    for r in $renderers; do
       img="box_${r}_${spp}_$i"
       l=$(load)
       case $r in
         cycles_*)
-          g=0; [ "$r" = cycles_on ] && g=1
+          opts="--guiding 0"
+          case $r in cycles_on*) opts="--guiding 1" ;; esac
+          case $r in *_nodet*) opts="$opts --guiding-deterministic 0" ;; esac
+          case $r in *_train[0-9]*) opts="$opts --guiding-training-samples ${r##*_train}" ;; esac
           "$py311" "$peer/cycles_cornell.py" --json "$box_json" --spp "$spp" --max-depth 8 --threads 2 \
-            --seed "$i" --repeat 2 --beauty-only --guiding "$g" --out "$out/$img" > "$out/log.txt" 2>&1
+            --seed "$i" --repeat 2 --beauty-only $opts --out "$out/$img" > "$out/log.txt" 2>&1
           w=$(sed -n 's/^RESULT.* best_s=\([0-9.]*\).*/\1/p' "$out/log.txt")
           c=$(sed -n 's/^RESULT.* best_cpu_s=\([0-9.]*\).*/\1/p' "$out/log.txt") ;;
         mitsuba)
@@ -80,5 +89,5 @@ for spp in $spps; do
     done
   done
 done
-"$py311" "$here/cycles_guiding.py" "$res" "$out" cycles="$cycles_ref" mitsuba="$mitsuba_ref" \
-  lightpath="$lightpath_ref"
+"$py311" "$here/cycles_guiding.py" "$res" "$out" cycles="$cycles_ref@${CYCLES_REF_SPP:-4096}" \
+  mitsuba="$mitsuba_ref@${MITSUBA_REF_SPP:-8192}" lightpath="$lightpath_ref@${LIGHTPATH_REF_SPP:-4096}"
