@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # Path guiding (issue 29 item 4): Blender Cycles with its Open PGL path guiding off and on
-# (surface guiding, Cycles' default 128 training samples, which it trains during the render
-# and keeps in the image) on the held-out indirect-only box (indirect_box.json), next to
+# (surface guiding, Cycles' default 128 training "samples", which are guiding-field updates of
+# at most 4 spp each: it trains through the first 512 spp, during the render, and keeps those
+# samples in the image) on the held-out indirect-only box (indirect_box.json), next to
 # Mitsuba 3 (llvm_ad_rgb path) and Lightpath --guiding off and on, all at max depth 8 and
 # 2 threads. Per spp and seed the renderers alternate: cycles_off, cycles_on, mitsuba,
 # lightpath_off, lightpath_on. Seconds: Cycles' and Mitsuba's best wall of 2 renders in one
@@ -21,8 +22,10 @@
 #   CYCLES_REF, MITSUBA_REF, LIGHTPATH_REF   existing converged images to use instead
 #     (CYCLES_REF_SPP, MITSUBA_REF_SPP, LIGHTPATH_REF_SPP: their spp if not 4096, 8192, 4096)
 #   RENDERERS="cycles_off cycles_on mitsuba lightpath_off lightpath_on"   the default list; Cycles
-#     variants: cycles_on_nodet (use_deterministic_guiding off), cycles_on_trainN
-#     (guiding_training_samples N; 0 trains to the last sample), e.g. cycles_on_nodet_train0
+#     variants: cycles_on_nodet (use_deterministic_guiding off, with Developer Extras on: Cycles
+#     ignores it otherwise), cycles_on_trainN (guiding_training_samples N, counted in field
+#     updates of at most 4 spp each, so the default 128 trains through 512 spp; 0 trains to the
+#     last sample), e.g. cycles_on_nodet_train16
 #   APPEND=1   add to OUT/results.txt instead of starting it afresh (the summary then covers both)
 set -u
 out=$1; lp=$2; spps=$3; shift 3

@@ -53,9 +53,13 @@ def parse(argv):
                     help="Cycles path guiding (Open PGL) on surfaces (1) or off (0, the default); volume guiding stays off. "
                          "Cycles trains during the render and keeps the training samples in the image")
     ap.add_argument("--guiding-training-samples", type=int, default=None,
-                    help="with --guiding 1: Cycles' guiding_training_samples (its default 128; 0 trains to the last sample)")
+                    help="with --guiding 1: Cycles' guiding_training_samples (its default 128; 0 trains to the last sample). "
+                         "Cycles counts it in guiding-field updates (PathTrace::guiding_prepare_structures compares it with "
+                         "the field's iteration), and while training it renders at most 4 samples per update: 128 trains "
+                         "for up to 512 spp")
     ap.add_argument("--guiding-deterministic", type=int, default=None, choices=(0, 1),
-                    help="with --guiding 1: Cycles' use_deterministic_guiding (its default 1, which slows training)")
+                    help="with --guiding 1: Cycles' use_deterministic_guiding (its default 1, which slows training). Cycles "
+                         "syncs it only with the Developer Extras preference, which this option therefore turns on")
     return ap.parse_args(argv)
 
 
@@ -141,6 +145,9 @@ def build_scene(bpy, js, args):
         cyc.guiding_training_samples = args.guiding_training_samples
     if args.guiding_deterministic is not None:
         cyc.use_deterministic_guiding = bool(args.guiding_deterministic)
+        # Cycles' sync reads use_deterministic_guiding (and the other guiding developer settings,
+        # left at their defaults here) only when the Developer Extras preference is on.
+        bpy.context.preferences.view.show_developer_ui = True
     film = js["film"]
     filt = (args.filter or film.get("pixel_filter", "box")).lower()
     if filt == "box":
