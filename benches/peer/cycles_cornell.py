@@ -59,7 +59,7 @@ def parse(argv):
                          "for up to 512 spp")
     ap.add_argument("--guiding-deterministic", type=int, default=None, choices=(0, 1),
                     help="with --guiding 1: Cycles' use_deterministic_guiding (its default 1, which slows training). Cycles "
-                         "syncs it only with the Developer Extras preference, which this option therefore turns on")
+                         "syncs it only with the Developer Extras (and Cycles Debug) preferences, which this option therefore turns on")
     return ap.parse_args(argv)
 
 
@@ -146,8 +146,12 @@ def build_scene(bpy, js, args):
     if args.guiding_deterministic is not None:
         cyc.use_deterministic_guiding = bool(args.guiding_deterministic)
         # Cycles' sync reads use_deterministic_guiding (and the other guiding developer settings,
-        # left at their defaults here) only when the Developer Extras preference is on.
-        bpy.context.preferences.view.show_developer_ui = True
+        # left at their defaults here) only with use_developer_ui, which BlenderSession takes
+        # from the Developer Extras and Cycles Debug preferences.
+        prefs = bpy.context.preferences
+        prefs.view.show_developer_ui = True
+        if hasattr(prefs.experimental, "use_cycles_debug"):
+            prefs.experimental.use_cycles_debug = True
     film = js["film"]
     filt = (args.filter or film.get("pixel_filter", "box")).lower()
     if filt == "box":
