@@ -15,6 +15,7 @@ Outputs PREFIX.exr, a multilayer float32 EXR with the passes
   Combined, DiffDir, DiffInd, DiffCol, GlossDir, GlossInd, GlossCol, Emit,
   Combined_<lightgroup> (one light group per emitter object)
 and PREFIX.png (combined, sRGB 'Standard' view transform).
+--guiding 1 turns on Cycles path guiding (Open PGL) on surfaces (see --help).
 Note: Cycles' Diff{Dir,Ind} passes are irradiance-like: the diffuse contribution to
 Combined is (DiffDir + DiffInd) * DiffCol.
 """
@@ -48,6 +49,17 @@ def parse(argv):
     ap.add_argument("--repeat", type=int, default=1, help="render this many times (timing); the last one is written")
     ap.add_argument("--beauty-only", action="store_true",
                     help="no extra passes and no light groups (Combined only), for beauty-only timing")
+    ap.add_argument("--guiding", type=int, default=0, choices=(0, 1),
+                    help="Cycles path guiding (Open PGL) on surfaces (1) or off (0, the default); volume guiding stays off. "
+                         "Cycles trains during the render and keeps the training samples in the image")
+    ap.add_argument("--guiding-training-samples", type=int, default=None,
+                    help="with --guiding 1: Cycles' guiding_training_samples (its default 128; 0 trains to the last sample). "
+                         "Cycles counts it in guiding-field updates (PathTrace::guiding_prepare_structures compares it with "
+                         "the field's iteration), and while training it renders at most 4 samples per update: 128 trains "
+                         "for up to 512 spp")
+    ap.add_argument("--guiding-deterministic", type=int, default=None, choices=(0, 1),
+                    help="with --guiding 1: Cycles' use_deterministic_guiding (its default 1, which slows training). Cycles "
+                         "syncs it only with the Developer Extras (and Cycles Debug) preferences, which this option therefore turns on")
     return ap.parse_args(argv)
 
 
@@ -125,6 +137,21 @@ def build_scene(bpy, js, args):
     cyc.blur_glossy = 0.0
     cyc.caustics_reflective = True
     cyc.caustics_refractive = True
+    # Path guiding (Open PGL, CPU only); property names as in CyclesRenderSettings.bl_rna.
+    cyc.use_guiding = bool(args.guiding)
+    cyc.use_surface_guiding = bool(args.guiding)
+    cyc.use_volume_guiding = False
+    if args.guiding_training_samples is not None:
+        cyc.guiding_training_samples = args.guiding_training_samples
+    if args.guiding_deterministic is not None:
+        cyc.use_deterministic_guiding = bool(args.guiding_deterministic)
+        # Cycles' sync reads use_deterministic_guiding (and the other guiding developer settings,
+        # left at their defaults here) only with use_developer_ui, which BlenderSession takes
+        # from the Developer Extras and Cycles Debug preferences.
+        prefs = bpy.context.preferences
+        prefs.view.show_developer_ui = True
+        if hasattr(prefs.experimental, "use_cycles_debug"):
+            prefs.experimental.use_cycles_debug = True
     film = js["film"]
     filt = (args.filter or film.get("pixel_filter", "box")).lower()
     if filt == "box":
@@ -240,23 +267,28 @@ def main():
     print(f"blender {bpy.app.version_string} cycles CPU threads={scene.render.threads} res={W}x{H} spp={args.spp} "
           f"max_depth={args.max_depth} (max_bounces={bounces}) filter={scene.cycles.pixel_filter_type} "
           f"light_tree={scene.cycles.use_light_tree} one_sided={not args.two_sided} lightgroups={lightgroups}")
+    c = scene.cycles
+    print(f"guiding={int(c.use_guiding)} surface={int(c.use_surface_guiding)} volume={int(c.use_volume_guiding)} "
+          f"training_samples={c.guiding_training_samples} deterministic={int(c.use_deterministic_guiding)} "
+          f"distribution={c.guiding_distribution_type} directional={c.guiding_directional_sampling_type}")
     print(f"build_s={t_build:.3f}")
     if args.save_blend:
         bpy.ops.wm.save_as_mainfile(filepath=os.path.abspath(args.save_blend))
 
     nsamples = W * H * args.spp
-    times = []
+    times, cpus = [], []
     for rep in range(args.repeat):
         last = rep == args.repeat - 1
-        t = time.perf_counter()
+        t, c = time.perf_counter(), time.process_time()
         bpy.ops.render.render(write_still=last)
         dt = time.perf_counter() - t
         times.append(dt)
+        cpus.append(time.process_time() - c)  # all render threads' CPU seconds
         print(f"run={rep} render_s={dt:.3f} (incl. scene sync/BVH{' + EXR write' if last else ''}) "
               f"Msamples_per_s={nsamples / dt / 1e6:.3f}")
     best = min(times)
-    print(f"RESULT renderer=cycles spp={args.spp} max_depth={args.max_depth} threads={args.threads} "
-          f"first_s={times[0]:.3f} best_s={best:.3f} Msamples_per_s_best={nsamples / best / 1e6:.3f}")
+    print(f"RESULT renderer=cycles guiding={args.guiding} spp={args.spp} max_depth={args.max_depth} threads={args.threads} "
+          f"first_s={times[0]:.3f} best_s={best:.3f} best_cpu_s={cpus[times.index(best)]:.3f} Msamples_per_s_best={nsamples / best / 1e6:.3f}")
     print("wrote", prefix + ".exr")
 
     # PNG preview of the combined pass
