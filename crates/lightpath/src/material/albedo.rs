@@ -47,7 +47,9 @@ pub const ETA_MAX: f32 = 3.0;
 fn coord(x: f32, n: usize) -> (usize, f32) {
     let x = if x >= 0.0 { x.min(1.0) } else { 0.0 };
     let s = x * (n - 1) as f32;
-    let i = (s as usize).min(n - 2);
+    // Through i32: s is in [0, n − 1] here, and a float's saturating cast to usize is
+    // ~3× the instructions of one to i32 (a sixth of a table lookup's).
+    let i = (s as i32 as usize).min(n - 2);
     (i, s - i as f32)
 }
 
