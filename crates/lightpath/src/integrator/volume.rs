@@ -430,12 +430,14 @@ impl Tracer<'_> {
         self.medium_light(out, path, s_v, v, guide, sampler);
         let bounce = dim::bounce(path.depth);
         let volume = &scene.volumes[v.medium.volume as usize];
+        let guided = guide.filter(|g| g.alpha > 0.0 || (self.learn && g.trained));
+        // A phase function has one lobe: the lobe's number picks phase or guide (read
+        // before the direction: the layout's order, sampler.rs).
+        let u_choice = guided.map(|_| sampler.get_1d(bounce + dim::LOBE_CHOICE));
         let u_dir = sampler.get_2d(bounce + dim::DIRECTION);
         let before = path.throughput;
-        let (wi, pdf, weight, pdfs) = match guide {
-            // A phase function has one lobe: the lobe's number picks phase or guide.
-            Some(g) if g.alpha > 0.0 || (self.learn && g.trained) => {
-                let u_choice = sampler.get_1d(bounce + dim::LOBE_CHOICE);
+        let (wi, pdf, weight, pdfs) = match (guided, u_choice) {
+            (Some(g), Some(u_choice)) => {
                 let (wi, pdf, f, pdfs) =
                     self.sample_medium_guided(g, &volume.phase, v.dir, u_choice, u_dir)?;
                 (wi, pdf, f / pdf, Some(pdfs))

@@ -215,6 +215,16 @@ fn guided_renders_are_bit_identical_for_any_thread_count() {
         .iter()
         .zip(&fog_in(2))
         .all(|(a, b)| a.to_bits() == b.to_bits()));
+    // The independent sampler checks (in debug builds) that a guided fog vertex asks
+    // for its numbers in the layout's order.
+    let independent = FOG_ROOM.replace("[render]\n", "[render]\nsampler = \"independent\"\n");
+    assert_ne!(independent, FOG_ROOM);
+    let s = scene_in(&independent, 16, GuidingMode::On, 5, 3, vec![]);
+    assert!(render_spp(&s, 2, 0)
+        .planes
+        .concat()
+        .iter()
+        .all(|v| v.is_finite()));
     let run = |threads: usize| run_in(threads, GuidingMode::On);
     let one = run(1);
     let two = run(2);
