@@ -95,14 +95,25 @@ pub fn axis_to_eta(x: f32) -> f32 {
 fn bilinear(table: &[f32], n: usize, y: f32, x: f32) -> f32 {
     let (j, ty) = coord(y, n);
     let (i, tx) = coord(x, n);
-    let row = |j: usize| lerp(table[j * n + i], table[j * n + i + 1], tx);
-    lerp(row(j), row(j + 1), ty)
+    cell(table, n, j * n + i, ty, tx)
 }
 
+/// The bilinear blend of the four nodes from `at` (the lower corner's index in a table
+/// `n` wide): one bounds check for the four loads.
+#[inline(always)]
+fn cell(table: &[f32], n: usize, at: usize, ty: f32, tx: f32) -> f32 {
+    let c = &table[at..at + n + 2];
+    lerp(lerp(c[0], c[1], tx), lerp(c[n], c[n + 1], tx), ty)
+}
+
+/// The coordinates along y and x are found once for both slices.
 fn trilinear(table: &[f32], n: usize, z: f32, y: f32, x: f32) -> f32 {
     let (k, tz) = coord(z, n);
-    let a = bilinear(&table[k * n * n..(k + 1) * n * n], n, y, x);
-    let b = bilinear(&table[(k + 1) * n * n..(k + 2) * n * n], n, y, x);
+    let (j, ty) = coord(y, n);
+    let (i, tx) = coord(x, n);
+    let at = k * n * n + j * n + i;
+    let a = cell(table, n, at, ty, tx);
+    let b = cell(table, n, at + n * n, ty, tx);
     lerp(a, b, tz)
 }
 

@@ -227,6 +227,16 @@ impl MicrofacetReflection {
             self.ms * (1.0 - self.e(wo))
         }
     }
+
+    /// [`ms_albedo`](Self::ms_albedo) for a `wo` whose albedo with F = 1 the caller
+    /// already looked up (`e_wo`).
+    pub fn ms_albedo_given(&self, e_wo: f32) -> Vec3A {
+        if self.ms == Vec3A::ZERO {
+            Vec3A::ZERO
+        } else {
+            self.ms * (1.0 - e_wo)
+        }
+    }
 }
 
 /// A reflection lobe of roughness `alpha` (both 0: a smooth mirror, a delta lobe) with

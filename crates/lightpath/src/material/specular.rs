@@ -116,7 +116,12 @@ impl Specular {
             let f0 = self.f0();
             let e_one = albedo::ggx_e(wo.z, a);
             let e_s = ((e_fresnel - f0 * e_one) / (1.0 - f0)).max(0.0);
-            self.tint * (f0 * (e_one - e_s)) + Vec3A::splat(e_s)
+            let ss = self.tint * (f0 * (e_one - e_s)) + Vec3A::splat(e_s);
+            // Isotropic, the multiple scattering's E(μo) is the same lookup.
+            if g.alpha_x == g.alpha_y {
+                return (w * (ss + r.ms_albedo_given(e_one))).min(Vec3A::ONE);
+            }
+            ss
         } else {
             self.tint * e_fresnel
         };
