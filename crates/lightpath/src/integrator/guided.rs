@@ -413,7 +413,9 @@ const AUTO_MIN_VERTICES: u64 = 4096;
 
 /// The guide a render samples from, if it guides: `guiding_passes` training passes over
 /// the frame (1, 2 samples a pixel on a sixteenth of the pixels, then 4, 8, … on all;
-/// seeds of their own), each sampling what the one before learnt. Under `auto`, after
+/// seeds of their own), each sampling what the one before learnt, then a check pass
+/// (`CHECK_SPP` on all pixels) that measures the fractions again with the trees the
+/// render samples, each leaf keeping the smaller (`SdTree::check_fractions`). Under `auto`, after
 /// the first two the render goes on unguided unless they measured a gain (`SdTree::gain`).
 /// The same scene and settings give the same tree and the same decision whatever the
 /// thread count, the window or the farm part.
@@ -425,47 +427,9 @@ pub(super) fn train(scene: &crate::scene::Scene) -> Option<SdTree> {
     }
     let (lo, hi) = scene.accel.bounds();
     let mut tree = SdTree::new(lo, hi);
-    let (w, h) = (scene.camera.width, scene.camera.height);
     for k in 0..passes {
-        let mut tracer = Tracer::new(scene);
-        tracer.guide = Some(&tree);
-        tracer.learn = true;
-        tracer.seed = settings.seed ^ TRAINING_SEED.wrapping_add(k as u64);
         let pilot = k < PILOT_PASSES;
-        let step = if pilot { 4 } else { 1 };
-        let stride = crate::film::Film::stride_with(scene.aovs.len(), scene.variance_aovs.len());
-        (0..h)
-            .into_par_iter()
-            .filter(|y| y % step == 0)
-            .for_each_init(
-                || {
-                    (
-                        crate::film::SampleAccumulator::with_squares(
-                            scene.aovs.len(),
-                            scene.variance_aovs.clone(),
-                        ),
-                        vec![0.0f32; stride],
-                    )
-                },
-                |(acc, run), y| {
-                    let mut out = Sink::new(acc);
-                    let mut nothing = |_: &Sink| {};
-                    for x in (0..w).step_by(step as usize) {
-                        run.fill(0.0);
-                        let job = super::pixel::PixelJob {
-                            x,
-                            y,
-                            run,
-                            first_sample: 0,
-                            taken: 0,
-                            spp: 1 << k,
-                            after_sample: &mut nothing,
-                            moments: None,
-                        };
-                        tracer.render_pixel(job, &mut out);
-                    }
-                },
-            );
+        training_pass(scene, &tree, k, if pilot { 4 } else { 1 }, 1 << k);
         tree.end_pass(k);
         if k + 1 == PILOT_PASSES
             && settings.guiding == GuidingMode::Auto
@@ -474,8 +438,67 @@ pub(super) fn train(scene: &crate::scene::Scene) -> Option<SdTree> {
             return None;
         }
     }
+    // The fractions were measured with the guides the last pass sampled, but the render
+    // samples the ones it recorded: a short pass over the frame samples those and each
+    // leaf keeps the smaller of the two fractions.
+    if tree.guides() {
+        training_pass(scene, &tree, passes, 1, CHECK_SPP);
+        tree.check_fractions();
+    }
     // Where no leaf chose to guide, the render is the unguided one, without lookups.
     tree.guides().then_some(tree)
+}
+
+/// Samples a pixel of the pass that checks the fractions against the guides the render
+/// samples (`SdTree::check_fractions`), on every pixel. On the caustic stand-in
+/// (benches/guiding/caustic.toml) the last pass's fractions made `on` 1.5x worse than
+/// unguided (the guides recorded from heavy-tailed caustic paths are worse than the ones
+/// the fractions were measured with); 1 sample a pixel left +13 %, 2 +5 %, and the
+/// room kept its gain (benches/guiding/CAUSTIC.md).
+const CHECK_SPP: u32 = 2;
+
+/// Training pass `k` (its seed) with `spp` samples on every `step`-th row and column:
+/// its paths record into `tree`'s recording trees and candidate fractions.
+fn training_pass(scene: &crate::scene::Scene, tree: &SdTree, k: u32, step: u32, spp: u32) {
+    let settings = &scene.settings;
+    let (w, h) = (scene.camera.width, scene.camera.height);
+    let mut tracer = Tracer::new(scene);
+    tracer.guide = Some(tree);
+    tracer.learn = true;
+    tracer.seed = settings.seed ^ TRAINING_SEED.wrapping_add(k as u64);
+    let stride = crate::film::Film::stride_with(scene.aovs.len(), scene.variance_aovs.len());
+    (0..h)
+        .into_par_iter()
+        .filter(|y| y % step == 0)
+        .for_each_init(
+            || {
+                (
+                    crate::film::SampleAccumulator::with_squares(
+                        scene.aovs.len(),
+                        scene.variance_aovs.clone(),
+                    ),
+                    vec![0.0f32; stride],
+                )
+            },
+            |(acc, run), y| {
+                let mut out = Sink::new(acc);
+                let mut nothing = |_: &Sink| {};
+                for x in (0..w).step_by(step as usize) {
+                    run.fill(0.0);
+                    let job = super::pixel::PixelJob {
+                        x,
+                        y,
+                        run,
+                        first_sample: 0,
+                        taken: 0,
+                        spp,
+                        after_sample: &mut nothing,
+                        moments: None,
+                    };
+                    tracer.render_pixel(job, &mut out);
+                }
+            },
+        );
 }
 
 #[cfg(test)]
