@@ -103,7 +103,8 @@ impl Tracer<'_> {
     }
 
     /// One (light, point) candidate from the selector, if the light lights `v`.
-    #[inline]
+    /// Always inlined, like `choose_light`: a call returning the `Chosen` through memory.
+    #[inline(always)]
     fn candidate(&self, v: &Vertex, u_light: f32, u_point: Vec2) -> Option<Chosen> {
         let scene = self.scene;
         let (li, select_pmf) = scene.light_select.sample(u_light, v.hit.p, v.sh.frame.n)?;
