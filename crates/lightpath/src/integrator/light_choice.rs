@@ -115,9 +115,13 @@ impl Tracer<'_> {
         // Triangle lights (quads, rects, disks, meshes of a few triangles) sampled
         // inline: through `LightShape`'s match of every kind the sample was a call.
         let ls = match &light.shape {
-            LightShape::Triangles(t) => {
-                t.sample(light.color, v.hit.p, v.sh.frame.n, u_point, scene.accel.prims())
-            }
+            LightShape::Triangles(t) => t.sample(
+                light.color,
+                v.hit.p,
+                v.sh.frame.n,
+                u_point,
+                scene.accel.prims(),
+            ),
             _ => light.sample(v.hit.p, v.sh.frame.n, u_point, scene.accel.prims()),
         }?;
         let mis_pdf = select_pmf * ls.pdf;
