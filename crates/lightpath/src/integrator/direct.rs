@@ -176,9 +176,8 @@ impl Tracer<'_> {
     ) {
         let scene = self.scene;
         let a = &scene.automaton;
-        let bounce = dim::bounce(path.depth);
-        let u_light = sampler.get_1d(bounce + dim::LIGHT_CHOICE);
-        let u_point = sampler.get_2d(bounce + dim::LIGHT_POINT);
+        let u_light = sampler.vertex_1d(path.depth, dim::LIGHT_CHOICE);
+        let u_point = sampler.vertex_2d(path.depth, dim::LIGHT_POINT);
         let bsdf = v.bsdf;
         let lobes = bsdf.lobes();
         if scene.lights.is_empty() || lobes.iter().all(|l| l.delta) {
