@@ -17,7 +17,7 @@
 
 use super::path::{PathState, Vertex};
 use super::Tracer;
-use crate::light::{luminance, LightSample};
+use crate::light::{luminance, LightModel, LightSample, LightShape};
 use glam::{Vec2, Vec3A};
 
 /// The light sample a vertex keeps.
@@ -103,14 +103,27 @@ impl Tracer<'_> {
     }
 
     /// One (light, point) candidate from the selector, if the light lights `v`.
-    #[inline]
+    /// Always inlined, like `choose_light`: a call returning the `Chosen` through memory.
+    #[inline(always)]
     fn candidate(&self, v: &Vertex, u_light: f32, u_point: Vec2) -> Option<Chosen> {
         let scene = self.scene;
         let (li, select_pmf) = scene.light_select.sample(u_light, v.hit.p, v.sh.frame.n)?;
         if !self.lit(v.hit.object, li as u32) {
             return None;
         }
-        let ls = scene.lights[li].sample(v.hit.p, v.sh.frame.n, u_point, scene.accel.prims())?;
+        let light = &scene.lights[li];
+        // Triangle lights (quads, rects, disks, meshes of a few triangles) sampled
+        // inline: through `LightShape`'s match of every kind the sample was a call.
+        let ls = match &light.shape {
+            LightShape::Triangles(t) => t.sample(
+                light.color,
+                v.hit.p,
+                v.sh.frame.n,
+                u_point,
+                scene.accel.prims(),
+            ),
+            _ => light.sample(v.hit.p, v.sh.frame.n, u_point, scene.accel.prims()),
+        }?;
         let mis_pdf = select_pmf * ls.pdf;
         Some(Chosen {
             li,

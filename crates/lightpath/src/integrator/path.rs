@@ -418,9 +418,8 @@ impl Tracer<'_> {
     ) -> Option<Ray> {
         let scene = self.scene;
         let settings = &scene.settings;
-        let bounce = dim::bounce(path.depth);
-        let u_lobe = sampler.get_1d(bounce + dim::LOBE_CHOICE);
-        let u_dir = sampler.get_2d(bounce + dim::DIRECTION);
+        let u_lobe = sampler.vertex_1d(path.depth, dim::LOBE_CHOICE);
+        let u_dir = sampler.vertex_2d(path.depth, dim::DIRECTION);
         // A training pass measures the guide even where its leaf samples the BSDF alone,
         // so that the leaf can learn to guide again (guiding/mod.rs, `FRACTIONS`).
         let (bs, pdfs) = match v.guide {
@@ -492,7 +491,7 @@ impl Tracer<'_> {
         if path.depth >= self.scene.settings.rr_depth {
             let q = (t_max * path.eta_scale * path.eta_scale).min(0.95);
             // The roulette of the vertex just scattered from (`depth` already counts it).
-            if sampler.get_1d(dim::bounce(path.depth - 1) + dim::ROULETTE) >= q {
+            if sampler.vertex_1d(path.depth - 1, dim::ROULETTE) >= q {
                 return false;
             }
             path.throughput /= q;
