@@ -153,6 +153,14 @@ impl MicrofacetReflection {
         }
     }
 
+    /// The same distribution with the multiple scattering of another mean Fresnel.
+    pub fn with_f_avg(self, f_avg: Vec3A) -> MicrofacetReflection {
+        MicrofacetReflection {
+            ms: kulla_conty_fms(f_avg, self.e_avg),
+            ..self
+        }
+    }
+
     /// Single scattering only (no compensation).
     pub fn single(alpha: Vec2) -> MicrofacetReflection {
         MicrofacetReflection {
@@ -257,7 +265,32 @@ pub fn reflection_eval<F: Fn(f32) -> Vec3A>(
     if is_smooth(alpha) || wo.z <= 0.0 || wi.z <= 0.0 {
         return (Vec3A::ZERO, 0.0);
     }
-    let r = MicrofacetReflection::new(alpha, f_avg);
+    reflection_eval_with(
+        &MicrofacetReflection::new(alpha, f_avg),
+        alpha,
+        weight,
+        wo,
+        wi,
+        sel,
+        fresnel,
+    )
+}
+
+/// [`reflection_eval`] with the lobe's [`MicrofacetReflection`] built beforehand (a lobe
+/// that keeps its own, so that no evaluation looks its tables up again).
+#[inline]
+pub fn reflection_eval_with<F: Fn(f32) -> Vec3A>(
+    r: &MicrofacetReflection,
+    alpha: Vec2,
+    weight: f32,
+    wo: Vec3A,
+    wi: Vec3A,
+    sel: f32,
+    fresnel: F,
+) -> (Vec3A, f32) {
+    if is_smooth(alpha) || wo.z <= 0.0 || wi.z <= 0.0 {
+        return (Vec3A::ZERO, 0.0);
+    }
     let (f, pdf) = r.eval(wo, wi, fresnel);
     (f * clamp_weight(weight), sel * pdf)
 }
@@ -274,6 +307,36 @@ pub fn reflection_sample<F: Fn(f32) -> Vec3A>(
     u: Vec2,
     fresnel: F,
 ) -> Option<LobeSample> {
+    reflection_sample_by(alpha, weight, wo, ctx, u, fresnel, || {
+        MicrofacetReflection::new(alpha, f_avg)
+    })
+}
+
+/// [`reflection_sample`] with the lobe's [`MicrofacetReflection`] built beforehand.
+#[inline]
+pub fn reflection_sample_with<F: Fn(f32) -> Vec3A>(
+    r: &MicrofacetReflection,
+    alpha: Vec2,
+    weight: f32,
+    wo: Vec3A,
+    ctx: SampleCtx,
+    u: Vec2,
+    fresnel: F,
+) -> Option<LobeSample> {
+    reflection_sample_by(alpha, weight, wo, ctx, u, fresnel, || *r)
+}
+
+/// The sampling both forms share; `rough` gives the rough lobe's distribution.
+#[inline(always)]
+fn reflection_sample_by<F: Fn(f32) -> Vec3A, R: FnOnce() -> MicrofacetReflection>(
+    alpha: Vec2,
+    weight: f32,
+    wo: Vec3A,
+    ctx: SampleCtx,
+    u: Vec2,
+    fresnel: F,
+    rough: R,
+) -> Option<LobeSample> {
     if wo.z <= 0.0 {
         return None;
     }
@@ -286,7 +349,7 @@ pub fn reflection_sample<F: Fn(f32) -> Vec3A>(
             value: Some((f / ctx.sel, ctx.sel, true)),
         });
     }
-    let wi = MicrofacetReflection::new(alpha, f_avg).sample(wo, ctx.u_lobe, u)?;
+    let wi = rough().sample(wo, ctx.u_lobe, u)?;
     LobeSample::direction(0, wi)
 }
 

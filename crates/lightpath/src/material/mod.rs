@@ -61,7 +61,7 @@ pub use layer::Layer;
 pub use lobe::{Lobe, LobeModel, LobeTag};
 pub use pbr::PbrParams;
 pub use rough_diffuse::RoughDiffuse;
-pub use specular::Specular;
+pub use specular::{Specular, SpecularParams};
 pub use subsurface::Subsurface;
 pub use thin_film::{conductor_ior_from_colors, thin_film_fresnel, FilmBase};
 pub use translucent::DiffuseTransmission;

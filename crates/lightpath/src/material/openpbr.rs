@@ -27,7 +27,7 @@ use super::lobe::Lobe;
 use super::microfacet::roughness_anisotropy_to_alpha;
 use super::{
     Bsdf, Coat, Conductor, Dielectric, DiffuseTransmission, Fuzz, Lambert, RoughDiffuse, Specular,
-    Subsurface,
+    SpecularParams, Subsurface,
 };
 use glam::Vec3A;
 
@@ -248,18 +248,15 @@ impl Bsdf {
             // The dielectric's reflection over the opaque base, bare and filmed; the base
             // lies under what the bare one reflects.
             let below = b.len();
-            let specular = Specular {
+            let specular = Specular::new(SpecularParams {
                 eta,
                 tint: p.specular_color,
                 tint_f0_only: p.specular_color_f0_only,
                 weight: 1.0,
                 alpha,
                 lobe: 2,
-            };
-            b.push(Specular {
-                weight: opaque * (1.0 - film),
-                ..specular
             });
+            b.push(specular.with_weight(opaque * (1.0 - film)));
             if set.film {
                 b.push(Iridescence::on_dielectric(
                     eta,

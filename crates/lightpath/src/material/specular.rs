@@ -23,14 +23,15 @@ use super::albedo;
 use super::fresnel::fresnel_dielectric;
 use super::lobe::{LobeModel, LobeSample, LobeTag, SampleCtx};
 use super::microfacet::{
-    clamp_weight, is_smooth, reflection_eval, reflection_sample, reflection_tags, Ggx,
+    clamp_weight, is_smooth, reflection_eval_with, reflection_sample_with, reflection_tags, Ggx,
     MicrofacetReflection,
 };
 use crate::light::luminance;
 use glam::{Vec2, Vec3A};
 
+/// The specular layer's parameters; [`Specular::new`] makes the lobe of them.
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Specular {
+pub struct SpecularParams {
     /// Relative index of refraction, below / above the surface (below 1: the denser
     /// medium is above, e.g. under a coat of higher index).
     pub eta: f32,
@@ -48,10 +49,57 @@ pub struct Specular {
     pub lobe: u8,
 }
 
+/// The lobe: its parameters and what it looks up in the tables once, when it is made
+/// (the mean Fresnel and E_avg were looked up again at every evaluation, ~3 % of a glTF
+/// shot's instructions: docs/performance.md).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Specular {
+    p: SpecularParams,
+    /// The dielectric's cosine-weighted mean Fresnel, untinted.
+    f_avg_white: f32,
+    /// The GGX distribution with the multiple scattering of the tinted mean Fresnel.
+    reflection: MicrofacetReflection,
+}
+
+impl From<SpecularParams> for Specular {
+    fn from(p: SpecularParams) -> Specular {
+        Specular::new(p)
+    }
+}
+
+impl From<SpecularParams> for super::lobe::Lobe {
+    fn from(p: SpecularParams) -> super::lobe::Lobe {
+        Specular::new(p).into()
+    }
+}
+
 impl Specular {
+    pub fn new(p: SpecularParams) -> Specular {
+        let mut s = Specular {
+            p,
+            f_avg_white: 0.0,
+            reflection: MicrofacetReflection::single(p.alpha),
+        };
+        s.f_avg_white = albedo::dielectric_f_avg(s.eta());
+        s.reflection = MicrofacetReflection::new(p.alpha, s.f_avg());
+        s
+    }
+
+    pub fn params(&self) -> &SpecularParams {
+        &self.p
+    }
+
+    /// The same lobe at another mixing weight (nothing it looked up depends on it).
+    pub fn with_weight(self, weight: f32) -> Specular {
+        Specular {
+            p: SpecularParams { weight, ..self.p },
+            ..self
+        }
+    }
+
     fn eta(&self) -> f32 {
-        if self.eta > 0.0 {
-            self.eta
+        if self.p.eta > 0.0 {
+            self.p.eta
         } else {
             1.0
         }
@@ -66,18 +114,18 @@ impl Specular {
     /// The cosine-weighted mean of [`Specular::fresnel`], the tint included (the
     /// multiple scattering takes the tint as the single scattering does).
     fn f_avg(&self) -> Vec3A {
-        self.tinted(albedo::dielectric_f_avg(self.eta()))
+        self.tinted(self.f_avg_white)
     }
 
     /// A reflectance `f` of the untinted interface (or a mean of them), tinted: scaled,
     /// or with the tint on F0 only mix(tint·F0, 1, s), s = (f − F0) / (1 − F0).
     fn tinted(&self, f: f32) -> Vec3A {
-        if self.tint_f0_only {
+        if self.p.tint_f0_only {
             let f0 = self.f0();
             let s = ((f - f0) / (1.0 - f0)).clamp(0.0, 1.0);
-            self.tint * (f0 * (1.0 - s)) + Vec3A::splat(s)
+            self.p.tint * (f0 * (1.0 - s)) + Vec3A::splat(s)
         } else {
-            self.tint * f
+            self.p.tint * f
         }
     }
 
@@ -87,11 +135,15 @@ impl Specular {
     /// lobe and the largest channel's with the tint on F0 only. Below 1; what the base
     /// beneath receives is 1 − E.
     pub fn albedo(&self, wo: Vec3A) -> f32 {
-        if self.tint_f0_only {
+        if self.p.tint_f0_only {
             self.albedo_rgb(wo).max_element().min(1.0)
         } else {
             let white = Specular {
-                tint: Vec3A::ONE,
+                p: SpecularParams {
+                    tint: Vec3A::ONE,
+                    ..self.p
+                },
+                reflection: self.reflection.with_f_avg(Vec3A::splat(self.f_avg_white)),
                 ..*self
             };
             white.albedo_rgb(wo).x
@@ -101,29 +153,29 @@ impl Specular {
     /// Directional albedo per channel, the tint included.
     pub fn albedo_rgb(&self, wo: Vec3A) -> Vec3A {
         let wo = Vec3A::new(wo.x, wo.y, wo.z.abs());
-        let w = clamp_weight(self.weight);
-        if is_smooth(self.alpha) {
+        let w = clamp_weight(self.p.weight);
+        if is_smooth(self.p.alpha) {
             return (w * self.fresnel(wo.z)).min(Vec3A::ONE);
         }
-        let r = MicrofacetReflection::new(self.alpha, self.f_avg());
-        let g = Ggx::new(self.alpha);
+        let r = &self.reflection;
+        let g = Ggx::new(self.p.alpha);
         let a = self.table_alpha(&g, wo);
         let e_fresnel = albedo::dielectric_e(wo.z, a, self.eta());
-        let ss = if self.tint_f0_only {
+        let ss = if self.p.tint_f0_only {
             // Linear in the Fresnel term: mix(tint·F0, 1, s) integrates to
             // tint·F0·(E₁ − E_s) + E_s, E₁ the albedo with F = 1 and E_s that with
             // F = s = (F − F0) / (1 − F0).
             let f0 = self.f0();
             let e_one = albedo::ggx_e(wo.z, a);
             let e_s = ((e_fresnel - f0 * e_one) / (1.0 - f0)).max(0.0);
-            let ss = self.tint * (f0 * (e_one - e_s)) + Vec3A::splat(e_s);
+            let ss = self.p.tint * (f0 * (e_one - e_s)) + Vec3A::splat(e_s);
             // Isotropic, the multiple scattering's E(μo) is the same lookup.
             if g.alpha_x == g.alpha_y {
                 return (w * (ss + r.ms_albedo_given(e_one))).min(Vec3A::ONE);
             }
             ss
         } else {
-            self.tint * e_fresnel
+            self.p.tint * e_fresnel
         };
         (w * (ss + r.ms_albedo(wo))).min(Vec3A::ONE)
     }
@@ -158,19 +210,21 @@ impl Specular {
 
 impl LobeModel for Specular {
     fn tags(&self) -> &'static [LobeTag] {
-        reflection_tags(self.lobe, is_smooth(self.alpha))
+        reflection_tags(self.p.lobe, is_smooth(self.p.alpha))
     }
     fn eval(&self, _: usize, wo: Vec3A, wi: Vec3A, sel: f32) -> (Vec3A, f32) {
-        reflection_eval(self.alpha, self.weight, self.f_avg(), wo, wi, sel, |c| {
+        let p = &self.p;
+        reflection_eval_with(&self.reflection, p.alpha, p.weight, wo, wi, sel, |c| {
             self.fresnel(c)
         })
     }
     fn sample(&self, wo: Vec3A, ctx: SampleCtx, u: Vec2) -> Option<LobeSample> {
-        reflection_sample(self.alpha, self.weight, self.f_avg(), wo, ctx, u, |c| {
+        let p = &self.p;
+        reflection_sample_with(&self.reflection, p.alpha, p.weight, wo, ctx, u, |c| {
             self.fresnel(c)
         })
     }
     fn selection_weight(&self, wo: Vec3A) -> f32 {
-        clamp_weight(self.weight) * luminance(self.fresnel(wo.z.abs()))
+        clamp_weight(self.p.weight) * luminance(self.fresnel(wo.z.abs()))
     }
 }

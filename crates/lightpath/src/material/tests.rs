@@ -189,7 +189,7 @@ fn rough_lobe_cases() -> Vec<(String, Lobe, Vec<Vec3A>)> {
         ));
         cases.push((
             format!("specular alpha {alpha}"),
-            Specular {
+            SpecularParams {
                 eta: 1.5,
                 tint: Vec3A::new(1.0, 0.8, 0.6),
                 tint_f0_only: false,
@@ -202,7 +202,7 @@ fn rough_lobe_cases() -> Vec<(String, Lobe, Vec<Vec3A>)> {
         ));
         cases.push((
             format!("specular under a coat, eta 1/1.4, alpha {alpha}"),
-            Specular {
+            SpecularParams {
                 eta: 1.0 / 1.4,
                 tint: Vec3A::ONE,
                 tint_f0_only: false,
@@ -1155,7 +1155,7 @@ fn white_furnace_specular_over_white_lambert_keeps_its_energy() {
         .enumerate()
         {
             for weight in [1.0, 0.5] {
-                let spec = Specular {
+                let spec = SpecularParams {
                     eta,
                     tint: Vec3A::ONE,
                     tint_f0_only: false,
@@ -1172,7 +1172,7 @@ fn white_furnace_specular_over_white_lambert_keeps_its_energy() {
                 };
                 for (k, wo) in furnace_dirs().into_iter().enumerate() {
                     let seed = (100 * i + 10 * j + k) as u64;
-                    let e = specular_over_white(&spec, wo, 50_000, seed);
+                    let e = specular_over_white(&Specular::new(spec), wo, 50_000, seed);
                     if alpha.x != alpha.y {
                         println!("specular eta {eta} alpha {alpha} weight {weight} over white, wo {wo}: {:.4}", e.0);
                     }
@@ -1206,7 +1206,7 @@ fn passive_lobes_never_create_energy() {
                 lobe: 2,
             }
             .into(),
-            1 => Specular {
+            1 => SpecularParams {
                 eta: 1.0 / 3.0 + r() * 3.0,
                 tint: colour(&mut r),
                 tint_f0_only: false,
@@ -1323,7 +1323,7 @@ fn conductor_and_specular_are_reciprocal() {
         }
         .into(),
         Conductor::schlick(Vec3A::ONE, 1.0).into(),
-        Specular {
+        SpecularParams {
             eta: 1.5,
             tint: Vec3A::new(1.0, 0.9, 0.7),
             tint_f0_only: false,
@@ -1332,7 +1332,7 @@ fn conductor_and_specular_are_reciprocal() {
             lobe: 4,
         }
         .into(),
-        Specular {
+        SpecularParams {
             eta: 1.0 / 1.3,
             tint: Vec3A::ONE,
             tint_f0_only: false,
@@ -1366,7 +1366,7 @@ fn conductor_and_specular_are_reciprocal() {
 #[test]
 fn specular_tinted_at_f0_only() {
     let tint = Vec3A::new(2.0, 1.0, 0.4);
-    let smooth = Specular {
+    let smooth = SpecularParams {
         eta: 1.5,
         tint,
         tint_f0_only: true,
@@ -1375,13 +1375,13 @@ fn specular_tinted_at_f0_only() {
         lobe: 2,
     };
     let f0 = 0.04;
-    let at_normal = smooth.albedo_rgb(Vec3A::Z);
+    let at_normal = Specular::new(smooth).albedo_rgb(Vec3A::Z);
     assert!(
         (at_normal - tint * f0).abs().max_element() < 1e-5,
         "{at_normal}"
     );
     // Near grazing the real Fresnel is ~0.99 and the tint has faded out.
-    let grazing = smooth.albedo_rgb(dir(89.9, 0.0));
+    let grazing = Specular::new(smooth).albedo_rgb(dir(89.9, 0.0));
     assert!(grazing.min_element() > 0.98, "{grazing}");
     assert!(
         grazing.max_element() - grazing.min_element() < 2e-3,
@@ -1391,7 +1391,7 @@ fn specular_tinted_at_f0_only() {
         .into_iter()
         .enumerate()
     {
-        let spec = Specular { alpha, ..smooth };
+        let spec = Specular::new(SpecularParams { alpha, ..smooth });
         let lobe = Lobe::from(spec);
         for (j, wo) in furnace_dirs().into_iter().enumerate() {
             let mut rng = Rng::for_sample(40 + (10 * k + j) as u64, 4, 0);
@@ -1427,7 +1427,7 @@ fn specular_lobes_carry_their_lobe_number() {
                 alpha,
                 ..Conductor::schlick(Vec3A::ONE, 0.0)
             });
-            let s = Lobe::from(Specular {
+            let s = Lobe::from(SpecularParams {
                 eta: 1.5,
                 tint: Vec3A::ONE,
                 tint_f0_only: false,

@@ -455,14 +455,14 @@ fn light_units_convert_as_blenders_importer_does() {
         .retain(|l| l.name.as_deref() == Some("bulbnode"));
     let (scene, film) = render_desc(&desc, 4, 4, vec![AovSpec::new("dd", "C<RD>[<L.>O]")]);
     let k = scene.aovs.iter().position(|a| a.name == "dd").unwrap();
-    let layer = lightpath::material::Specular {
+    let layer = lightpath::material::Specular::new(lightpath::material::SpecularParams {
         eta: 1.5,
         tint: Vec3A::ONE,
         tint_f0_only: true,
         weight: 1.0,
         alpha: glam::Vec2::ONE,
         lobe: 2,
-    };
+    });
     let rho = 0.5 * layer.base_attenuation(Vec3A::Z);
     let want = rho / std::f32::consts::PI;
     let got = film.pixel(k, 2, 2).x;
