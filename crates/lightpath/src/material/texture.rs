@@ -165,10 +165,15 @@ impl MipMap {
         let (x0, y0) = (x.floor(), y.floor());
         let (fx, fy) = (x - x0, y - y0);
         let (x0, y0) = (x0 as i32, y0 as i32);
-        let px =
-            |i: i32, j: i32| l.texels[wrap[1].index(j, h) * l.width as usize + wrap[0].index(i, w)];
-        let top = px(x0, y0) * (1.0 - fx) + px(x0 + 1, y0) * fx;
-        let bottom = px(x0, y0 + 1) * (1.0 - fx) + px(x0 + 1, y0 + 1) * fx;
+        // The two columns and two rows wrapped once each, not once a texel.
+        let (i0, i1) = (wrap[0].index(x0, w), wrap[0].index(x0 + 1, w));
+        let (r0, r1) = (
+            wrap[1].index(y0, h) * l.width as usize,
+            wrap[1].index(y0 + 1, h) * l.width as usize,
+        );
+        let px = |row: usize, i: usize| l.texels[row + i];
+        let top = px(r0, i0) * (1.0 - fx) + px(r0, i1) * fx;
+        let bottom = px(r1, i0) * (1.0 - fx) + px(r1, i1) * fx;
         top * (1.0 - fy) + bottom * fy
     }
 
