@@ -76,6 +76,13 @@ pub trait Sampler {
     fn vertex_2d(&mut self, depth: u32, offset: u32) -> Vec2 {
         self.get_2d(dim::bounce(depth) + offset)
     }
+    /// The camera sample's filter and lens numbers: `get_2d(dim::FILTER)`, then
+    /// `get_2d(dim::LENS)`.
+    #[inline(always)]
+    fn camera_2d(&mut self) -> (Vec2, Vec2) {
+        let filter = self.get_2d(dim::FILTER);
+        (filter, self.get_2d(dim::LENS))
+    }
 }
 
 /// Which sampler a render uses.
@@ -726,6 +733,14 @@ impl Sampler for SobolSampler<'_> {
             _ => self.get_2d(dim::bounce(depth) + offset),
         }
     }
+
+    /// The camera sequence's four lanes (filter 0–1, lens 2–3: `Source::of`), without
+    /// the table lookups.
+    #[inline(always)]
+    fn camera_2d(&mut self) -> (Vec2, Vec2) {
+        let lanes = self.padded(CAMERA);
+        (Vec2::new(lanes[0], lanes[1]), Vec2::new(lanes[2], lanes[3]))
+    }
 }
 
 #[cfg(test)]
@@ -796,6 +811,22 @@ mod tests {
                     ib.vertex_1d(depth, dim::ROULETTE)
                 );
             }
+        }
+    }
+
+    /// `camera_2d` gives `get_2d(FILTER)` and `get_2d(LENS)`'s numbers, for both samplers,
+    /// in several blocks of 2^16 samples.
+    #[test]
+    fn camera_numbers_are_the_layouts() {
+        for (pixel, sample) in [(0, 0), (5, 3), (77, 64), (123, 65_537), (9, 200_003)] {
+            let (mut a, mut b) = (SobolPixel::new(11, pixel), SobolPixel::new(11, pixel));
+            let (mut sa, mut sb) = (a.sample(sample), b.sample(sample));
+            let by_dim = (sa.get_2d(dim::FILTER), sa.get_2d(dim::LENS));
+            assert_eq!(by_dim, sb.camera_2d(), "pixel {pixel}, sample {sample}");
+            let mut ia = IndependentSampler::new(3, pixel, sample);
+            let mut ib = IndependentSampler::new(3, pixel, sample);
+            let by_dim = (ia.get_2d(dim::FILTER), ia.get_2d(dim::LENS));
+            assert_eq!(by_dim, ib.camera_2d());
         }
     }
 

@@ -10,7 +10,7 @@ use super::adaptive::Moments;
 use super::{Sink, Tracer};
 use crate::film::Film;
 use crate::light::luminance;
-use crate::sampler::{dim, IndependentPixel, PixelSampler, Sampler, SamplerKind, SobolPixel};
+use crate::sampler::{IndependentPixel, PixelSampler, Sampler, SamplerKind, SobolPixel};
 use glam::Vec2;
 
 /// Where one pixel's samples go and which samples it takes.
@@ -54,9 +54,10 @@ impl Tracer<'_> {
         let mut moments = job.moments;
         for s in job.first_sample + job.taken..job.first_sample + job.spp {
             let mut sampler = samplers.sample(s as u64);
-            let offset = scene.filter.offset(sampler.get_2d(dim::FILTER));
+            let (u_filter, u_lens) = sampler.camera_2d();
+            let offset = scene.filter.offset(u_filter);
             let film_pos = Vec2::new(job.x as f32 + 0.5, job.y as f32 + 0.5) + offset;
-            let ray = cam.ray(film_pos, sampler.get_2d(dim::LENS));
+            let ray = cam.ray(film_pos, u_lens);
             let alpha = self.trace(ray, &mut sampler, out);
             (job.after_sample)(out);
             if let Some(m) = &mut moments {
