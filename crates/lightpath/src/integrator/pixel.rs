@@ -40,14 +40,30 @@ impl Tracer<'_> {
         let settings = &self.scene.settings;
         let index = job.y as u64 * self.scene.camera.width as u64 + job.x as u64;
         match settings.sampler {
-            SamplerKind::Sobol => self.pixel_samples(job, out, SobolPixel::new(self.seed, index)),
+            SamplerKind::Sobol => {
+                let mut pixel = match out.sobol.take() {
+                    Some(mut pixel) => {
+                        pixel.reset(self.seed, index);
+                        pixel
+                    }
+                    None => Box::new(SobolPixel::new(self.seed, index)),
+                };
+                let held = self.pixel_samples(job, out, &mut *pixel);
+                out.sobol = Some(pixel);
+                held
+            }
             SamplerKind::Independent => {
-                self.pixel_samples(job, out, IndependentPixel::new(self.seed, index))
+                self.pixel_samples(job, out, &mut IndependentPixel::new(self.seed, index))
             }
         }
     }
 
-    fn pixel_samples(&self, job: PixelJob, out: &mut Sink, mut samplers: impl PixelSampler) -> u32 {
+    fn pixel_samples(
+        &self,
+        job: PixelJob,
+        out: &mut Sink,
+        samplers: &mut impl PixelSampler,
+    ) -> u32 {
         let scene = self.scene;
         let cam = &scene.camera;
         let alpha_slot = Film::alpha_slot(job.run.len());
