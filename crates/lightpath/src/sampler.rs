@@ -76,6 +76,13 @@ pub trait Sampler {
     fn vertex_2d(&mut self, depth: u32, offset: u32) -> Vec2 {
         self.get_2d(dim::bounce(depth) + offset)
     }
+    /// The camera sample's filter and lens numbers: `get_2d(dim::FILTER)`, then
+    /// `get_2d(dim::LENS)`.
+    #[inline(always)]
+    fn camera_2d(&mut self) -> (Vec2, Vec2) {
+        let filter = self.get_2d(dim::FILTER);
+        (filter, self.get_2d(dim::LENS))
+    }
 }
 
 /// Which sampler a render uses.
@@ -471,6 +478,15 @@ impl SobolPixel {
         }
     }
 
+    /// This pixel made over for pixel `pixel` of seed `seed`: the same numbers as
+    /// `SobolPixel::new(seed, pixel)`'s (the first sample's block differs from `block`,
+    /// so it works out the hashes again), without clearing and copying its ~2.4 KB.
+    pub fn reset(&mut self, seed: u64, pixel: u64) {
+        self.seed = seed;
+        self.pixel = pixel;
+        self.block = u64::MAX;
+    }
+
     /// Padded sequence `number`'s hashes.
     #[inline(always)]
     fn hashes(&mut self, number: u32) -> SequenceHashes {
@@ -726,6 +742,14 @@ impl Sampler for SobolSampler<'_> {
             _ => self.get_2d(dim::bounce(depth) + offset),
         }
     }
+
+    /// The camera sequence's four lanes (filter 0–1, lens 2–3: `Source::of`), without
+    /// the table lookups.
+    #[inline(always)]
+    fn camera_2d(&mut self) -> (Vec2, Vec2) {
+        let lanes = self.padded(CAMERA);
+        (Vec2::new(lanes[0], lanes[1]), Vec2::new(lanes[2], lanes[3]))
+    }
 }
 
 #[cfg(test)]
@@ -796,6 +820,43 @@ mod tests {
                     ib.vertex_1d(depth, dim::ROULETTE)
                 );
             }
+        }
+    }
+
+    /// A pixel made over by `reset` gives the numbers of a new one.
+    #[test]
+    fn a_reset_pixel_is_a_new_one() {
+        let mut reused = SobolPixel::new(4, 17);
+        let _ = reused
+            .sample(70_000)
+            .get_2d(dim::bounce(3) + dim::DIRECTION);
+        for (seed, pixel, sample) in [(4, 18, 0), (5, 18, 3), (5, 19, 65_540)] {
+            reused.reset(seed, pixel);
+            let mut new = SobolPixel::new(seed, pixel);
+            let (mut a, mut b) = (reused.sample(sample), new.sample(sample));
+            for d in 0..60 {
+                assert_eq!(
+                    a.get_1d(d),
+                    b.get_1d(d),
+                    "seed {seed}, pixel {pixel}, dim {d}"
+                );
+            }
+        }
+    }
+
+    /// `camera_2d` gives `get_2d(FILTER)` and `get_2d(LENS)`'s numbers, for both samplers,
+    /// in several blocks of 2^16 samples.
+    #[test]
+    fn camera_numbers_are_the_layouts() {
+        for (pixel, sample) in [(0, 0), (5, 3), (77, 64), (123, 65_537), (9, 200_003)] {
+            let (mut a, mut b) = (SobolPixel::new(11, pixel), SobolPixel::new(11, pixel));
+            let (mut sa, mut sb) = (a.sample(sample), b.sample(sample));
+            let by_dim = (sa.get_2d(dim::FILTER), sa.get_2d(dim::LENS));
+            assert_eq!(by_dim, sb.camera_2d(), "pixel {pixel}, sample {sample}");
+            let mut ia = IndependentSampler::new(3, pixel, sample);
+            let mut ib = IndependentSampler::new(3, pixel, sample);
+            let by_dim = (ia.get_2d(dim::FILTER), ia.get_2d(dim::LENS));
+            assert_eq!(by_dim, ib.camera_2d());
         }
     }
 

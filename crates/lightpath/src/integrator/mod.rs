@@ -81,6 +81,10 @@ struct Sink<'b> {
     first_object: Option<u32>,
     /// The current path's vertices recorded for training the guide (guided.rs).
     record: guided::PathRecord,
+    /// The Sobol sampler's pixel state, made over for each pixel (`SobolPixel::reset`):
+    /// a new one for every pixel was ~2 % of the indirect box's instructions (clearing
+    /// and copying its ~2.4 KB).
+    sobol: Option<Box<crate::sampler::SobolPixel>>,
 }
 
 impl<'b> Sink<'b> {
@@ -93,6 +97,7 @@ impl<'b> Sink<'b> {
             holdout: false,
             first_object: None,
             record: guided::PathRecord::default(),
+            sobol: None,
         }
     }
 }

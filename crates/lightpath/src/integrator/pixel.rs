@@ -10,7 +10,7 @@ use super::adaptive::Moments;
 use super::{Sink, Tracer};
 use crate::film::Film;
 use crate::light::luminance;
-use crate::sampler::{dim, IndependentPixel, PixelSampler, Sampler, SamplerKind, SobolPixel};
+use crate::sampler::{IndependentPixel, PixelSampler, Sampler, SamplerKind, SobolPixel};
 use glam::Vec2;
 
 /// Where one pixel's samples go and which samples it takes.
@@ -40,23 +40,40 @@ impl Tracer<'_> {
         let settings = &self.scene.settings;
         let index = job.y as u64 * self.scene.camera.width as u64 + job.x as u64;
         match settings.sampler {
-            SamplerKind::Sobol => self.pixel_samples(job, out, SobolPixel::new(self.seed, index)),
+            SamplerKind::Sobol => {
+                let mut pixel = match out.sobol.take() {
+                    Some(mut pixel) => {
+                        pixel.reset(self.seed, index);
+                        pixel
+                    }
+                    None => Box::new(SobolPixel::new(self.seed, index)),
+                };
+                let held = self.pixel_samples(job, out, &mut *pixel);
+                out.sobol = Some(pixel);
+                held
+            }
             SamplerKind::Independent => {
-                self.pixel_samples(job, out, IndependentPixel::new(self.seed, index))
+                self.pixel_samples(job, out, &mut IndependentPixel::new(self.seed, index))
             }
         }
     }
 
-    fn pixel_samples(&self, job: PixelJob, out: &mut Sink, mut samplers: impl PixelSampler) -> u32 {
+    fn pixel_samples(
+        &self,
+        job: PixelJob,
+        out: &mut Sink,
+        samplers: &mut impl PixelSampler,
+    ) -> u32 {
         let scene = self.scene;
         let cam = &scene.camera;
         let alpha_slot = Film::alpha_slot(job.run.len());
         let mut moments = job.moments;
         for s in job.first_sample + job.taken..job.first_sample + job.spp {
             let mut sampler = samplers.sample(s as u64);
-            let offset = scene.filter.offset(sampler.get_2d(dim::FILTER));
+            let (u_filter, u_lens) = sampler.camera_2d();
+            let offset = scene.filter.offset(u_filter);
             let film_pos = Vec2::new(job.x as f32 + 0.5, job.y as f32 + 0.5) + offset;
-            let ray = cam.ray(film_pos, sampler.get_2d(dim::LENS));
+            let ray = cam.ray(film_pos, u_lens);
             let alpha = self.trace(ray, &mut sampler, out);
             (job.after_sample)(out);
             if let Some(m) = &mut moments {

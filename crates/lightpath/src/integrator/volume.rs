@@ -428,13 +428,12 @@ impl Tracer<'_> {
         }
         let guide = self.guide_in_medium(v.p);
         self.medium_light(out, path, s_v, v, guide, sampler);
-        let bounce = dim::bounce(path.depth);
         let volume = &scene.volumes[v.medium.volume as usize];
         let guided = guide.filter(|g| g.alpha > 0.0 || (self.learn && g.trained));
         // A phase function has one lobe: the lobe's number picks phase or guide (read
         // before the direction: the layout's order, sampler.rs).
-        let u_choice = guided.map(|_| sampler.get_1d(bounce + dim::LOBE_CHOICE));
-        let u_dir = sampler.get_2d(bounce + dim::DIRECTION);
+        let u_choice = guided.map(|_| sampler.vertex_1d(path.depth, dim::LOBE_CHOICE));
+        let u_dir = sampler.vertex_2d(path.depth, dim::DIRECTION);
         let before = path.throughput;
         let (wi, pdf, weight, pdfs) = match (guided, u_choice) {
             (Some(g), Some(u_choice)) => {
@@ -490,9 +489,8 @@ impl Tracer<'_> {
     ) {
         let scene = self.scene;
         let a = &scene.automaton;
-        let bounce = dim::bounce(path.depth);
-        let u_light = sampler.get_1d(bounce + dim::LIGHT_CHOICE);
-        let u_point = sampler.get_2d(bounce + dim::LIGHT_POINT);
+        let u_light = sampler.vertex_1d(path.depth, dim::LIGHT_CHOICE);
+        let u_point = sampler.vertex_2d(path.depth, dim::LIGHT_POINT);
         if scene.lights.is_empty() {
             return;
         }

@@ -449,6 +449,29 @@ impl Bsdf {
         u: Vec2,
     ) -> Option<BsdfSample> {
         let wo = sh.wo;
+        // One Lambertian lobe and no layer (the commonest material): its own sample,
+        // without the lobe kinds' dispatch, the event lookup and the layers' attenuation
+        // (one: `weight` is the albedo the lobe returns). The same sample as below.
+        if self.n_lobes == 1 && self.n_layers == 0 && self.n_tags == 1 {
+            if let Lobe::Lambert(lambert) = &self.lobes[0] {
+                let ctx = SampleCtx {
+                    sel: 1.0,
+                    u_lobe,
+                    alone: true,
+                };
+                let s = lambert.sample(wo, ctx, u)?;
+                if let Some((weight, pdf, delta)) = s.value {
+                    return Some(BsdfSample {
+                        lobe: 0,
+                        wi: sh.frame.to_world(s.wi),
+                        weight,
+                        pdf,
+                        delta,
+                        eta: s.eta,
+                    });
+                }
+            }
+        }
         let (l, u_rest, sel_l) = if self.n_lobes == 1 {
             (0, u_lobe, 1.0)
         } else {
