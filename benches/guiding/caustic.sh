@@ -9,6 +9,8 @@
 set -u
 out=$1; lp=$2; shift 2
 here="$(cd "$(dirname "$0")" && pwd)"
+# shellcheck source=timed_mode.sh
+. "$here/timed_mode.sh"
 mkdir -p "$out"
 res="$out/results.txt"
 : > "$res"
@@ -21,11 +23,7 @@ done
 for i in "$@"; do
   for scene in caustic caustic_heldout; do
     for g in off auto on; do
-      /usr/bin/time -f "TIME %U %S" -o "$out/time.txt" "$lp" render "$here/$scene.toml" --aovs none \
-        --spp 64 --threads 2 --seed "$i" --guiding "$g" -o "$out/${scene}_${g}_$i.exr" > "$out/log.txt" 2>&1
-      w=$(sed -n 's/^.*AOVs: \([0-9.]*\) s,.*/\1/p' "$out/log.txt")
-      c=$(awk '/^TIME/{print $2 + $3}' "$out/time.txt")
-      echo "RESULT scene=$scene renderer=$g seed=$i wall=$w cpu=$c image=${scene}_${g}_$i.exr" >> "$res"
+      timed_mode "$out" "$lp" "$scene" "$g" "$i" "$here/$scene.toml"
     done
   done
 done

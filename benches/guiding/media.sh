@@ -14,6 +14,8 @@
 set -u
 out=$1; lp=$2; shift 2
 here="$(cd "$(dirname "$0")" && pwd)"
+# shellcheck source=timed_mode.sh
+. "$here/timed_mode.sh"
 root="$(cd "$here/../.." && pwd)"
 ref_spp="${REF_SPP:-2048}"
 mkdir -p "$out"
@@ -48,12 +50,7 @@ for i in "$@"; do
   for scene in $scenes; do
     for g in off on auto; do
       # shellcheck disable=SC2046
-      /usr/bin/time -f "TIME %U %S" -o "$out/time.txt" "$lp" render "$(scene_file "$scene")" \
-        $(scene_args "$scene") --quiet --aovs none --spp 64 --threads 2 --seed "$i" \
-        --guiding "$g" -o "$out/${scene}_${g}_$i.exr" > "$out/log.txt" 2>&1
-      w=$(sed -n 's/^.*AOVs: \([0-9.]*\) s,.*/\1/p' "$out/log.txt")
-      c=$(awk '/^TIME/{print $2 + $3}' "$out/time.txt")
-      echo "RESULT scene=$scene renderer=$g seed=$i wall=$w cpu=$c image=${scene}_${g}_$i.exr" >> "$res"
+      timed_mode "$out" "$lp" "$scene" "$g" "$i" "$(scene_file "$scene")" $(scene_args "$scene")
     done
   done
 done

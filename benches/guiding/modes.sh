@@ -9,6 +9,8 @@
 set -u
 out=$1; lp=$2; shift 2
 here="$(cd "$(dirname "$0")" && pwd)"
+# shellcheck source=timed_mode.sh
+. "$here/timed_mode.sh"
 mkdir -p "$out"
 res="$out/results.txt"
 : > "$res"
@@ -29,11 +31,7 @@ for i in "$@"; do
       *) f=cornell-classic ;;
     esac
     for g in off on auto; do
-      /usr/bin/time -f "TIME %U %S" -o "$out/time.txt" "$lp" render "$f" --quiet --aovs none \
-        --spp 64 --threads 2 --seed "$i" --guiding "$g" -o "$out/${scene}_${g}_$i.exr" > "$out/log.txt" 2>&1
-      w=$(sed -n 's/^.*AOVs: \([0-9.]*\) s,.*/\1/p' "$out/log.txt")
-      c=$(awk '/^TIME/{print $2 + $3}' "$out/time.txt")
-      echo "RESULT scene=$scene renderer=$g seed=$i wall=$w cpu=$c image=${scene}_${g}_$i.exr" >> "$res"
+      timed_mode "$out" "$lp" "$scene" "$g" "$i" "$f"
     done
   done
 done
