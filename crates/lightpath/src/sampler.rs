@@ -756,70 +756,51 @@ impl Sampler for SobolSampler<'_> {
 mod tests {
     use super::*;
 
+    /// Every number of the layout's vertex offsets for vertices `0..depths`, read by
+    /// dimension (`get_1d`/`get_2d`) or by vertex (`vertex_1d`/`vertex_2d`), in the
+    /// layout's order.
+    fn read_vertices<S: Sampler>(s: &mut S, by_vertex: bool, depths: u32) -> Vec<Vec2> {
+        let mut out = Vec::new();
+        for depth in 0..depths {
+            for (offset, two) in [
+                (dim::LIGHT_CHOICE, false),
+                (dim::LIGHT_POINT, true),
+                (dim::LOBE_CHOICE, false),
+                (dim::DIRECTION, true),
+                (dim::ROULETTE, false),
+            ] {
+                let d = dim::bounce(depth) + offset;
+                out.push(match (by_vertex, two) {
+                    (false, true) => s.get_2d(d),
+                    (false, false) => Vec2::new(s.get_1d(d), 0.0),
+                    (true, true) => s.vertex_2d(depth, offset),
+                    (true, false) => Vec2::new(s.vertex_1d(depth, offset), 0.0),
+                });
+            }
+        }
+        out
+    }
+
     /// `vertex_1d` and `vertex_2d` give exactly `get_1d` and `get_2d`'s numbers, for both
     /// samplers, at every offset of the layout, for vertices past the cached sequences
     /// (31) and past the Sobol directions (128), in several blocks of 2^16 samples.
     #[test]
     fn vertex_numbers_are_the_layouts() {
-        type Read = fn(&mut dyn FnMut(u32, u32, bool));
-        let walk: Read = |read| {
-            for depth in 0..140 {
-                read(depth, dim::LIGHT_CHOICE, false);
-                read(depth, dim::LIGHT_POINT, true);
-                read(depth, dim::LOBE_CHOICE, false);
-                read(depth, dim::DIRECTION, true);
-                read(depth, dim::ROULETTE, false);
-            }
-        };
         for (pixel, sample) in [(0, 0), (5, 3), (77, 64), (123, 65_537), (9, 200_003)] {
             let (mut a, mut b) = (SobolPixel::new(11, pixel), SobolPixel::new(11, pixel));
-            let (mut sa, mut sb) = (a.sample(sample), b.sample(sample));
-            let mut by_dim = Vec::new();
-            walk(&mut |d, o, two| {
-                let v = if two {
-                    sa.get_2d(dim::bounce(d) + o)
-                } else {
-                    Vec2::new(sa.get_1d(dim::bounce(d) + o), 0.0)
-                };
-                by_dim.push(v);
-            });
-            let mut by_vertex = Vec::new();
-            walk(&mut |d, o, two| {
-                let v = if two {
-                    sb.vertex_2d(d, o)
-                } else {
-                    Vec2::new(sb.vertex_1d(d, o), 0.0)
-                };
-                by_vertex.push(v);
-            });
-            assert_eq!(by_dim, by_vertex, "pixel {pixel}, sample {sample}");
-            let (mut ia, mut ib) = (
-                IndependentSampler::new(3, pixel, sample),
-                IndependentSampler::new(3, pixel, sample),
+            let (by_dim, by_vertex) = (
+                read_vertices(&mut a.sample(sample), false, 140),
+                read_vertices(&mut b.sample(sample), true, 140),
             );
-            for depth in 0..4 {
-                let b = dim::bounce(depth);
-                assert_eq!(
-                    ia.get_1d(b + dim::LIGHT_CHOICE),
-                    ib.vertex_1d(depth, dim::LIGHT_CHOICE)
-                );
-                assert_eq!(
-                    ia.get_2d(b + dim::LIGHT_POINT),
-                    ib.vertex_2d(depth, dim::LIGHT_POINT)
-                );
-                assert_eq!(
-                    ia.get_1d(b + dim::LOBE_CHOICE),
-                    ib.vertex_1d(depth, dim::LOBE_CHOICE)
-                );
-                assert_eq!(
-                    ia.get_2d(b + dim::DIRECTION),
-                    ib.vertex_2d(depth, dim::DIRECTION)
-                );
-                assert_eq!(
-                    ia.get_1d(b + dim::ROULETTE),
-                    ib.vertex_1d(depth, dim::ROULETTE)
-                );
-            }
+            assert_eq!(by_dim, by_vertex, "pixel {pixel}, sample {sample}");
+            let (by_dim, by_vertex) = (
+                read_vertices(&mut IndependentSampler::new(3, pixel, sample), false, 4),
+                read_vertices(&mut IndependentSampler::new(3, pixel, sample), true, 4),
+            );
+            assert_eq!(
+                by_dim, by_vertex,
+                "independent: pixel {pixel}, sample {sample}"
+            );
         }
     }
 

@@ -262,18 +262,9 @@ pub fn reflection_eval<F: Fn(f32) -> Vec3A>(
     sel: f32,
     fresnel: F,
 ) -> (Vec3A, f32) {
-    if is_smooth(alpha) || wo.z <= 0.0 || wi.z <= 0.0 {
-        return (Vec3A::ZERO, 0.0);
-    }
-    reflection_eval_with(
-        &MicrofacetReflection::new(alpha, f_avg),
-        alpha,
-        weight,
-        wo,
-        wi,
-        sel,
-        fresnel,
-    )
+    reflection_eval_by(alpha, weight, wo, wi, sel, fresnel, || {
+        MicrofacetReflection::new(alpha, f_avg)
+    })
 }
 
 /// [`reflection_eval`] with the lobe's [`MicrofacetReflection`] built beforehand (a lobe
@@ -288,10 +279,25 @@ pub fn reflection_eval_with<F: Fn(f32) -> Vec3A>(
     sel: f32,
     fresnel: F,
 ) -> (Vec3A, f32) {
+    reflection_eval_by(alpha, weight, wo, wi, sel, fresnel, || *r)
+}
+
+/// The evaluation both forms share; `rough` gives the distribution, built only where
+/// the lobe is rough and both directions are above the surface.
+#[inline(always)]
+fn reflection_eval_by<F: Fn(f32) -> Vec3A, R: FnOnce() -> MicrofacetReflection>(
+    alpha: Vec2,
+    weight: f32,
+    wo: Vec3A,
+    wi: Vec3A,
+    sel: f32,
+    fresnel: F,
+    rough: R,
+) -> (Vec3A, f32) {
     if is_smooth(alpha) || wo.z <= 0.0 || wi.z <= 0.0 {
         return (Vec3A::ZERO, 0.0);
     }
-    let (f, pdf) = r.eval(wo, wi, fresnel);
+    let (f, pdf) = rough().eval(wo, wi, fresnel);
     (f * clamp_weight(weight), sel * pdf)
 }
 
