@@ -83,6 +83,10 @@ pub trait Sampler {
         let filter = self.get_2d(dim::FILTER);
         (filter, self.get_2d(dim::LENS))
     }
+    /// The numbers of the sample's light subpath (integrator/connect.rs): the light's
+    /// choice, the point on it (2D) and the emitted direction (2D). Outside the layout's
+    /// dimensions, so asking for them changes no other number, whenever they are asked.
+    fn light_path(&mut self) -> (f32, Vec2, Vec2);
 }
 
 /// Which sampler a render uses.
@@ -117,6 +121,8 @@ impl SamplerKind {
 /// renders have always used, so its pixels are those of earlier versions.
 pub struct IndependentSampler {
     rng: Rng,
+    /// (seed, pixel, sample), for the light subpath's own stream.
+    key: (u64, u64, u64),
     /// The next dimension allowed, to check the order in debug builds.
     #[cfg(debug_assertions)]
     next_dim: u32,
@@ -126,6 +132,7 @@ impl IndependentSampler {
     pub fn new(seed: u64, pixel: u64, sample: u64) -> IndependentSampler {
         IndependentSampler {
             rng: Rng::for_sample(seed, pixel, sample),
+            key: (seed, pixel, sample),
             #[cfg(debug_assertions)]
             next_dim: 0,
         }
@@ -157,7 +164,17 @@ impl Sampler for IndependentSampler {
         self.check_order(dim, 2);
         self.rng.next_2d()
     }
+
+    /// From a stream of their own (the seed hashed with a constant), not the path's.
+    fn light_path(&mut self) -> (f32, Vec2, Vec2) {
+        let (seed, pixel, sample) = self.key;
+        let mut rng = Rng::for_sample(seed ^ LIGHT_PATH_SEED, pixel, sample);
+        (rng.next_f32(), rng.next_2d(), rng.next_2d())
+    }
 }
+
+/// Folded into the seed of the independent sampler's light-subpath stream.
+const LIGHT_PATH_SEED: u64 = 0x6c69_6768_7470_6174;
 
 /// Makes the samplers of one pixel's camera samples (state shared by a pixel's samples
 /// is computed once per pixel).
@@ -261,6 +278,10 @@ fn vertex_sequence(d: u32) -> u32 {
 fn roulette_sequence(d: u32) -> u32 {
     2 + 2 * d
 }
+/// The light subpath's sequences: numbers no vertex reaches (`u32::MAX` is
+/// `SobolSampler::sequence`'s "none").
+const LIGHT_POINT_SEQUENCE: u32 = u32::MAX - 1;
+const LIGHT_DIRECTION_SEQUENCE: u32 = u32::MAX - 2;
 
 /// A padded sequence's seed for `sobol_burley`: the camera sequence's is the pixel's
 /// (so camera rays are those of renders made before padding), the others hash it with
@@ -741,6 +762,18 @@ impl Sampler for SobolSampler<'_> {
             }
             _ => self.get_2d(dim::bounce(depth) + offset),
         }
+    }
+
+    /// Two padded sequences of their own: the point on the light (lanes 0–1, a (0, 2)-net)
+    /// and the light's choice (lane 2) from one, the direction (lanes 0–1) from the other.
+    fn light_path(&mut self) -> (f32, Vec2, Vec2) {
+        let lanes = *self.padded(LIGHT_POINT_SEQUENCE);
+        let dir = self.padded(LIGHT_DIRECTION_SEQUENCE);
+        (
+            lanes[2],
+            Vec2::new(lanes[0], lanes[1]),
+            Vec2::new(dir[0], dir[1]),
+        )
     }
 
     /// The camera sequence's four lanes (filter 0–1, lens 2–3: `Source::of`), without

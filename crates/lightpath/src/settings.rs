@@ -10,6 +10,7 @@ use crate::aov::naming::{setting_attribute, SEED_ATTRIBUTE, SPP_ATTRIBUTE};
 use crate::camera::FilterKind;
 use crate::error::SettingError;
 use crate::guiding::GuidingMode;
+use crate::integrator::connect::LightConnections;
 use crate::light::select::LightSelection;
 use crate::media::VolumeSampling;
 use crate::sampler::SamplerKind;
@@ -245,6 +246,18 @@ settings! {
         header: Header::Setting,
         help: "Path guiding's training passes before the render: 1 and 2 samples on a \
                sixteenth of the pixels, then 4, 8, … on all (0: no guiding).",
+    }
+    light_connections: LightConnections = LightConnections::Off, {
+        section: Render,
+        flag: "light-connections",
+        range: Range::Any,
+        role: Shared,
+        header: Header::Setting,
+        help: "Light-vertex connections (Veach and Guibas' bidirectional strategy for light \
+               subpaths of one bounce): each camera sample also traces a ray from an area \
+               light and joins every scattering vertex to the surface it lit, weighted by \
+               MIS against light and BSDF sampling; for rooms lit by light bouncing off a \
+               ceiling or baffle (integrator/connect.rs). on or off.",
     }
     frame: Option<f32> = None, {
         section: Render,
@@ -758,6 +771,7 @@ choice!(LightSelection);
 choice!(FilterKind);
 choice!(GuidingMode);
 choice!(VolumeSampling);
+choice!(LightConnections);
 
 #[cfg(test)]
 mod tests;

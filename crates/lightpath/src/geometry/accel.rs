@@ -40,6 +40,8 @@ pub struct Accel {
     /// Which ray kinds see each primitive, in the same order (for building Embree's scene).
     #[cfg(feature = "embree")]
     pub(super) visibility: Vec<u8>,
+    /// See [`Accel::shadows_match_indirect`] (instances included).
+    shadows_match_indirect: bool,
     /// When set (`use_embree`), `intersect` and `occluded` ask Embree instead of the tree.
     #[cfg(feature = "embree")]
     embree: Option<Box<EmbreeScene>>,
@@ -71,7 +73,11 @@ impl Accel {
         for (slot, &i) in laid.order.iter().enumerate() {
             slots[i as usize] = slot as u32;
         }
+        let shadows_match_indirect = visibility
+            .iter()
+            .all(|&v| (v & Visibility::INDIRECT != 0) == (v & Visibility::SHADOW != 0));
         Accel {
+            shadows_match_indirect,
             tree: laid.tree,
             objects: laid.order.iter().map(|&i| objects[i as usize]).collect(),
             face_normals: laid.prims.iter().map(Prim::face_normal).collect(),
@@ -89,6 +95,12 @@ impl Accel {
 
     pub fn prims(&self) -> &[Prim] {
         &self.prims
+    }
+
+    /// Whether every primitive that indirect rays see casts shadows and the other way
+    /// round: then a shadow ray is blocked exactly where an indirect ray stops.
+    pub fn shadows_match_indirect(&self) -> bool {
+        self.shadows_match_indirect
     }
 
     /// Which ray kinds see each primitive of `prims()`.
@@ -139,6 +151,7 @@ impl Accel {
     /// instances themselves: the structure has two levels.
     pub fn with_instances(mut self, meshes: Vec<Accel>, instances: Vec<Instance>) -> Accel {
         debug_assert!(meshes.iter().all(|m| m.instances.is_empty()));
+        self.shadows_match_indirect &= meshes.iter().all(|m| m.shadows_match_indirect);
         self.meshes = meshes;
         self.instances = instances;
         self

@@ -3,6 +3,7 @@
 //! and sampled glows found by BSDF rays with the complementary weight, and the lights-only test that `unoccluded` and
 //! `shadows` AOVs see. The one power heuristic of the renderer lives here (docs/architecture.md).
 
+use super::connect::power_heuristic3;
 use super::guided::LobeValues;
 use super::path::{PathState, Vertex};
 use super::routing::{Origin, Via};
@@ -98,6 +99,20 @@ impl Tracer<'_> {
         li: u32,
         light_pdf: impl FnOnce(&Light) -> f32,
     ) -> f32 {
+        self.bsdf_weight_reached(path, li, light_pdf, true)
+    }
+
+    /// [`bsdf_weight`](Self::bsdf_weight), for a ray that `reached` the light or (the
+    /// lights-only test) was blocked before it: only a reached light weighs against a
+    /// light-vertex connection (connect.rs), which never makes a blocked segment.
+    #[inline]
+    pub(super) fn bsdf_weight_reached(
+        &self,
+        path: &PathState,
+        li: u32,
+        light_pdf: impl FnOnce(&Light) -> f32,
+        reached: bool,
+    ) -> f32 {
         if path.prev_delta {
             1.0
         } else if self.scene.lights[li as usize].shadow_linked {
@@ -106,13 +121,18 @@ impl Tracer<'_> {
             0.0
         } else {
             let scene = self.scene;
-            power_heuristic(
-                path.prev_pdf,
-                scene
-                    .light_select
-                    .pmf(li as usize, path.prev_p, path.prev_n)
-                    * light_pdf(&scene.lights[li as usize]),
-            )
+            let light_pdf = scene
+                .light_select
+                .pmf(li as usize, path.prev_p, path.prev_n)
+                * light_pdf(&scene.lights[li as usize]);
+            match &self.connect {
+                Some(conn) if reached && path.conn_a > 0.0 => power_heuristic3(
+                    path.prev_pdf,
+                    light_pdf,
+                    conn.pdf_over(li, path.conn_cos, path.conn_a),
+                ),
+                _ => power_heuristic(path.prev_pdf, light_pdf),
+            }
         }
     }
 
@@ -192,6 +212,13 @@ impl Tracer<'_> {
         let l_class = light.classes.light;
         let (part, glow) = (light.part, light.glow);
         let (light_pdf, estimate_pdf) = (chosen.mis_pdf, chosen.estimate_pdf);
+        // A light-vertex connection's pdf term for this sample (connect.rs), if any
+        // (none for delta and shadow-linked lights: `Connect::density` is 0).
+        let conn_pdf = if RICH {
+            0.0
+        } else {
+            self.conn_pdf(v, li as u32, ls.wi)
+        };
         // The shadow ray is traced once, and only if some lobe's contribution counts.
         let mut visible: Option<bool> = None;
         // With media, its transmittance instead (volume.rs).
@@ -226,7 +253,7 @@ impl Tracer<'_> {
             if f == Vec3A::ZERO {
                 continue;
             }
-            let w = if ls.delta || light.shadow_linked {
+            let mut w = if ls.delta || light.shadow_linked {
                 1.0
             } else {
                 power_heuristic(light_pdf, lobe_pdf)
@@ -271,6 +298,9 @@ impl Tracer<'_> {
                     vis
                 }
             };
+            if vis && conn_pdf > 0.0 && bsdf.subsurface(k).is_none() {
+                w = power_heuristic3(light_pdf, lobe_pdf, conn_pdf);
+            }
             let via = match (glow, vis) {
                 // A glow is no light: what cannot reach it is no shadow.
                 (true, false) => continue,
@@ -409,9 +439,9 @@ impl Tracer<'_> {
                 if le == Vec3A::ZERO || !self.lit(path.prev_object, li as u32) {
                     return;
                 }
-                let w =
-                    self.bsdf_weight(path, li as u32, |light| path.pdf_of(light, ray.dir, t, n));
                 if scene.has_media {
+                    let w = self
+                        .bsdf_weight(path, li as u32, |light| path.pdf_of(light, ray.dir, t, n));
                     let seg = Ray {
                         tmax: t - 2.0 * scene.epsilon,
                         ..*ray
@@ -423,6 +453,12 @@ impl Tracer<'_> {
                 let reached = self
                     .present_hit(ray, hit)
                     .is_some_and(|h| scene.objects[h.object as usize].light == Some(li as u32));
+                let w = self.bsdf_weight_reached(
+                    path,
+                    li as u32,
+                    |light| path.pdf_of(light, ray.dir, t, n),
+                    reached,
+                );
                 self.light_only_seen(out, path, li as u32, le, w, !reached);
             }
             None => {

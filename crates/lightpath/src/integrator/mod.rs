@@ -8,6 +8,7 @@
 //! `routing.rs` what each AOV takes of a contribution; this module runs the render loop.
 
 pub mod adaptive;
+pub mod connect;
 mod direct;
 mod guided;
 mod light_choice;
@@ -68,6 +69,8 @@ struct Tracer<'a> {
     path_rng: bool,
     /// Boxes around the declared triangle lights, for the lights-only test (direct.rs).
     light_boxes: Vec<Option<(Vec3A, Vec3A)>>,
+    /// Light-vertex connections, if the render makes them (connect.rs).
+    connect: Option<connect::Connect>,
 }
 
 /// Where a worker's paths put what they find: the sample's AOV values and counters.
@@ -119,6 +122,7 @@ impl<'a> Tracer<'a> {
             path_rng: scene.has_media
                 || (scene.settings.light_candidates > 1 && scene.lights.len() > 1),
             light_boxes: direct::light_boxes(scene),
+            connect: None,
         }
     }
 
@@ -289,6 +293,7 @@ fn render_passes(
     let guide = guided::train(scene);
     let mut tracer = Tracer::new(scene);
     tracer.guide = guide.as_ref();
+    tracer.connect = connect::Connect::new(scene, tracer.guide.is_some());
     let frame = FrameRender {
         tracer,
         options,

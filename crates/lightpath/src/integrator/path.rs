@@ -48,6 +48,13 @@ pub(super) struct PathState {
     pub travelled: f32,
     /// Free-flight and channel choices, and shadow-ray transmittance estimates.
     pub rng: Rng,
+    /// Light-vertex connections (connect.rs): whether the vertex scattered from last
+    /// could have been joined to a light vertex (`prev_pdf` is then its lobe's pdf),
+    /// and, for the ray now traced, the connection's terms of its pdf if it finds a
+    /// light: A of the vertex it left (0: none) and |cos θ'| there.
+    pub conn_x: bool,
+    pub conn_a: f32,
+    pub conn_cos: f32,
 }
 
 /// A scattering vertex: the hit and what is there.
@@ -66,6 +73,9 @@ pub(super) struct Vertex<'a> {
     pub dir: Vec3A,
     /// Path guiding here, if the render guides and the Bsdf is guided (guided.rs).
     pub guide: Option<GuideAt>,
+    /// A light-vertex connection's pdf term here (connect.rs): the area pdf of this
+    /// point from the vertex before, if that could have been joined; 0 otherwise.
+    pub conn_a: f32,
 }
 
 impl PathState {
@@ -104,6 +114,9 @@ impl PathState {
             } else {
                 Rng::UNUSED
             },
+            conn_x: false,
+            conn_a: 0.0,
+            conn_cos: 0.0,
         }
     }
 }
@@ -141,13 +154,11 @@ impl Tracer<'_> {
         // Past a boundary without an event the ray starts on it and skips this much of
         // itself instead of being moved off it, so media see their whole thickness.
         let mut tmin = 0.0;
+        // The sample's light vertex (connect.rs), traced at its first vertex that joins.
+        let mut light_vertex = None;
         loop {
             out.rays += 1;
-            let mask = if path.depth == 0 {
-                Visibility::CAMERA
-            } else {
-                Visibility::INDIRECT
-            };
+            let mask = [Visibility::INDIRECT, Visibility::CAMERA][(path.depth == 0) as usize];
             let (found, passes, null, also) = self.find::<RICH>(&path.media, &ray, tmin, mask);
             tmin = 0.0;
             if let Some(hit) = found.as_ref().filter(|_| !passes) {
@@ -228,9 +239,15 @@ impl Tracer<'_> {
                 at_wo: bsdf.at_wo(sh.wo),
                 dir: ray.dir,
                 guide: RICH.then(|| self.guide_at(bsdf, hit.p, &sh)).flatten(),
+                conn_a: if RICH {
+                    0.0
+                } else {
+                    path.conn_a_at(&hit, ray.dir)
+                },
             };
             self.data_lobes(out, &path, &v);
             self.direct_light::<S, RICH>(out, &mut path, &v, sampler);
+            self.join::<S, RICH>(out, &path, &v, sampler, &mut light_vertex);
             let Some(mut next) = self.scatter(out, &mut path, &v, sampler) else {
                 break;
             };
@@ -460,6 +477,14 @@ impl Tracer<'_> {
         let before = path.throughput;
         path.throughput *= bs.weight;
         path.eta_scale *= bs.eta;
+        // What a light this ray finds weighs against a connection, and whether this
+        // vertex could be joined (connect.rs; never through a subsurface walk).
+        if self.connect.is_some() {
+            let walks = v.bsdf.subsurface(bs.lobe).is_some();
+            path.conn_a = if bs.delta || walks { 0.0 } else { v.conn_a };
+            path.conn_cos = v.hit.ng.dot(bs.wi).abs();
+            path.conn_x = !bs.delta && !walks;
+        }
         if let Some(lobe) = v.bsdf.subsurface(bs.lobe) {
             let u = [u_lobe, u_dir.x, u_dir.y];
             return self.subsurface_scatter(out, path, v, lobe, bs.wi, u);

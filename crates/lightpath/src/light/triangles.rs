@@ -94,9 +94,14 @@ impl Triangles {
     ) -> Option<LightSample> {
         let n = self.normals[0];
         let [p0, e1, e2] = self.parallelogram?;
-        // Behind a one-sided light (or in its plane) no point of it is seen.
+        // Behind a one-sided light (or in its plane) no point of it is seen. In its plane
+        // up to rounding too: a point of the light's own surface (a light with a
+        // material, hit) rounded to a hair in front would see the whole light as a
+        // hemisphere and light itself.
         let height = (p - p0).dot(n);
-        if height <= 0.0 && !self.two_sided || height == 0.0 {
+        let on_plane =
+            1e-5 * (p0.abs().max_element() + e1.abs().max_element() + e2.abs().max_element());
+        if height <= 0.0 && !self.two_sided || height.abs() <= on_plane {
             return None;
         }
         let (q, pdf_of) = match rect.seen(p, ns) {

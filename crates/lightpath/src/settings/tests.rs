@@ -52,6 +52,7 @@ const EXAMPLES: &[Example] = &[
     ex("regularize", ("0.3", "0.3"), ("5", "5")),
     ex("guiding", ("on", "\"on\""), ("yes", "\"yes\"")),
     ex("guiding_passes", ("5", "5"), ("13", "13")),
+    ex("light_connections", ("on", "\"on\""), ("both", "\"both\"")),
     ex("frame", ("12.5", "12.5"), ("1e12", "1e12")),
     ex(
         "render_settings",
@@ -226,6 +227,7 @@ fn the_header_keeps_its_attribute_names_and_values() {
         ("lightpath/setting/guiding", "auto"),
         ("lightpath/setting/guiding_passes", "4"),
         ("lightpath/setting/light_candidates", "1"),
+        ("lightpath/setting/light_connections", "off"),
         ("lightpath/setting/light_selection", "tree"),
         ("lightpath/setting/max_depth", "8"),
         ("lightpath/setting/max_diffuse_depth", "none"),

@@ -13,6 +13,7 @@
 //! rays only.
 
 use crate::geometry::{Accel, Prim};
+use crate::light::spherical_rect::Rect;
 use crate::light::{Light, LightShape, Mesh, Sphere, Triangles};
 use crate::sampling::Distribution1D;
 use crate::scene::desc::ObjectDesc;
@@ -84,12 +85,15 @@ fn shape(range: &Range<u32>, accel: &Accel) -> Option<LightShape> {
         normals.push(p.face_normal());
     }
     let area: f32 = areas.iter().sum();
+    // A glowing rectangle (two triangles) is sampled in solid angle, as a rect light.
+    let tris: Vec<Prim> = slots.iter().map(|&s| prims[s as usize]).collect();
+    let parallelogram = super::lights::either_order(&tris);
     (area > 0.0 && area.is_finite()).then(|| {
         Mesh(Triangles {
             prims: slots,
             normals,
-            parallelogram: None,
-            rect: None,
+            parallelogram,
+            rect: parallelogram.and_then(|[p0, e1, e2]| Rect::new(p0, e1, e2)),
             by_area: Distribution1D::new(&areas),
             area,
             two_sided: true,

@@ -222,6 +222,8 @@ pub fn mesh_surfaces(
             normals,
             by_area,
             area,
+            parallelogram: quad,
+            rect,
             ..
         })) = &mut light.shape
         else {
@@ -256,6 +258,11 @@ pub fn mesh_surfaces(
                 .error("a mesh light's object has no area: it cannot emit"));
         }
         *by_area = Distribution1D::new(&areas);
+        // A rectangle of two triangles (an OBJ's or glTF's emissive quad) is sampled in
+        // solid angle, as a rect light.
+        let tris: Vec<Prim> = ids.iter().map(|&s| accel.prims()[s as usize]).collect();
+        *quad = either_order(&tris);
+        *rect = quad.and_then(|[p0, e1, e2]| Rect::new(p0, e1, e2));
     }
     let n = prims.len();
     Ok(Accel::build(
@@ -264,6 +271,14 @@ pub fn mesh_surfaces(
         Vec::new(),
         vec![crate::geometry::Visibility::ALL; n],
     ))
+}
+
+/// [`parallelogram`] of two triangles in either order (a BVH's slot order may swap them).
+pub(super) fn either_order(prims: &[Prim]) -> Option<[Vec3A; 3]> {
+    match prims {
+        [a, b] => parallelogram(&[*a, *b]).or_else(|| parallelogram(&[*b, *a])),
+        _ => None,
+    }
 }
 
 /// Two triangles `(c0, c1, c2)`, `(c0, c2, c3)` that form a parallelogram, as corner and
