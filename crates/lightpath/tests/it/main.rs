@@ -5,6 +5,7 @@
 mod common;
 
 mod cli;
+mod connect;
 mod denoise;
 mod docs;
 mod embree;
