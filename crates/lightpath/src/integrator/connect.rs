@@ -42,7 +42,7 @@ use crate::sampling::{cosine_hemisphere, uniform_triangle, Distribution1D, Frame
 use crate::scene::Scene;
 use glam::{Vec2, Vec3A};
 use lpe::ScatterClass;
-use std::borrow::Cow;
+use std::cell::{Cell, OnceCell};
 use std::f32::consts::PI;
 
 /// Whether renders trace light subpaths and join them to camera paths
@@ -171,6 +171,8 @@ pub(super) struct LightVertex {
     alpha: Vec3A,
     /// |cos θ'| at y1 between the geometric normal and `to_light`.
     cos_out: f32,
+    /// Light sampling's pdf at y1 for y0, by shading normal (`light_pdf_at`).
+    light_pdfs: [(Cell<Option<Vec3A>>, Cell<f32>); 2],
 }
 
 impl PathState {
@@ -294,6 +296,7 @@ impl Tracer<'_> {
             light_ng: n,
             alpha,
             cos_out,
+            light_pdfs: Default::default(),
         })
     }
 
@@ -336,6 +339,7 @@ impl Tracer<'_> {
         let q_conn = conn.density[lv.li as usize] * lv.cos_out;
         // y1's Bsdf as the path tracer would shade it after a diffuse bounce or not
         // (path.rs): the regularised one only after one.
+        let textured = OnceCell::new();
         let mut shaded: [Option<Option<YShading>>; 2] = [None, None];
         let mut visible: Option<bool> = None;
         let lobes = v.bsdf.lobes();
@@ -366,7 +370,7 @@ impl Tracer<'_> {
             }
             let after_diffuse = path.diffuse > 0 || diffuse;
             let ys = shaded[after_diffuse as usize].get_or_insert_with(|| {
-                self.shade_light_vertex(path, lv, material, w, dist, after_diffuse)
+                self.shade_light_vertex(path, lv, material, (w, dist), after_diffuse, &textured)
             });
             let Some(ys) = ys.as_ref() else {
                 continue;
@@ -422,50 +426,71 @@ impl Tracer<'_> {
     }
 
     /// y1 shaded as the path tracer shades a vertex reached from `v` along `w`:
-    /// textured (with the ray cone the path would have there), regularised after a
-    /// diffuse bounce, or plain; `None` where the path tracer would stop there.
+    /// textured (with the ray cone the path would have there; kept in `textured`, the
+    /// same for both `after_diffuse`), regularised after a diffuse bounce, or plain (the
+    /// choice trace_path makes, path.rs); `None` where the path tracer would stop there.
+    #[allow(clippy::too_many_arguments)]
     fn shade_light_vertex<'m>(
         &self,
         path: &PathState,
         lv: &LightVertex,
         material: &'m crate::scene::Material,
-        w: Vec3A,
-        dist: f32,
+        (w, dist): (Vec3A, f32),
         after_diffuse: bool,
+        textured: &'m OnceCell<(Bsdf, Vec3A)>,
     ) -> Option<YShading<'m>> {
-        let scene = self.scene;
         let y = &lv.hit;
-        let cone = path.cone_width + path.cone_spread.max(super::shading::SCATTERED_SPREAD) * dist;
-        // trace_path's choice (path.rs), owning a textured Bsdf (it outlives this call).
         let (bsdf, ns) = match (&material.textured, &material.regularized) {
             (Some(t), _) => {
-                let (bsdf, ns) = self.textured(t, y, w, cone);
-                (Cow::Owned(bsdf), ns)
+                let (bsdf, ns) = textured.get_or_init(|| {
+                    let spread = path.cone_spread.max(super::shading::SCATTERED_SPREAD);
+                    self.textured(t, y, w, path.cone_width + spread * dist)
+                });
+                (bsdf, *ns)
             }
-            (None, Some(rough)) if after_diffuse => (Cow::Borrowed(rough), y.ns),
-            (None, _) => (Cow::Borrowed(&material.bsdf), y.ns),
+            (None, Some(rough)) if after_diffuse => (rough, y.ns),
+            (None, _) => (&material.bsdf, y.ns),
         };
-        let sh = self.oriented(Shading::new(&bsdf, ns, y.ng, -w), material, y);
+        let sh = self.oriented(Shading::new(bsdf, ns, y.ng, -w), material, y);
         if sh.wo.z == 0.0 {
             return None;
         }
-        let at_wo = bsdf.at_wo(sh.wo);
-        let light = &scene.lights[lv.li as usize];
-        let light_pdf = scene.light_select.pmf(lv.li as usize, y.p, sh.frame.n)
-            * light.pdf_hit(y.p, sh.frame.n, lv.to_light, lv.dist, lv.light_ng);
         Some(YShading {
             wi_light: sh.frame.to_local(lv.to_light),
             bsdf,
+            at_wo: bsdf.at_wo(sh.wo),
+            light_pdf: self.light_pdf_at(lv, sh.frame.n),
             sh,
-            at_wo,
-            light_pdf,
         })
+    }
+
+    /// Light sampling's pdf at y1 with shading normal `n` for y0 (selection included):
+    /// the same for every vertex joined to `lv` from the same side, so kept for two
+    /// normals (the spherical rectangle's solid angle was ~15 % of a connected render).
+    fn light_pdf_at(&self, lv: &LightVertex, n: Vec3A) -> f32 {
+        let scene = self.scene;
+        for (known, pdf) in &lv.light_pdfs {
+            if let Some((m, p)) = known.get().zip(Some(pdf.get())) {
+                if m == n {
+                    return p;
+                }
+            }
+        }
+        let y = &lv.hit;
+        let light = &scene.lights[lv.li as usize];
+        let pdf = scene.light_select.pmf(lv.li as usize, y.p, n)
+            * light.pdf_hit(y.p, n, lv.to_light, lv.dist, lv.light_ng);
+        if let Some((known, p)) = lv.light_pdfs.iter().find(|(k, _)| k.get().is_none()) {
+            known.set(Some(n));
+            p.set(pdf);
+        }
+        pdf
     }
 }
 
 /// A light vertex shaded for one connection.
 struct YShading<'m> {
-    bsdf: Cow<'m, Bsdf>,
+    bsdf: &'m Bsdf,
     sh: Shading,
     at_wo: Option<crate::material::AtWo>,
     wi_light: Vec3A,
