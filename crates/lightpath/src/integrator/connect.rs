@@ -31,6 +31,7 @@
 //! declared triangle lights (rect, quad, disk) that are not shadow-linked; the others
 //! keep two-way weights, as no subpath starts on them.
 
+use super::direct::power_heuristic3;
 use super::path::{PathState, Vertex};
 use super::routing::{Origin, Via};
 use super::{Sink, Tracer};
@@ -140,21 +141,6 @@ impl Connect {
         } else {
             0.0
         }
-    }
-}
-
-/// The power heuristic over three strategies, for the one with pdf `a`.
-#[inline]
-pub(super) fn power_heuristic3(a: f32, b: f32, c: f32) -> f32 {
-    let (a2, sum) = (a * a, a * a + b * b + c * c);
-    if sum == 0.0 {
-        0.0
-    } else if a2.is_infinite() {
-        1.0
-    } else if !sum.is_finite() {
-        0.0
-    } else {
-        a2 / sum
     }
 }
 

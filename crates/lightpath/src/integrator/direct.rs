@@ -1,9 +1,9 @@
 //! Direct light with multiple importance sampling: light samples at each scattering
 //! vertex (every non-delta lobe through its own event, then `L`, or a glow's `O`), lights
 //! and sampled glows found by BSDF rays with the complementary weight, and the lights-only test that `unoccluded` and
-//! `shadows` AOVs see. The one power heuristic of the renderer lives here (docs/architecture.md).
+//! `shadows` AOVs see. The renderer's power heuristic lives here, over two strategies and
+//! over three where light-vertex connections (connect.rs) add theirs (docs/architecture.md).
 
-use super::connect::power_heuristic3;
 use super::guided::LobeValues;
 use super::path::{PathState, Vertex};
 use super::routing::{Origin, Via};
@@ -63,6 +63,22 @@ pub(super) fn power_heuristic(a: f32, b: f32) -> f32 {
         1.0
     } else {
         a2 / (a2 + b2)
+    }
+}
+
+/// The power heuristic over three strategies (light-vertex connections, connect.rs),
+/// for the one with pdf `a`.
+#[inline]
+pub(super) fn power_heuristic3(a: f32, b: f32, c: f32) -> f32 {
+    let (a2, sum) = (a * a, a * a + b * b + c * c);
+    if sum == 0.0 {
+        0.0
+    } else if a2.is_infinite() {
+        1.0
+    } else if !sum.is_finite() {
+        0.0
+    } else {
+        a2 / sum
     }
 }
 
