@@ -38,3 +38,27 @@ pub fn index(scene: &lightpath::Scene, name: &str) -> usize {
         .position(|a| a.name == name)
         .unwrap_or_else(|| panic!("no AOV {name}"))
 }
+
+/// The first `spp` samples from `first_sample` on of `scene`.
+pub fn render_spp(scene: &lightpath::Scene, spp: u32, first_sample: u32) -> lightpath::film::Film {
+    lightpath::render(scene, &lightpath::RenderOptions { spp, first_sample }).0
+}
+
+/// An AOV's mean luminance over the image.
+pub fn image_mean(film: &lightpath::film::Film, aov: usize) -> f64 {
+    let mut sum = 0.0;
+    for y in 0..film.height {
+        for x in 0..film.width {
+            sum += lightpath::light::luminance(film.pixel(aov, x, y)) as f64;
+        }
+    }
+    sum / (film.width * film.height) as f64
+}
+
+/// Mean and standard error of the mean of independent estimates.
+pub fn mean_and_se(vals: &[f64]) -> (f64, f64) {
+    let n = vals.len() as f64;
+    let mean = vals.iter().sum::<f64>() / n;
+    let var = vals.iter().map(|v| (v - mean).powi(2)).sum::<f64>() / (n - 1.0);
+    (mean, (var / n).sqrt())
+}

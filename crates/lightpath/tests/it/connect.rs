@@ -4,12 +4,11 @@
 //! renders stay deterministic across thread counts and sample ranges, and scenes the
 //! strategy does not apply to render exactly as without it.
 
-use crate::common::index;
+use crate::common::{image_mean, index, mean_and_se, render_spp};
 use glam::Vec3A;
 use lightpath::aov::{self, AovSpec};
-use lightpath::film::Film;
 use lightpath::integrator::connect::LightConnections;
-use lightpath::{render, RenderOptions, Scene, Source};
+use lightpath::{Scene, Source};
 
 /// A room lit around a plate just under a lamp that faces the ceiling 0.09 above it: the room sees the
 /// lamp's light after one bounce or more, a vertex on the plate's top or on the lamp's
@@ -97,29 +96,6 @@ fn scene_in(text: &str, res: u32, on: bool, seed: u64, extra: Vec<AovSpec>) -> S
         LightConnections::Off
     };
     Scene::build(&desc, &aov::assemble(extra)).unwrap()
-}
-
-fn render_spp(scene: &Scene, spp: u32, first_sample: u32) -> Film {
-    render(scene, &RenderOptions { spp, first_sample }).0
-}
-
-/// An AOV's mean luminance over the image.
-fn image_mean(film: &Film, aov: usize) -> f64 {
-    let mut sum = 0.0;
-    for y in 0..film.height {
-        for x in 0..film.width {
-            sum += lightpath::light::luminance(film.pixel(aov, x, y)) as f64;
-        }
-    }
-    sum / (film.width * film.height) as f64
-}
-
-/// Mean and standard error of the mean of independent estimates.
-fn mean_and_se(vals: &[f64]) -> (f64, f64) {
-    let n = vals.len() as f64;
-    let mean = vals.iter().sum::<f64>() / n;
-    let var = vals.iter().map(|v| (v - mean).powi(2)).sum::<f64>() / (n - 1.0);
-    (mean, (var / n).sqrt())
 }
 
 fn bounces() -> Vec<AovSpec> {

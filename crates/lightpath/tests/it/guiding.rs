@@ -3,12 +3,11 @@
 //! still sums to the beauty, and renders stay deterministic across thread counts and
 //! sample ranges; `auto` renders exactly as `on` or as `off`, as its pilot decides.
 
-use crate::common::index;
+use crate::common::{image_mean, index, mean_and_se, render_spp};
 use glam::Vec3A;
 use lightpath::aov::{self, AovSpec};
-use lightpath::film::Film;
 use lightpath::guiding::GuidingMode;
-use lightpath::{render, RenderOptions, Scene, Source};
+use lightpath::{Scene, Source};
 
 /// A room lit only around a baffle: a lamp under the ceiling faces it, a plate below the
 /// lamp hides it from the floor, so the floor sees light after a bounce (the kind of
@@ -109,29 +108,6 @@ fn scene_in(
     Scene::build(&desc, &aov::assemble(extra)).unwrap()
 }
 
-fn render_spp(scene: &Scene, spp: u32, first_sample: u32) -> Film {
-    render(scene, &RenderOptions { spp, first_sample }).0
-}
-
-/// The beauty's mean luminance over the image.
-fn image_mean(film: &Film) -> f64 {
-    let mut sum = 0.0;
-    for y in 0..film.height {
-        for x in 0..film.width {
-            sum += lightpath::light::luminance(film.pixel(0, x, y)) as f64;
-        }
-    }
-    sum / (film.width * film.height) as f64
-}
-
-/// Mean and standard error of the mean of independent estimates.
-fn mean_and_se(vals: &[f64]) -> (f64, f64) {
-    let n = vals.len() as f64;
-    let mean = vals.iter().sum::<f64>() / n;
-    let var = vals.iter().map(|v| (v - mean).powi(2)).sum::<f64>() / (n - 1.0);
-    (mean, (var / n).sqrt())
-}
-
 /// The image means of independent renders (seeds 1…runs; a guided render trains its
 /// own tree from its seed) agree with and without guiding within 5 standard errors of
 /// their difference, estimated from the spread of the runs themselves.
@@ -140,7 +116,7 @@ fn guided_renders_converge_to_the_unguided_mean() {
     let runs = 8;
     let means = |passes: u32| -> Vec<f64> {
         (1..=runs)
-            .map(|seed| image_mean(&render_spp(&scene(48, passes, seed, vec![]), 4, 0)))
+            .map(|seed| image_mean(&render_spp(&scene(48, passes, seed, vec![]), 4, 0), 0))
             .collect()
     };
     let (plain, se_plain) = mean_and_se(&means(0));
@@ -341,7 +317,7 @@ fn guided_media_converge_to_the_unguided_mean_and_partitions_sum() {
     let runs = 8;
     let means = |mode| -> Vec<f64> {
         (1..=runs)
-            .map(|seed| image_mean(&render_spp(&fog(mode, seed, vec![]), 4, 0)))
+            .map(|seed| image_mean(&render_spp(&fog(mode, seed, vec![]), 4, 0), 0))
             .collect()
     };
     let (plain, se_plain) = mean_and_se(&means(GuidingMode::Off));

@@ -2,7 +2,7 @@
 //! furnaces conserve energy, the guide's example expressions select what they say, and
 //! renders are deterministic.
 
-use crate::common::index;
+use crate::common::{index, mean_and_se};
 use glam::Vec3A;
 use lightpath::aov::{self, AovSpec};
 use lightpath::film::Film;
@@ -63,15 +63,6 @@ fn partition_error(scene: &Scene, film: &Film, parts: &[&str]) -> f32 {
         }
     }
     worst
-}
-
-/// Mean and standard error of the mean of values that are independent estimates of the
-/// same quantity (pixels: each has its own sample sequence).
-fn mean_and_se(vals: &[f64]) -> (f64, f64) {
-    let n = vals.len() as f64;
-    let mean = vals.iter().sum::<f64>() / n;
-    let var = vals.iter().map(|v| (v - mean).powi(2)).sum::<f64>() / (n - 1.0);
-    (mean, (var / n).sqrt())
 }
 
 /// Rounding of a pixel's value: `spp` samples summed in f32, each off by at most a few
