@@ -62,3 +62,25 @@ pub fn mean_and_se(vals: &[f64]) -> (f64, f64) {
     let var = vals.iter().map(|v| (v - mean).powi(2)).sum::<f64>() / (n - 1.0);
     (mean, (var / n).sqrt())
 }
+
+/// Every pixel of AOVs `parts` sums to the beauty's (to 1e-5 of the beauty, or of 1e-3
+/// where the beauty is darker).
+pub fn assert_sums_to_beauty(
+    scene: &lightpath::Scene,
+    film: &lightpath::film::Film,
+    parts: &[&str],
+) {
+    let beauty = index(scene, "beauty");
+    let ids: Vec<usize> = parts.iter().map(|p| index(scene, p)).collect();
+    for y in 0..film.height {
+        for x in 0..film.width {
+            let b = film.pixel(beauty, x, y);
+            let sum: glam::Vec3A = ids.iter().map(|&k| film.pixel(k, x, y)).sum();
+            let err = (sum - b).abs() / b.abs().max(glam::Vec3A::splat(1e-3));
+            assert!(
+                err.max_element() <= 1e-5,
+                "{parts:?} off by {err} at {x},{y}"
+            );
+        }
+    }
+}

@@ -4,8 +4,7 @@
 //! renders stay deterministic across thread counts and sample ranges, and scenes the
 //! strategy does not apply to render exactly as without it.
 
-use crate::common::{image_mean, index, mean_and_se, render_spp};
-use glam::Vec3A;
+use crate::common::{assert_sums_to_beauty, image_mean, index, mean_and_se, render_spp};
 use lightpath::aov::{self, AovSpec};
 use lightpath::integrator::connect::LightConnections;
 use lightpath::{Scene, Source};
@@ -162,20 +161,8 @@ fn connected_partitions_sum_to_beauty() {
     extra.extend(bounces());
     let scene = scene_in(ROOM, 32, true, 0, extra);
     let film = render_spp(&scene, 4, 0);
-    let beauty = index(&scene, "beauty");
     for parts in [&lpe::BEAUTY_PARTITION[..], &["b0", "b1", "b2", "b3"][..]] {
-        let ids: Vec<usize> = parts.iter().map(|p| index(&scene, p)).collect();
-        for y in 0..film.height {
-            for x in 0..film.width {
-                let b = film.pixel(beauty, x, y);
-                let sum: Vec3A = ids.iter().map(|&k| film.pixel(k, x, y)).sum();
-                let err = (sum - b).abs() / b.abs().max(Vec3A::splat(1e-3));
-                assert!(
-                    err.max_element() <= 1e-5,
-                    "{parts:?} off by {err} at {x},{y}"
-                );
-            }
-        }
+        assert_sums_to_beauty(&scene, &film, parts);
     }
 }
 

@@ -3,7 +3,7 @@
 //! still sums to the beauty, and renders stay deterministic across thread counts and
 //! sample ranges; `auto` renders exactly as `on` or as `off`, as its pilot decides.
 
-use crate::common::{image_mean, index, mean_and_se, render_spp};
+use crate::common::{assert_sums_to_beauty, image_mean, index, mean_and_se, render_spp};
 use glam::Vec3A;
 use lightpath::aov::{self, AovSpec};
 use lightpath::guiding::GuidingMode;
@@ -146,20 +146,8 @@ fn guided_partitions_sum_to_beauty() {
     ]);
     let scene = scene(48, 5, 0, extra);
     let film = render_spp(&scene, 4, 0);
-    let beauty = index(&scene, "beauty");
     for parts in [&lpe::BEAUTY_PARTITION[..], &["b0", "b1", "b2", "b3"][..]] {
-        let ids: Vec<usize> = parts.iter().map(|p| index(&scene, p)).collect();
-        for y in 0..film.height {
-            for x in 0..film.width {
-                let b = film.pixel(beauty, x, y);
-                let sum: Vec3A = ids.iter().map(|&k| film.pixel(k, x, y)).sum();
-                let err = (sum - b).abs() / b.abs().max(Vec3A::splat(1e-3));
-                assert!(
-                    err.max_element() <= 1e-5,
-                    "{parts:?} off by {err} at {x},{y}"
-                );
-            }
-        }
+        assert_sums_to_beauty(&scene, &film, parts);
     }
 }
 
