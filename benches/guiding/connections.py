@@ -1,0 +1,78 @@
+"""Light-vertex connections (`--light-connections on|off`, integrator/connect.rs): the
+efficiency of a render with them over one without, on the scenes docs/performance.md,
+"Light-vertex connections", reports.
+
+    python3 benches/guiding/connections.py LIGHTPATH_BINARY OUT_DIR [--seeds 3]
+
+For each scene, each seed and each setting (alternating), one render at the scene's own
+spp on 2 threads; its CPU seconds (the whole process) and its MSE against a reference:
+Mitsuba's for the indirect box and cornell-classic (benches/guiding/out and
+benches/peer/ref, made by benches/peer/mitsuba_cornell.py), for the guiding bench rooms a
+4096-spp Lightpath render without connections at seed 999 (made in OUT_DIR if missing).
+Prints the medians and efficiency = 1 / (MSE × CPU s), on over off. Needs numpy and the
+OpenEXR module; not a CI dependency.
+"""
+
+import argparse
+import os
+import resource
+import statistics
+import subprocess
+import sys
+
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), ".."))
+from benchlib.exr import channels, rgb  # noqa: E402
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+ROOT = os.path.dirname(os.path.dirname(HERE))
+# (name, scene, reference or None for a Lightpath one, extra flags)
+SCENES = [
+    ("room", f"{HERE}/room.toml", None, []),
+    ("door", f"{HERE}/door.toml", None, []),
+    ("indirect_box", f"{HERE}/indirect_box.toml", f"{HERE}/out/indirect_box_ref.exr", []),
+    ("cornell-classic", f"{ROOT}/scenes/cornell-classic.toml",
+     f"{ROOT}/benches/peer/ref/cornell_ref.exr", ["--spp", "64"]),
+]
+
+
+def render(binary, scene, out, seed, extra):
+    """Renders; returns the child's CPU seconds."""
+    before = resource.getrusage(resource.RUSAGE_CHILDREN)
+    subprocess.run([binary, "render", scene, "-o", out, "--quiet", "--aovs", "none",
+                    "--threads", "2", "--seed", str(seed)] + extra,
+                   check=True, capture_output=True)
+    after = resource.getrusage(resource.RUSAGE_CHILDREN)
+    return (after.ru_utime + after.ru_stime) - (before.ru_utime + before.ru_stime)
+
+
+def main():
+    ap = argparse.ArgumentParser()
+    ap.add_argument("binary")
+    ap.add_argument("out_dir")
+    ap.add_argument("--seeds", type=int, default=3)
+    args = ap.parse_args()
+    os.makedirs(args.out_dir, exist_ok=True)
+    print("| scene | CPU s off / on | MSE off / on | efficiency, on ÷ off |")
+    print("|---|---|---|---:|")
+    for name, scene, ref, extra in SCENES:
+        if ref is None:
+            ref = f"{args.out_dir}/{name}_ref.exr"
+            if not os.path.exists(ref):
+                render(args.binary, scene, ref, 999, ["--spp", "4096", "--guiding", "off"])
+        reference = rgb(channels(ref))
+        runs = {"off": [], "on": []}
+        for seed in range(1, args.seeds + 1):
+            for mode in ("off", "on"):
+                out = f"{args.out_dir}/{name}_{mode}_{seed}.exr"
+                cpu = render(args.binary, scene, out, seed, extra + ["--light-connections", mode])
+                mse = float(((rgb(channels(out)) - reference) ** 2).mean())
+                runs[mode].append((cpu, mse))
+        med = {m: [statistics.median(x) for x in zip(*r)] for m, r in runs.items()}
+        eff = {m: 1.0 / (c * e) for m, (c, e) in med.items()}
+        print(f"| {name} | {med['off'][0]:.2f} / {med['on'][0]:.2f} | "
+              f"{med['off'][1]:.3g} / {med['on'][1]:.3g} | {eff['on'] / eff['off']:.2f}× |",
+              flush=True)
+
+
+if __name__ == "__main__":
+    main()
