@@ -96,8 +96,8 @@ impl Connect {
         {
             return None;
         }
-        let mut lights = Vec::new();
-        let mut power = Vec::new();
+        // Each light's index, power, and area × π × emitting sides.
+        let mut chosen = Vec::new();
         for (li, light) in scene.lights[..scene.first_glow_light as usize]
             .iter()
             .enumerate()
@@ -110,21 +110,19 @@ impl Connect {
             if light.shadow_linked || light.object.is_none() || !emits {
                 continue;
             }
-            lights.push(li as u32);
-            power.push(p);
+            let sides = if t.two_sided { 2.0 } else { 1.0 };
+            chosen.push((li as u32, p, t.area * PI * sides));
         }
-        if lights.is_empty() {
+        if chosen.is_empty() {
             return None;
         }
+        let power: Vec<f32> = chosen.iter().map(|c| c.1).collect();
         let choice = Distribution1D::new(&power);
         let mut density = vec![0.0; scene.lights.len()];
-        for (k, &li) in lights.iter().enumerate() {
-            let LightShape::Triangles(t) = &scene.lights[li as usize].shape else {
-                unreachable!("only triangle lights are chosen above");
-            };
-            let sides = if t.two_sided { 2.0 } else { 1.0 };
-            density[li as usize] = choice.pmf(k) / (t.area * PI * sides);
+        for (k, &(li, _, spread)) in chosen.iter().enumerate() {
+            density[li as usize] = choice.pmf(k) / spread;
         }
+        let lights = chosen.iter().map(|c| c.0).collect();
         Some(Connect {
             lights,
             choice,
