@@ -228,8 +228,7 @@ impl Tracer<'_> {
         let l_class = light.classes.light;
         let (part, glow) = (light.part, light.glow);
         let (light_pdf, estimate_pdf) = (chosen.mis_pdf, chosen.estimate_pdf);
-        // A light-vertex connection's pdf term for this sample (connect.rs), if any
-        // (none for delta and shadow-linked lights: `Connect::density` is 0).
+        // A light-vertex connection's pdf term (connect.rs; 0 for delta, shadow-linked).
         let conn_pdf = if RICH {
             0.0
         } else {

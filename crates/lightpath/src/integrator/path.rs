@@ -251,17 +251,8 @@ impl Tracer<'_> {
             let Some(mut next) = self.scatter(out, &mut path, &v, sampler) else {
                 break;
             };
-            // Through an interior's boundary (not a subsurface walk's exit, elsewhere):
-            // the medium changes, and its flight starts on the surface (see `tmin`).
-            let through = ray.dir.dot(hit.ng) * next.dir.dot(hit.ng) > 0.0;
-            if RICH
-                && obj.interior.is_some()
-                && through
-                && next.origin.distance(hit.p) <= 2.0 * scene.epsilon
-            {
-                path.media = self.stack_after(&path.media, &hit, ray.dir, next.dir);
-                next.origin = hit.p;
-                tmin = scene.epsilon;
+            if RICH && obj.interior.is_some() {
+                tmin = self.enter_interior(&mut path, &hit, ray.dir, &mut next);
             }
             ray = next;
             if !self.roulette(&mut path, sampler) {
@@ -269,6 +260,20 @@ impl Tracer<'_> {
             }
         }
         alpha
+    }
+
+    /// Through the boundary of an interior at `hit` (not a subsurface walk's exit,
+    /// elsewhere): the medium changes, and the flight of `next` starts on the surface;
+    /// returns the length of itself it skips there (`tmin` in `trace_path`).
+    fn enter_interior(&self, path: &mut PathState, hit: &Hit, dir: Vec3A, next: &mut Ray) -> f32 {
+        let eps = self.scene.epsilon;
+        let through = dir.dot(hit.ng) * next.dir.dot(hit.ng) > 0.0;
+        if !through || next.origin.distance(hit.p) > 2.0 * eps {
+            return 0.0;
+        }
+        path.media = self.stack_after(&path.media, hit, dir, next.dir);
+        next.origin = hit.p;
+        eps
     }
 
     /// What `ray` finds: the hit, whether it passes it without an event (a null surface,
