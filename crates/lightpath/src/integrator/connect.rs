@@ -135,7 +135,7 @@ impl Connect {
     #[inline]
     pub(super) fn pdf_over(&self, li: u32, cos_out: f32, a: f32) -> f32 {
         if a > 0.0 {
-            self.density.get(li as usize).copied().unwrap_or(0.0) * cos_out / a
+            self.density[li as usize] * cos_out / a
         } else {
             0.0
         }
@@ -156,7 +156,7 @@ pub(super) struct LightVertex {
     /// |cos θ'| at y1 between the geometric normal and `to_light`.
     cos_out: f32,
     /// Light sampling's pdf at y1 for y0, by shading normal (`light_pdf_at`).
-    light_pdfs: [(Cell<Option<Vec3A>>, Cell<f32>); 2],
+    light_pdfs: [Cell<Option<(Vec3A, f32)>>; 2],
 }
 
 impl PathState {
@@ -452,21 +452,17 @@ impl Tracer<'_> {
     /// the same for every vertex joined to `lv` from the same side, so kept for two
     /// normals (the spherical rectangle's solid angle was ~15 % of a connected render).
     fn light_pdf_at(&self, lv: &LightVertex, n: Vec3A) -> f32 {
-        let scene = self.scene;
-        for (known, pdf) in &lv.light_pdfs {
-            if let Some((m, p)) = known.get().zip(Some(pdf.get())) {
-                if m == n {
-                    return p;
-                }
-            }
+        let mut known = lv.light_pdfs.iter().filter_map(Cell::get);
+        if let Some((_, pdf)) = known.find(|&(m, _)| m == n) {
+            return pdf;
         }
+        let scene = self.scene;
         let y = &lv.hit;
         let light = &scene.lights[lv.li as usize];
         let pdf = scene.light_select.pmf(lv.li as usize, y.p, n)
             * light.pdf_hit(y.p, n, lv.to_light, lv.dist, lv.light_ng);
-        if let Some((known, p)) = lv.light_pdfs.iter().find(|(k, _)| k.get().is_none()) {
-            known.set(Some(n));
-            p.set(pdf);
+        if let Some(free) = lv.light_pdfs.iter().find(|slot| slot.get().is_none()) {
+            free.set(Some((n, pdf)));
         }
         pdf
     }
