@@ -87,6 +87,10 @@ pub trait Sampler {
     /// choice, the point on it (2D) and the emitted direction (2D). Outside the layout's
     /// dimensions, so asking for them changes no other number, whenever they are asked.
     fn light_path(&mut self) -> (f32, Vec2, Vec2);
+    /// The numbers with which the light subpath scatters at its vertex `j` (from 1 at
+    /// the first surface it lands on): the lobe choice, the direction (2D) and the
+    /// roulette. Outside the layout, as [`light_path`](Self::light_path).
+    fn light_vertex(&mut self, j: u32) -> (f32, Vec2, f32);
 }
 
 /// Which sampler a render uses.
@@ -170,6 +174,15 @@ impl Sampler for IndependentSampler {
         let (seed, pixel, sample) = self.key;
         let mut rng = Rng::for_sample(seed ^ LIGHT_PATH_SEED, pixel, sample);
         (rng.next_f32(), rng.next_2d(), rng.next_2d())
+    }
+
+    /// From a stream of their own per vertex, as `light_path`.
+    fn light_vertex(&mut self, j: u32) -> (f32, Vec2, f32) {
+        let (seed, pixel, sample) = self.key;
+        let vertex_seed = LIGHT_PATH_SEED.wrapping_add(splitmix64(u64::from(j)));
+        let mut rng = Rng::for_sample(seed ^ vertex_seed, pixel, sample);
+        let u_lobe = rng.next_f32();
+        (u_lobe, rng.next_2d(), rng.next_f32())
     }
 }
 
@@ -282,6 +295,10 @@ fn roulette_sequence(d: u32) -> u32 {
 /// `SobolSampler::sequence`'s "none").
 const LIGHT_POINT_SEQUENCE: u32 = u32::MAX - 1;
 const LIGHT_DIRECTION_SEQUENCE: u32 = u32::MAX - 2;
+/// Light subpath vertex `j`'s sequence (`j` ≥ 1): below the two above.
+fn light_vertex_sequence(j: u32) -> u32 {
+    u32::MAX - 2 - j.min(u32::MAX / 2)
+}
 
 /// A padded sequence's seed for `sobol_burley`: the camera sequence's is the pixel's
 /// (so camera rays are those of renders made before padding), the others hash it with
@@ -774,6 +791,13 @@ impl Sampler for SobolSampler<'_> {
             Vec2::new(lanes[0], lanes[1]),
             Vec2::new(dir[0], dir[1]),
         )
+    }
+
+    /// One padded sequence per vertex: the direction (lanes 0–1, a (0, 2)-net), the
+    /// lobe choice (lane 2) and the roulette (lane 3).
+    fn light_vertex(&mut self, j: u32) -> (f32, Vec2, f32) {
+        let lanes = *self.padded(light_vertex_sequence(j));
+        (lanes[2], Vec2::new(lanes[0], lanes[1]), lanes[3])
     }
 
     /// The camera sequence's four lanes (filter 0–1, lens 2–3: `Source::of`), without

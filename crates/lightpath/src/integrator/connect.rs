@@ -1,49 +1,60 @@
-//! Light-vertex connections: the bidirectional strategy of Veach and Guibas 1995,
-//! "Optimally Combining Sampling Techniques for Monte Carlo Rendering" (Veach's thesis,
-//! 1997, ch. 10), for light subpaths of one segment. Each camera sample also traces one
-//! ray from an area light (the light chosen by power, a point uniform in its area, a
-//! cosine-distributed direction); where it lands, y1, is a light vertex, and every
-//! scattering vertex x of the camera path is joined to it by a shadow ray: the path
-//! camera … x → y1 → y0 (the light). Path tracing finds the same paths two ways (a BSDF
-//! ray from x lands on y1, then light sampling or a BSDF ray at y1 finds y0), and the
-//! three are weighed by the power heuristic over their pdfs of the whole path.
+//! Bidirectional path tracing: Veach and Guibas 1995, "Optimally Combining Sampling
+//! Techniques for Monte Carlo Rendering" (Veach's thesis, 1997, ch. 10), with the
+//! recursive form of its MIS weights of Georgiev et al. 2012, "Light Transport
+//! Simulation with Vertex Connection and Merging" (tech. report, §4–5). Each camera
+//! sample also traces a light subpath from an area light (the light chosen by power, a
+//! point uniform in its area, a cosine-distributed direction, then BSDF sampling at each
+//! surface it lands on: y1, y2, …), and every scattering vertex x of the camera path is
+//! joined to every light vertex by a shadow ray. A path of n scattering vertices is then
+//! made n + 1 ways: a BSDF ray that finds the light, light sampling, and a join of a
+//! camera subpath of k ≥ 1 vertices to a light subpath of n − k; the power heuristic
+//! weighs them by their pdfs of the whole path. (Joining light vertices to the camera,
+//! light tracing, would splat across pixels, which neither farm parts nor adaptive
+//! sampling allow: that strategy is left out, and the weights sum over the others.)
 //!
 //! A room lit only by light off a ceiling or a baffle is where this pays: path tracing
-//! must find the small bright patch of ceiling with a BSDF ray from every surface, while
-//! the light subpath lands on it in proportion to how bright it is.
+//! must find the small bright patch of ceiling, and the light trapped above the baffle,
+//! with BSDF rays from every surface, while light subpaths carry that light out to
+//! where the camera's vertices are.
 //!
-//! **The weights.** The three pdfs share the camera subpath up to x. Divided by the pdf of
-//! y1 in area measure from x, `A = pdf_x(x→y1) · |cos y1| / |x − y1|²` (the BSDF ray from
-//! x), the path tracer's two are its usual solid-angle pdfs at y1 — BSDF sampling's
-//! `p_y1(y1→y0)` and light sampling's `p_L` — and the connection's is
-//! `pmf · (1/area) · |cos θ'| / (π · sides) / A`, with θ' at y1 between the geometric
-//! normal and the light (`density` below holds the part without θ' and A). A path the
-//! path tracer makes carries that third term only when its vertex before y1 could have
-//! been joined (`PathState::conn_x`: connections on, a surface, a non-delta lobe) and
-//! the light can emit a subpath (`density` > 0); a light sample whose shadow ray is
-//! blocked, which no light subpath makes, keeps its two-way weight (the lights-only test
-//! likewise).
+//! **The weights.** Each subpath carries two sums of pdf ratios (squared: the power
+//! heuristic), `dvcm` and `dvc` in the report's notation, updated at each vertex from
+//! local quantities alone: the area pdf of the vertex from the one before (forward), and
+//! the pdf of the reverse direction as the other subpath would sample it. A join of x to
+//! y weighs `1 / (1 + wLight + wCamera)`, each term one subpath's sum times the other's
+//! pdf of reaching across. The camera path's sums live in `PathState::dvc`/`dvcm` (before
+//! the vertex the ray finds) and `Vertex::dvc`/`dvcm` (at it); light sampling and BSDF
+//! rays that find a light add the camera's term to their two-way weights. Light
+//! sampling's pdf at y1 depends on the shading normal there (the light tree's
+//! probabilities), so y1's `dvcm` is worked out where it is used.
+//!
+//! **Where a subpath may go.** Light subpaths stop at delta lobes, subsurface walks and
+//! materials regularised after a diffuse bounce (`[render] regularize`: which Bsdf the
+//! path tracer uses there depends on the camera's side of the path); such a vertex is
+//! still joined to. Camera vertices there carry no `dvc` (no strategy scatters a light
+//! subpath through them), and a delta lobe or walk clears both sums. Textures at light
+//! vertices are filtered with the light subpath's own ray cone.
 //!
 //! **Where it applies.** Scenes without media, cut-outs, holdouts, a guide, or objects
-//! that indirect rays see but shadow rays do not (the light subpath's ray and the path
-//! tracer's shadow ray must find the same surfaces): `Connect::new` returns `None`
+//! that indirect rays see but shadow rays do not (the light subpath's rays and the path
+//! tracer's shadow rays must find the same surfaces): `Connect::new` returns `None`
 //! otherwise and the render is path tracing's alone. Lights that emit subpaths: the
 //! declared triangle lights (rect, quad, disk) that are not shadow-linked; the others
-//! keep two-way weights, as no subpath starts on them.
+//! keep two-way weights, as no subpath starts on them (their `density` is 0).
 
-use super::direct::power_heuristic3;
+use super::direct::weight_over;
 use super::path::{PathState, Vertex};
 use super::routing::{Origin, Via};
 use super::{Sink, Tracer};
 use crate::geometry::{Hit, Prim, Ray, Visibility};
 use crate::light::LightShape;
-use crate::material::{Bsdf, Shading};
+use crate::material::{AtWo, Bsdf, Shading};
 use crate::sampler::Sampler;
 use crate::sampling::{cosine_hemisphere, uniform_triangle, Distribution1D, Frame};
-use crate::scene::Scene;
+use crate::scene::{Material, Scene};
 use glam::{Vec2, Vec3A};
-use lpe::ScatterClass;
-use std::cell::{Cell, OnceCell};
+use lpe::{ClassId, ScatterClass};
+use std::cell::Cell;
 use std::f32::consts::PI;
 
 /// Whether renders trace light subpaths and join them to camera paths
@@ -129,53 +140,260 @@ impl Connect {
             density,
         })
     }
+}
 
-    /// The third term of the power heuristic's sum for a path the path tracer made (module
-    /// doc): `a` is A, `cos_out` |cos θ'|; 0 when `a` is (no connection could make it).
-    #[inline]
-    pub(super) fn pdf_over(&self, li: u32, cos_out: f32, a: f32) -> f32 {
-        if a > 0.0 {
-            self.density[li as usize] * cos_out / a
+/// x².
+#[inline(always)]
+fn sq(x: f32) -> f32 {
+    x * x
+}
+
+/// One vertex of the sample's light subpath, y_j.
+pub(super) struct LightVertex {
+    hit: Hit,
+    /// Towards the vertex before (y_{j−1}; for y1 the point on the light), its distance,
+    /// and |cos| between the geometric normal and it.
+    to_prev: Vec3A,
+    dist_prev: f32,
+    cos_prev: f32,
+    /// The subpath's throughput here: Le and every BSDF, G and pdf from the light.
+    beta: Vec3A,
+    /// The shading normal, and whether the Bsdf only reflects (`Bsdf::reflects_only`).
+    ns: Vec3A,
+    reflects: bool,
+    /// The sums of the weights here (module doc); y1's `dvcm` depends on the normal it
+    /// is shaded with and is worked out where used (`Tracer::first_dvcm`).
+    dvcm: f32,
+    dvc: f32,
+    /// The Bsdf seen from the light's side (`wo` towards the vertex before), if the
+    /// subpath may scatter here (module doc).
+    light_side: Option<Turned>,
+    /// This vertex's textured Bsdf, by index into `LightPath::textured`.
+    textured: Option<u32>,
+    /// The event of the lobe the subpath scattered through here, once it goes on.
+    class_out: Option<ClassId>,
+    /// Diffuse and specular lobes the subpath scattered through at y2 … y_{j−1} (the
+    /// path tracer counts every lobe but the last one before the light).
+    diffuse: u32,
+    specular: u32,
+}
+
+/// A light subpath between two vertices: its ray, where it left, its throughput, and
+/// the sums before the distance and cosine where it lands count (y2 on).
+struct Walk {
+    ray: Ray,
+    prev_p: Vec3A,
+    beta: Vec3A,
+    dvcm_pre: f32,
+    dvc_pre: f32,
+    /// Length so far (the ray cone that filters textures), and the diffuse and specular
+    /// lobes scattered through at y2 on.
+    travelled: f32,
+    diffuse: u32,
+    specular: u32,
+}
+
+/// The sample's light subpath: traced at the first camera vertex that joins; kept by the
+/// worker between samples (`Sink::light_path`) so that its buffers are reused.
+#[derive(Default)]
+pub(super) struct LightPath {
+    traced: bool,
+    li: u32,
+    /// The light's normal at the subpath's start, and `Connect::density` of the light.
+    light_ng: Vec3A,
+    density: f32,
+    vertices: Vec<LightVertex>,
+    textured: Vec<(Bsdf, Vec3A)>,
+    /// Light sampling's pdf at y1 for the start (selection included), by shading normal:
+    /// the same for every vertex joined to y1 from one side (the spherical rectangle's
+    /// solid angle was ~15 % of a connected render).
+    light_pdfs: [Cell<Option<(Vec3A, f32)>>; 2],
+}
+
+impl LightPath {
+    /// The worker's buffers (`Sink::light_path`) for a path about to be traced, if it
+    /// `joins`; its subpath is traced when first joined.
+    #[inline(always)]
+    pub(super) fn borrow(kept: &mut LightPath, joins: bool) -> LightPath {
+        let mut lp = if joins {
+            std::mem::take(kept)
         } else {
-            0.0
+            LightPath::default()
+        };
+        lp.traced = false;
+        lp
+    }
+
+    /// The buffers back to the worker, for its next path.
+    #[inline(always)]
+    pub(super) fn give_back(self, kept: &mut LightPath, joins: bool) {
+        if joins {
+            *kept = self;
         }
     }
 }
 
-/// Where a light subpath landed: y1, and what it brings there from y0.
-pub(super) struct LightVertex {
-    hit: Hit,
-    li: u32,
-    /// From y1 to the point y0 on the light: unit direction and distance, and the
-    /// light's normal there.
-    to_light: Vec3A,
-    dist: f32,
-    light_ng: Vec3A,
-    /// The subpath's throughput at y1: Le · |cos θ0| / (pmf · pdf_area · pdf_dir).
-    alpha: Vec3A,
-    /// |cos θ'| at y1 between the geometric normal and `to_light`.
-    cos_out: f32,
-    /// Light sampling's pdf at y1 for y0, by shading normal (`light_pdf_at`).
-    light_pdfs: [Cell<Option<(Vec3A, f32)>>; 2],
+/// A Bsdf shaded with `wo` along some direction: the pdfs with which it samples others
+/// (a subpath's pdf of a vertex as the other subpath would sample it).
+#[derive(Clone, Copy)]
+pub(super) struct Turned {
+    sh: Shading,
+    at: Option<AtWo>,
+}
+
+impl Turned {
+    /// The pdf of lobe `k` of `bsdf` (the one shaded) sampling the world direction `wi`.
+    #[inline]
+    fn pdf(&self, bsdf: &Bsdf, k: usize, wi: Vec3A) -> f32 {
+        let local = self.sh.frame.to_local(wi);
+        bsdf.eval_lobe_at(k, &self.sh, self.at.as_ref(), local).1
+    }
+}
+
+/// The camera subpath's side of the weight of a path through vertex `v` (module doc):
+/// its sums, and the Bsdf there turned towards where the path goes next, for the reverse
+/// pdfs `dvc` is multiplied by.
+pub(super) struct CameraSide {
+    dvcm: f32,
+    dvc: f32,
+    turned: Option<Turned>,
+}
+
+impl CameraSide {
+    /// The sum for a path leaving `v` through lobe `k` (`back`: towards the vertex
+    /// before v).
+    #[inline]
+    pub(super) fn sum(&self, bsdf: &Bsdf, k: usize, back: Vec3A) -> f32 {
+        let p = self.turned.as_ref().map_or(0.0, |t| t.pdf(bsdf, k, back));
+        self.dvcm + self.dvc * sq(p)
+    }
 }
 
 impl PathState {
-    /// A at `hit`, reached along `dir` from the vertex the path scattered at last: the
-    /// area pdf of `hit` from there, if that vertex could have been joined; else 0.
-    #[inline]
-    pub(super) fn conn_a_at(&self, hit: &Hit, dir: Vec3A) -> f32 {
-        if self.conn_x {
-            self.prev_pdf * hit.ng.dot(dir).abs() / self.prev_p.distance_squared(hit.p)
-        } else {
-            0.0
+    /// `v` with the camera subpath's sums there, if the path `joins`, reached along `dir`.
+    #[inline(always)]
+    pub(super) fn with_sums<'a>(&self, v: Vertex<'a>, joins: bool, dir: Vec3A) -> Vertex<'a> {
+        if !joins {
+            return v;
         }
+        let (dvcm, dvc) = self.sums_at(v.hit, dir, v.material);
+        Vertex { dvcm, dvc, ..v }
+    }
+
+    /// The camera subpath's sums at `hit`, reached along `dir` from the vertex the path
+    /// scattered at last, on `material`: none scatter a light subpath through a material
+    /// regularised after a diffuse bounce (module doc).
+    #[inline]
+    pub(super) fn sums_at(&self, hit: &Hit, dir: Vec3A, material: &Material) -> (f32, f32) {
+        let c = hit.ng.dot(dir).abs();
+        if c == 0.0 || (self.dvcm == 0.0 && self.dvc == 0.0) {
+            return (0.0, 0.0);
+        }
+        let d2 = self.prev_p.distance_squared(hit.p);
+        let dvc = if material.regularized.is_some() {
+            0.0
+        } else {
+            self.dvc / sq(c)
+        };
+        (self.dvcm * sq(d2 / c), dvc)
     }
 }
 
 impl Tracer<'_> {
-    /// Joins the path's vertex `v` to the sample's light vertex, tracing that at the
-    /// first vertex that asks for it (`light_vertex` keeps it for the path's others).
-    /// Connections apply only where `RICH` (path.rs) is off: `Connect::new`.
+    /// `bsdf` at `hit` with shading normal `ns` (of `material`), shaded with `wo`
+    /// (world, away from the surface); `None` where `wo` grazes it.
+    #[inline]
+    fn turned(
+        &self,
+        bsdf: &Bsdf,
+        material: &Material,
+        hit: &Hit,
+        ns: Vec3A,
+        wo: Vec3A,
+    ) -> Option<Turned> {
+        let sh = self.oriented(Shading::new(bsdf, ns, hit.ng, wo), material, hit);
+        (sh.wo.z != 0.0).then(|| Turned {
+            sh,
+            at: bsdf.at_wo(sh.wo),
+        })
+    }
+
+    /// The camera side at `v` for a path going on towards `w` (world); `None` where no
+    /// light subpath makes any such path.
+    #[inline]
+    pub(super) fn camera_side(&self, v: &Vertex, w: Vec3A) -> Option<CameraSide> {
+        if v.dvcm == 0.0 && v.dvc == 0.0 {
+            return None;
+        }
+        let turned = if v.dvc > 0.0 {
+            self.turned(v.bsdf, v.material, v.hit, v.ns, w)
+        } else {
+            None
+        };
+        Some(CameraSide {
+            dvcm: v.dvcm,
+            dvc: v.dvc,
+            turned,
+        })
+    }
+
+    /// The camera subpath's sums after scattering at `v` through lobe `lobe` towards
+    /// `wi` with pdf `pdf` (non-delta, no walk), before the vertex the ray finds.
+    #[inline]
+    pub(super) fn sums_after(&self, v: &Vertex, lobe: usize, wi: Vec3A, pdf: f32) -> (f32, f32) {
+        let p_rev = if v.dvc > 0.0 {
+            self.turned(v.bsdf, v.material, v.hit, v.ns, wi)
+                .map_or(0.0, |t| t.pdf(v.bsdf, lobe, -v.dir))
+        } else {
+            0.0
+        };
+        let cos_out = v.hit.ng.dot(wi).abs();
+        (
+            1.0 / sq(pdf),
+            sq(cos_out / pdf) * (v.dvc * sq(p_rev) + v.dvcm),
+        )
+    }
+
+    /// The weight of a BSDF-sampled ray of `path` that found light `li`, light sampling's
+    /// pdf being `light_pdf`, with the light subpaths that make the same path; `None`
+    /// where none does.
+    #[inline]
+    pub(super) fn found_light_weight(
+        &self,
+        path: &PathState,
+        li: u32,
+        light_pdf: f32,
+    ) -> Option<f32> {
+        let conn = self.connect.as_ref()?;
+        let e = conn.density[li as usize];
+        (path.dvc > 0.0 && e > 0.0)
+            .then(|| weight_over(sq(light_pdf / path.prev_pdf) + sq(e) * path.dvc))
+    }
+
+    /// Light sampling's weight at `v` for light `li` towards `wi` through lobe `k` (pdf
+    /// `lobe_pdf`; the light's `light_pdf`), with the light subpaths that make the same
+    /// path (`camera`: `camera_side` towards `wi`).
+    #[inline]
+    pub(super) fn light_sample_weight(
+        &self,
+        v: &Vertex,
+        camera: &CameraSide,
+        (li, wi, light_pdf): (u32, Vec3A, f32),
+        (k, lobe_pdf): (usize, f32),
+    ) -> Option<f32> {
+        let conn = self.connect.as_ref()?;
+        let e = conn.density[li as usize];
+        if e == 0.0 || v.bsdf.subsurface(k).is_some() {
+            return None;
+        }
+        let cos_x = v.hit.ng.dot(wi).abs();
+        let w_camera = sq(e * cos_x / light_pdf) * camera.sum(v.bsdf, k, -v.dir);
+        Some(weight_over(sq(lobe_pdf / light_pdf) + w_camera))
+    }
+
+    /// Joins the path's vertex `v` to every vertex of the sample's light subpath, tracing
+    /// that at the first vertex that asks for it. Connections apply only where `RICH`
+    /// (path.rs) is off: `Connect::new`.
     #[inline(always)]
     pub(super) fn join<S: Sampler, const RICH: bool>(
         &self,
@@ -183,12 +401,12 @@ impl Tracer<'_> {
         path: &PathState,
         v: &Vertex,
         sampler: &mut S,
-        light_vertex: &mut Option<Option<LightVertex>>,
+        lp: &mut LightPath,
     ) {
         let Some(conn) = self.connect.as_ref().filter(|_| !RICH) else {
             return;
         };
-        self.join_with(out, path, v, sampler, conn, light_vertex);
+        self.join_with(out, path, v, sampler, conn, lp);
     }
 
     fn join_with<S: Sampler>(
@@ -198,30 +416,63 @@ impl Tracer<'_> {
         v: &Vertex,
         sampler: &mut S,
         conn: &Connect,
-        light_vertex: &mut Option<Option<LightVertex>>,
+        lp: &mut LightPath,
     ) {
-        // The joined path scatters at v and at y1: both within the depth limit.
-        if path.depth + 2 >= self.scene.settings.max_depth {
+        // The joined path scatters at v and at y1 … y_s: all within the depth limit.
+        let max_depth = self.scene.settings.max_depth;
+        if path.depth + 2 >= max_depth {
             return;
         }
-        if let Some(lv) = light_vertex.get_or_insert_with(|| self.light_vertex(conn, sampler)) {
-            self.connect(out, path, v, conn, lv);
+        if !lp.traced {
+            lp.traced = true;
+            self.trace_light_path(out, conn, sampler, lp);
+        }
+        for s in 0..lp.vertices.len() {
+            if path.depth + 2 + s as u32 >= max_depth {
+                break;
+            }
+            self.connect(out, path, v, lp, s);
         }
     }
 
-    /// The connection's term of the power heuristic for a light sample at `v` towards
-    /// `wi` (world) on light `li` (module doc); 0 where no connection makes that path.
-    #[inline]
-    pub(super) fn conn_pdf(&self, v: &Vertex, li: u32, wi: Vec3A) -> f32 {
-        match &self.connect {
-            Some(conn) if v.conn_a > 0.0 => conn.pdf_over(li, v.hit.ng.dot(wi).abs(), v.conn_a),
-            _ => 0.0,
+    /// Traces the sample's light subpath into `lp` (module doc), up to the depth limit
+    /// less the camera's first vertex.
+    fn trace_light_path<S: Sampler>(
+        &self,
+        out: &mut Sink,
+        conn: &Connect,
+        sampler: &mut S,
+        lp: &mut LightPath,
+    ) {
+        lp.vertices.clear();
+        lp.textured.clear();
+        lp.light_pdfs = Default::default();
+        let max_vertices = self.scene.settings.max_depth.saturating_sub(2);
+        if max_vertices == 0 {
+            return;
+        }
+        let Some(mut walk) = self.light_start(conn, sampler, lp) else {
+            return;
+        };
+        for j in 1..=max_vertices {
+            out.rays += 1;
+            if !self.land(lp, &mut walk, j) || j == max_vertices {
+                break;
+            }
+            if !self.scatter_light(lp, &mut walk, j, sampler) {
+                break;
+            }
         }
     }
 
-    /// Traces the sample's light subpath: `None` where it leaves the scene or lands on
-    /// nothing that scatters.
-    fn light_vertex<S: Sampler>(&self, conn: &Connect, sampler: &mut S) -> Option<LightVertex> {
+    /// The subpath's start: a light chosen by power, a point uniform on it, a
+    /// cosine-distributed direction from its emitting side (or one of two).
+    fn light_start<S: Sampler>(
+        &self,
+        conn: &Connect,
+        sampler: &mut S,
+        lp: &mut LightPath,
+    ) -> Option<Walk> {
         let scene = self.scene;
         let (u_choice, u_point, u_dir) = sampler.light_path();
         let (k, pmf, _) = conn.choice.sample(u_choice);
@@ -231,7 +482,6 @@ impl Tracer<'_> {
             return None;
         };
         let (p0, n) = point_on(t, scene.accel.prims(), u_point)?;
-        // The emitting side, then a cosine-distributed direction about it.
         let (side, u_dir) = if t.two_sided {
             if u_dir.x < 0.5 {
                 (1.0, Vec2::new(u_dir.x * 2.0, u_dir.y))
@@ -251,63 +501,191 @@ impl Tracer<'_> {
         if le == Vec3A::ZERO {
             return None;
         }
-        let ray = Ray {
-            origin: p0 + ns * scene.epsilon,
-            dir,
-            tmax: f32::INFINITY,
-        };
-        let hit = scene.accel.intersect(&ray, 0.0, Visibility::INDIRECT)?;
-        let obj = &scene.objects[hit.object as usize];
-        obj.material?;
-        let back = p0 - hit.p;
-        let dist = back.length();
-        if !(dist > 0.0 && dist.is_finite()) {
-            return None;
-        }
-        let to_light = back / dist;
-        let cos_out = hit.ng.dot(to_light).abs();
-        if cos_out == 0.0 {
-            return None;
-        }
+        lp.li = li;
+        lp.light_ng = n;
+        lp.density = conn.density[li as usize];
         // pdf_area = 1 / area, pdf_dir = cos θ0 / (π · sides): the cosines cancel.
         let sides = if t.two_sided { 2.0 } else { 1.0 };
-        let alpha = le * (t.area * PI * sides / pmf);
-        Some(LightVertex {
-            hit,
-            li,
-            to_light,
-            dist,
-            light_ng: n,
-            alpha,
-            cos_out,
-            light_pdfs: Default::default(),
+        Some(Walk {
+            ray: Ray {
+                origin: p0 + ns * scene.epsilon,
+                dir,
+                tmax: f32::INFINITY,
+            },
+            prev_p: p0,
+            beta: le * (t.area * PI * sides / pmf),
+            dvcm_pre: 0.0,
+            dvc_pre: 0.0,
+            travelled: 0.0,
+            diffuse: 0,
+            specular: 0,
         })
     }
 
-    /// Joins the camera path's vertex `v` (x) to the light vertex `lv`: every pair of a
-    /// non-delta lobe at x and one at y1 through their events, then `L`, with the
-    /// connection's MIS weight. One shadow ray, traced once some pair's contribution
-    /// counts.
-    fn connect(
+    /// Where `walk`'s ray lands: light vertex `j`, kept in `lp`; `false` where the
+    /// subpath ends there (nothing found, nothing that scatters, a light that does not
+    /// light y1).
+    fn land(&self, lp: &mut LightPath, walk: &mut Walk, j: u32) -> bool {
+        let scene = self.scene;
+        let Some(hit) = scene.accel.intersect(&walk.ray, 0.0, Visibility::INDIRECT) else {
+            return false;
+        };
+        let obj = &scene.objects[hit.object as usize];
+        let Some(material) = obj.material.map(|m| &scene.materials[m as usize]) else {
+            return false;
+        };
+        // Light linking: a light that does not light y1 lights nothing through it.
+        if j == 1 && !self.lit(hit.object, lp.li) {
+            return false;
+        }
+        let back = walk.prev_p - hit.p;
+        let dist = back.length();
+        if !(dist > 0.0 && dist.is_finite()) {
+            return false;
+        }
+        let to_prev = back / dist;
+        let cos_prev = hit.ng.dot(to_prev).abs();
+        if cos_prev == 0.0 {
+            return false;
+        }
+        walk.travelled += dist;
+        let (dvcm, dvc) = if j == 1 {
+            // dvcm: `first_dvcm`; dvc: the BSDF ray from y1 that finds the light.
+            (0.0, 1.0 / sq(lp.density * cos_prev))
+        } else {
+            let d2 = dist * dist;
+            (
+                walk.dvcm_pre * sq(d2 / cos_prev),
+                walk.dvc_pre / sq(cos_prev),
+            )
+        };
+        let textured = material.textured.as_ref().map(|tex| {
+            let width = super::shading::SCATTERED_SPREAD * walk.travelled;
+            let shaded = self.textured(tex, &hit, walk.ray.dir, width);
+            lp.textured.push(shaded);
+            (lp.textured.len() - 1) as u32
+        });
+        let (bsdf, ns) = match textured {
+            Some(i) => (&lp.textured[i as usize].0, lp.textured[i as usize].1),
+            None => (&material.bsdf, hit.ns),
+        };
+        let light_side = if material.regularized.is_none() {
+            self.turned(bsdf, material, &hit, ns, to_prev)
+        } else {
+            None
+        };
+        lp.vertices.push(LightVertex {
+            hit,
+            to_prev,
+            dist_prev: dist,
+            cos_prev,
+            beta: walk.beta,
+            ns,
+            reflects: bsdf.reflects_only(),
+            dvcm,
+            dvc,
+            light_side,
+            textured,
+            class_out: None,
+            diffuse: walk.diffuse,
+            specular: walk.specular,
+        });
+        true
+    }
+
+    /// Scatters `walk` at `lp`'s last vertex (y_j): sampled from the light's side, valued
+    /// as the camera sees it; `false` where the subpath ends (a delta lobe, a walk, no
+    /// sample, the roulette).
+    fn scatter_light<S: Sampler>(
         &self,
-        out: &mut Sink,
-        path: &PathState,
-        v: &Vertex,
-        conn: &Connect,
-        lv: &LightVertex,
-    ) {
+        lp: &mut LightPath,
+        walk: &mut Walk,
+        j: u32,
+        sampler: &mut S,
+    ) -> bool {
+        let scene = self.scene;
+        let Some(y) = lp.vertices.last() else {
+            return false;
+        };
+        let Some(from_light) = y.light_side else {
+            return false;
+        };
+        let hit = y.hit;
+        let obj = &scene.objects[hit.object as usize];
+        let Some(material) = obj.material.map(|m| &scene.materials[m as usize]) else {
+            return false;
+        };
+        let bsdf = match y.textured {
+            Some(i) => &lp.textured[i as usize].0,
+            None => &material.bsdf,
+        };
+        let (u_lobe, u_dir, u_rr) = sampler.light_vertex(j);
+        let Some(bs) = bsdf.sample_at(&from_light.sh, from_light.at.as_ref(), u_lobe, u_dir) else {
+            return false;
+        };
+        if bs.delta || bsdf.subsurface(bs.lobe).is_some() || bs.pdf.is_nan() || bs.pdf <= 0.0 {
+            return false;
+        }
+        let Some(seen) = self.turned(bsdf, material, &hit, y.ns, bs.wi) else {
+            return false;
+        };
+        let local_prev = seen.sh.frame.to_local(y.to_prev);
+        let (f, pdf_rev) = bsdf.eval_lobe_at(bs.lobe, &seen.sh, seen.at.as_ref(), local_prev);
+        let cos_next = hit.ng.dot(bs.wi).abs();
+        let step = f * (cos_next / (y.cos_prev * bs.pdf));
+        let mut beta = walk.beta * step;
+        if j >= scene.settings.rr_depth {
+            let q = step.max_element().min(0.95);
+            if u_rr >= q || q.is_nan() {
+                return false;
+            }
+            beta /= q;
+        }
+        if !(beta.max_element() > 0.0 && beta.is_finite()) {
+            return false;
+        }
+        let dvcm = if j == 1 {
+            self.first_dvcm(lp, seen.sh.frame.n)
+        } else {
+            y.dvcm
+        };
+        walk.dvc_pre = sq(cos_next / bs.pdf) * (y.dvc * sq(pdf_rev) + dvcm);
+        walk.dvcm_pre = 1.0 / sq(bs.pdf);
+        if j >= 2 {
+            match bsdf.lobes()[bs.lobe].scatter.class {
+                ScatterClass::Diffuse => walk.diffuse += 1,
+                _ => walk.specular += 1,
+            }
+        }
+        walk.beta = beta;
+        walk.prev_p = hit.p;
+        walk.ray = self.spawn(&hit, bs.wi, f32::INFINITY);
+        if let Some(last) = lp.vertices.last_mut() {
+            last.class_out = Some(obj.lobe_classes[bs.lobe]);
+        }
+        true
+    }
+
+    /// y1's `dvcm` shaded with normal `n`: light sampling's pdf there over the light
+    /// subpath's, both of y1's segment to the light.
+    fn first_dvcm(&self, lp: &LightPath, n: Vec3A) -> f32 {
+        sq(self.light_pdf_at(lp, n) / (lp.density * lp.vertices[0].cos_prev))
+    }
+
+    /// Joins the camera path's vertex `v` (x) to light vertex `s` of `lp` (y): every pair
+    /// of a non-delta lobe at x and one at y through their events, then the light
+    /// subpath's events back to the light, then `L`, weighted by the power heuristic over
+    /// every way to make that path. One shadow ray, traced once some pair counts.
+    fn connect(&self, out: &mut Sink, path: &PathState, v: &Vertex, lp: &LightPath, s: usize) {
         let scene = self.scene;
         let a = &scene.automaton;
-        let settings = &scene.settings;
-        let light = &scene.lights[lv.li as usize];
+        let lv = &lp.vertices[s];
+        let light = &scene.lights[lp.li as usize];
         let y = &lv.hit;
         let obj = &scene.objects[y.object as usize];
         let Some(material) = obj.material.map(|m| &scene.materials[m as usize]) else {
             return;
         };
-        if !self.lit(y.object, lv.li) {
-            return;
-        }
         let d = y.p - v.hit.p;
         let dist2 = d.length_squared();
         if !(dist2 > 0.0 && dist2.is_finite()) {
@@ -316,14 +694,22 @@ impl Tracer<'_> {
         let dist = dist2.sqrt();
         let w = d / dist;
         let cos_in = y.ng.dot(w).abs();
-        if cos_in == 0.0 {
+        let cos_x = v.hit.ng.dot(w).abs();
+        if cos_in == 0.0 || cos_x == 0.0 {
+            return;
+        }
+        // Where either end only reflects, the other end must be on its side.
+        if lv.reflects && lv.ns.dot(w) * lv.ns.dot(lv.to_prev) >= 0.0 {
             return;
         }
         let wi_x = v.sh.frame.to_local(w);
-        let q_conn = conn.density[lv.li as usize] * lv.cos_out;
-        // y1's Bsdf as the path tracer would shade it after a diffuse bounce or not
-        // (path.rs): the regularised one only after one.
-        let textured = OnceCell::new();
+        if wi_x.z <= 0.0 && v.bsdf.reflects_only() {
+            return;
+        }
+        // The camera side towards y, once for every lobe pair.
+        let mut camera_side: Option<Option<CameraSide>> = None;
+        // The Bsdf at y: textured (the light subpath's), regularised after a diffuse
+        // bounce, or plain (the choice trace_path makes, path.rs).
         let mut shaded: [Option<Option<YShading>>; 2] = [None, None];
         let mut visible: Option<bool> = None;
         let lobes = v.bsdf.lobes();
@@ -331,19 +717,7 @@ impl Tracer<'_> {
             if tag.delta || v.bsdf.subsurface(i).is_some() {
                 continue;
             }
-            let diffuse = tag.scatter.class == ScatterClass::Diffuse;
-            let over = if diffuse {
-                settings
-                    .max_diffuse_depth
-                    .is_some_and(|max| path.diffuse + 1 > max)
-            } else {
-                settings
-                    .max_specular_depth
-                    .is_some_and(|max| path.specular + 1 > max)
-            };
-            if over {
-                continue;
-            }
+            let diffuse_i = tag.scatter.class == ScatterClass::Diffuse;
             let s_i = a.step(path.state, v.obj.lobe_classes[i]);
             if a.is_dead(s_i) {
                 continue;
@@ -352,56 +726,60 @@ impl Tracer<'_> {
             if f_i == Vec3A::ZERO {
                 continue;
             }
-            let after_diffuse = path.diffuse > 0 || diffuse;
-            let ys = shaded[after_diffuse as usize].get_or_insert_with(|| {
-                self.shade_light_vertex(path, lv, material, (w, dist), after_diffuse, &textured)
-            });
+            // The shadow ray first: most joins that get this far are either seen or
+            // blocked, and a blocked one needs y shaded for nothing.
+            let vis = *visible.get_or_insert_with(|| self.sees(out, v.hit, y, w));
+            if !vis {
+                return;
+            }
+            let after_diffuse = path.diffuse > 0 || diffuse_i;
+            let ys = shaded[after_diffuse as usize]
+                .get_or_insert_with(|| self.shade_light_vertex(lp, s, material, w, after_diffuse));
             let Some(ys) = ys.as_ref() else {
                 continue;
             };
             let area_pdf = pdf_i * cos_in / dist2;
+            let camera_sum = camera_side
+                .get_or_insert_with(|| self.camera_side(v, w))
+                .as_ref()
+                .map_or(0.0, |c| c.sum(v.bsdf, i, -v.dir));
             for (j, tag_y) in ys.bsdf.lobes().iter().enumerate() {
                 if tag_y.delta || ys.bsdf.subsurface(j).is_some() {
                     continue;
                 }
-                let s_j = a.step(s_i, obj.lobe_classes[j]);
-                if a.is_dead(s_j) {
+                let at_y = (s > 0).then_some(tag_y.scatter.class);
+                if self.over_depth(path, lv, diffuse_i, at_y) {
                     continue;
                 }
-                let s_l = a.step(s_j, light.classes.light);
+                let mut state = a.step(s_i, obj.lobe_classes[j]);
+                for before in lp.vertices[..s].iter().rev() {
+                    if a.is_dead(state) {
+                        break;
+                    }
+                    state = before.class_out.map_or(state, |c| a.step(state, c));
+                }
+                let s_l = a.step(state, light.classes.light);
                 if a.accepting(s_l).is_empty() {
                     continue;
                 }
                 let (f_j, pdf_j) = ys
                     .bsdf
-                    .eval_lobe_at(j, &ys.sh, ys.at_wo.as_ref(), ys.wi_light);
+                    .eval_lobe_at(j, &ys.sh, ys.at_wo.as_ref(), ys.wi_prev);
                 if f_j == Vec3A::ZERO {
                     continue;
                 }
-                let vis = *visible.get_or_insert_with(|| {
-                    out.rays += 1;
-                    // Between points moved off both surfaces (each to the other's side):
-                    // a segment ending short of y1 by a fixed length would cross y1's
-                    // own plane when it arrives at a grazing angle.
-                    let from = self.spawn(v.hit, w, 0.0).origin;
-                    let to = self.spawn(y, -w, 0.0).origin;
-                    let span = to - from;
-                    let len = span.length();
-                    let ray = Ray {
-                        origin: from,
-                        dir: span / len,
-                        tmax: len * (1.0 - 1e-4),
-                    };
-                    len.is_nan() || len <= 0.0 || !scene.accel.occluded(&ray, 0.0, u32::MAX)
-                });
-                if !vis {
-                    return;
-                }
-                let weight = power_heuristic3(q_conn, area_pdf * pdf_j, area_pdf * ys.light_pdf);
-                let value = f_i * f_j * lv.alpha * (cos_in / (dist2 * lv.cos_out));
+                // The light subpath's pdf of x, had it scattered at y through lobe j.
+                let p_light_x = lv
+                    .light_side
+                    .as_ref()
+                    .map_or(0.0, |t| t.pdf(ys.bsdf, j, -w) * cos_x / dist2);
+                let w_light = sq(area_pdf) * (ys.dvcm + lv.dvc * sq(pdf_j));
+                let w_camera = sq(p_light_x) * camera_sum;
+                let weight = weight_over(w_light + w_camera);
+                let value = f_i * f_j * lv.beta * (cos_in / (dist2 * lv.cos_prev));
                 let origin = Origin {
                     via: Via::LightSample { visible: true },
-                    scatters: path.depth + 2,
+                    scatters: path.depth + 2 + s as u32,
                     part: light.part,
                 };
                 self.contribute(out, s_l, path.throughput, value, weight, origin);
@@ -409,29 +787,59 @@ impl Tracer<'_> {
         }
     }
 
-    /// y1 shaded as the path tracer shades a vertex reached from `v` along `w`:
-    /// textured (with the ray cone the path would have there; kept in `textured`, the
-    /// same for both `after_diffuse`), regularised after a diffuse bounce, or plain (the
-    /// choice trace_path makes, path.rs); `None` where the path tracer would stop there.
-    #[allow(clippy::too_many_arguments)]
-    fn shade_light_vertex<'m>(
+    /// Whether a joined path is over the diffuse or specular depth limit: the path
+    /// tracer counts every lobe but the last before the light (y1's), so the lobes at x
+    /// (`diffuse_x`), at y2 … (`lv`'s counts) and at y unless it is y1 (`at_y`).
+    fn over_depth(
         &self,
         path: &PathState,
         lv: &LightVertex,
-        material: &'m crate::scene::Material,
-        (w, dist): (Vec3A, f32),
+        diffuse_x: bool,
+        at_y: Option<ScatterClass>,
+    ) -> bool {
+        let settings = &self.scene.settings;
+        let diffuse_y = at_y.map(|c| (c == ScatterClass::Diffuse) as u32);
+        let diffuse = path.diffuse + lv.diffuse + diffuse_x as u32 + diffuse_y.unwrap_or(0);
+        let specular = path.specular + lv.specular + (!diffuse_x) as u32 + at_y.is_some() as u32
+            - diffuse_y.unwrap_or(0);
+        settings.max_diffuse_depth.is_some_and(|max| diffuse > max)
+            || settings
+                .max_specular_depth
+                .is_some_and(|max| specular > max)
+    }
+
+    /// Whether `x` and `y` see each other (`w`: from x to y): one shadow ray, between
+    /// points moved off both surfaces (each to the other's side), as a segment ending
+    /// short of y by a fixed length would cross y's own plane at grazing angles.
+    fn sees(&self, out: &mut Sink, x: &Hit, y: &Hit, w: Vec3A) -> bool {
+        out.rays += 1;
+        let from = self.spawn(x, w, 0.0).origin;
+        let to = self.spawn(y, -w, 0.0).origin;
+        let span = to - from;
+        let len = span.length();
+        let ray = Ray {
+            origin: from,
+            dir: span / len,
+            tmax: len * (1.0 - 1e-4),
+        };
+        len.is_nan() || len <= 0.0 || !self.scene.accel.occluded(&ray, 0.0, u32::MAX)
+    }
+
+    /// Light vertex `s` shaded as the path tracer shades a vertex reached along `w`:
+    /// its textured Bsdf, the regularised one after a diffuse bounce, or the plain one
+    /// (the choice trace_path makes, path.rs); `None` where the path tracer would stop.
+    fn shade_light_vertex<'m>(
+        &self,
+        lp: &'m LightPath,
+        s: usize,
+        material: &'m Material,
+        w: Vec3A,
         after_diffuse: bool,
-        textured: &'m OnceCell<(Bsdf, Vec3A)>,
     ) -> Option<YShading<'m>> {
+        let lv = &lp.vertices[s];
         let y = &lv.hit;
-        let (bsdf, ns) = match (&material.textured, &material.regularized) {
-            (Some(t), _) => {
-                let (bsdf, ns) = textured.get_or_init(|| {
-                    let spread = path.cone_spread.max(super::shading::SCATTERED_SPREAD);
-                    self.textured(t, y, w, path.cone_width + spread * dist)
-                });
-                (bsdf, *ns)
-            }
+        let (bsdf, ns) = match (lv.textured, &material.regularized) {
+            (Some(i), _) => (&lp.textured[i as usize].0, lp.textured[i as usize].1),
             (None, Some(rough)) if after_diffuse => (rough, y.ns),
             (None, _) => (&material.bsdf, y.ns),
         };
@@ -439,29 +847,33 @@ impl Tracer<'_> {
         if sh.wo.z == 0.0 {
             return None;
         }
+        let dvcm = if s == 0 {
+            self.first_dvcm(lp, sh.frame.n)
+        } else {
+            lv.dvcm
+        };
         Some(YShading {
-            wi_light: sh.frame.to_local(lv.to_light),
+            wi_prev: sh.frame.to_local(lv.to_prev),
             bsdf,
             at_wo: bsdf.at_wo(sh.wo),
-            light_pdf: self.light_pdf_at(lv, sh.frame.n),
+            dvcm,
             sh,
         })
     }
 
-    /// Light sampling's pdf at y1 with shading normal `n` for y0 (selection included):
-    /// the same for every vertex joined to `lv` from the same side, so kept for two
-    /// normals (the spherical rectangle's solid angle was ~15 % of a connected render).
-    fn light_pdf_at(&self, lv: &LightVertex, n: Vec3A) -> f32 {
-        let mut known = lv.light_pdfs.iter().filter_map(Cell::get);
+    /// Light sampling's pdf at y1 with shading normal `n` for the subpath's start
+    /// (selection included), kept for two normals.
+    fn light_pdf_at(&self, lp: &LightPath, n: Vec3A) -> f32 {
+        let mut known = lp.light_pdfs.iter().filter_map(Cell::get);
         if let Some((_, pdf)) = known.find(|&(m, _)| m == n) {
             return pdf;
         }
         let scene = self.scene;
-        let y = &lv.hit;
-        let light = &scene.lights[lv.li as usize];
-        let pdf = scene.light_select.pmf(lv.li as usize, y.p, n)
-            * light.pdf_hit(y.p, n, lv.to_light, lv.dist, lv.light_ng);
-        if let Some(free) = lv.light_pdfs.iter().find(|slot| slot.get().is_none()) {
+        let y1 = &lp.vertices[0];
+        let light = &scene.lights[lp.li as usize];
+        let pdf = scene.light_select.pmf(lp.li as usize, y1.hit.p, n)
+            * light.pdf_hit(y1.hit.p, n, y1.to_prev, y1.dist_prev, lp.light_ng);
+        if let Some(free) = lp.light_pdfs.iter().find(|slot| slot.get().is_none()) {
             free.set(Some((n, pdf)));
         }
         pdf
@@ -472,10 +884,11 @@ impl Tracer<'_> {
 struct YShading<'m> {
     bsdf: &'m Bsdf,
     sh: Shading,
-    at_wo: Option<crate::material::AtWo>,
-    wi_light: Vec3A,
-    /// Light sampling's solid-angle pdf at y1 for y0 (selection included).
-    light_pdf: f32,
+    at_wo: Option<AtWo>,
+    /// Towards the vertex before, in `sh`'s frame.
+    wi_prev: Vec3A,
+    /// The vertex's `dvcm` for this shading.
+    dvcm: f32,
 }
 
 /// A point uniform in the area of triangle light `t`, and its unit normal.

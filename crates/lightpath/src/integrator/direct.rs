@@ -66,19 +66,15 @@ pub(super) fn power_heuristic(a: f32, b: f32) -> f32 {
     }
 }
 
-/// The power heuristic over three strategies (light-vertex connections, connect.rs),
-/// for the one with pdf `a`.
+/// The power heuristic's weight of a strategy whose pdf of a path is p, from the sum
+/// over the others of (their pdf / p)², as bidirectional weights (connect.rs) carry it:
+/// 0 for a sum that is not a number (a zero pdf against an infinite one).
 #[inline]
-pub(super) fn power_heuristic3(a: f32, b: f32, c: f32) -> f32 {
-    let (a2, sum) = (a * a, a * a + b * b + c * c);
-    if sum == 0.0 {
-        0.0
-    } else if a2.is_infinite() {
-        1.0
-    } else if !sum.is_finite() {
+pub(super) fn weight_over(others: f32) -> f32 {
+    if others.is_nan() {
         0.0
     } else {
-        a2 / sum
+        1.0 / (1.0 + others)
     }
 }
 
@@ -141,13 +137,13 @@ impl Tracer<'_> {
                 .light_select
                 .pmf(li as usize, path.prev_p, path.prev_n)
                 * light_pdf(&scene.lights[li as usize]);
-            match &self.connect {
-                Some(conn) if reached && path.conn_a > 0.0 => power_heuristic3(
-                    path.prev_pdf,
-                    light_pdf,
-                    conn.pdf_over(li, path.conn_cos, path.conn_a),
-                ),
-                _ => power_heuristic(path.prev_pdf, light_pdf),
+            // With light subpaths that make the same path (connect.rs): never a blocked one.
+            match self
+                .found_light_weight(path, li, light_pdf)
+                .filter(|_| reached)
+            {
+                Some(w) => w,
+                None => power_heuristic(path.prev_pdf, light_pdf),
             }
         }
     }
@@ -228,12 +224,9 @@ impl Tracer<'_> {
         let l_class = light.classes.light;
         let (part, glow) = (light.part, light.glow);
         let (light_pdf, estimate_pdf) = (chosen.mis_pdf, chosen.estimate_pdf);
-        // A light-vertex connection's pdf term (connect.rs; 0 for delta, shadow-linked).
-        let conn_pdf = if RICH {
-            0.0
-        } else {
-            self.conn_pdf(v, li as u32, ls.wi)
-        };
+        // The camera side of light subpaths that make the same paths (connect.rs).
+        let direct = RICH || ls.delta || light.shadow_linked;
+        let camera_side = (!direct).then(|| self.camera_side(v, ls.wi)).flatten();
         // The shadow ray is traced once, and only if some lobe's contribution counts.
         let mut visible: Option<bool> = None;
         // With media, its transmittance instead (volume.rs).
@@ -313,8 +306,11 @@ impl Tracer<'_> {
                     vis
                 }
             };
-            if vis && conn_pdf > 0.0 && bsdf.subsurface(k).is_none() {
-                w = power_heuristic3(light_pdf, lobe_pdf, conn_pdf);
+            if let Some(camera) = camera_side.as_ref().filter(|_| vis) {
+                let sample = (li as u32, ls.wi, light_pdf);
+                w = self
+                    .light_sample_weight(v, camera, sample, (k, lobe_pdf))
+                    .unwrap_or(w);
             }
             let via = match (glow, vis) {
                 // A glow is no light: what cannot reach it is no shadow.

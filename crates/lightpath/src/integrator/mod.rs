@@ -88,6 +88,8 @@ struct Sink<'b> {
     /// a new one for every pixel was ~2 % of the indirect box's instructions (clearing
     /// and copying its ~2.4 KB).
     sobol: Option<Box<crate::sampler::SobolPixel>>,
+    /// The current sample's light subpath (connect.rs), its buffers reused.
+    light_path: connect::LightPath,
 }
 
 impl<'b> Sink<'b> {
@@ -101,6 +103,7 @@ impl<'b> Sink<'b> {
             first_object: None,
             record: guided::PathRecord::default(),
             sobol: None,
+            light_path: connect::LightPath::default(),
         }
     }
 }

@@ -2,6 +2,7 @@
 //! data lobes, direct light (direct.rs), BSDF sampling and continuation, and Russian
 //! roulette. Each step reads the path state; only `scatter` and `roulette` change it.
 
+use super::connect::LightPath;
 use super::guided::GuideAt;
 use super::routing::{Origin, Via};
 use super::volume::{media_seed, Coincident, Flight, MAX_CROSSINGS};
@@ -48,13 +49,10 @@ pub(super) struct PathState {
     pub travelled: f32,
     /// Free-flight and channel choices, and shadow-ray transmittance estimates.
     pub rng: Rng,
-    /// Light-vertex connections (connect.rs): whether the vertex scattered from last
-    /// could have been joined to a light vertex (`prev_pdf` is then its lobe's pdf),
-    /// and, for the ray now traced, the connection's terms of its pdf if it finds a
-    /// light: A of the vertex it left (0: none) and |cos θ'| there.
-    pub conn_x: bool,
-    pub conn_a: f32,
-    pub conn_cos: f32,
+    /// Bidirectional weights (connect.rs): the camera subpath's sums of pdf ratios for
+    /// the ray now traced, before the distance and cosine where it lands count.
+    pub dvcm: f32,
+    pub dvc: f32,
 }
 
 /// A scattering vertex: the hit and what is there.
@@ -73,9 +71,11 @@ pub(super) struct Vertex<'a> {
     pub dir: Vec3A,
     /// Path guiding here, if the render guides and the Bsdf is guided (guided.rs).
     pub guide: Option<GuideAt>,
-    /// A light-vertex connection's pdf term here (connect.rs): the area pdf of this
-    /// point from the vertex before, if that could have been joined; 0 otherwise.
-    pub conn_a: f32,
+    /// The shading normal `bsdf` uses (before `sh` orients it).
+    pub ns: Vec3A,
+    /// The camera subpath's sums here (connect.rs; 0 without light subpaths).
+    pub dvcm: f32,
+    pub dvc: f32,
 }
 
 impl PathState {
@@ -114,9 +114,8 @@ impl PathState {
             } else {
                 Rng::UNUSED
             },
-            conn_x: false,
-            conn_a: 0.0,
-            conn_cos: 0.0,
+            dvcm: 0.0,
+            dvc: 0.0,
         }
     }
 }
@@ -154,8 +153,9 @@ impl Tracer<'_> {
         // Past a boundary without an event the ray starts on it and skips this much of
         // itself instead of being moved off it, so media see their whole thickness.
         let mut tmin = 0.0;
-        // The sample's light vertex (connect.rs), traced at its first vertex that joins.
-        let mut light_vertex = None;
+        // The sample's light subpath (connect.rs), traced at its first vertex that joins.
+        let joins = !RICH && self.connect.is_some();
+        let mut light_path = LightPath::borrow(&mut out.light_path, joins);
         loop {
             out.rays += 1;
             let mask = [Visibility::INDIRECT, Visibility::CAMERA][(path.depth == 0) as usize];
@@ -239,15 +239,14 @@ impl Tracer<'_> {
                 at_wo: bsdf.at_wo(sh.wo),
                 dir: ray.dir,
                 guide: RICH.then(|| self.guide_at(bsdf, hit.p, &sh)).flatten(),
-                conn_a: if RICH {
-                    0.0
-                } else {
-                    path.conn_a_at(&hit, ray.dir)
-                },
+                ns,
+                dvcm: 0.0,
+                dvc: 0.0,
             };
+            let v = path.with_sums(v, joins, ray.dir);
             self.data_lobes(out, &path, &v);
             self.direct_light::<S, RICH>(out, &mut path, &v, sampler);
-            self.join::<S, RICH>(out, &path, &v, sampler, &mut light_vertex);
+            self.join::<S, RICH>(out, &path, &v, sampler, &mut light_path);
             let Some(mut next) = self.scatter(out, &mut path, &v, sampler) else {
                 break;
             };
@@ -259,6 +258,7 @@ impl Tracer<'_> {
                 break;
             }
         }
+        light_path.give_back(&mut out.light_path, joins);
         alpha
     }
 
@@ -482,13 +482,15 @@ impl Tracer<'_> {
         let before = path.throughput;
         path.throughput *= bs.weight;
         path.eta_scale *= bs.eta;
-        // What a light this ray finds weighs against a connection, and whether this
-        // vertex could be joined (connect.rs; never through a subsurface walk).
+        // The camera subpath's sums (connect.rs): no light subpath scatters through a
+        // delta lobe or a subsurface walk, nor is joined to one.
         if self.connect.is_some() {
             let walks = v.bsdf.subsurface(bs.lobe).is_some();
-            path.conn_a = if bs.delta || walks { 0.0 } else { v.conn_a };
-            path.conn_cos = v.hit.ng.dot(bs.wi).abs();
-            path.conn_x = !bs.delta && !walks;
+            (path.dvcm, path.dvc) = if bs.delta || walks {
+                (0.0, 0.0)
+            } else {
+                self.sums_after(v, bs.lobe, bs.wi, bs.pdf)
+            };
         }
         if let Some(lobe) = v.bsdf.subsurface(bs.lobe) {
             let u = [u_lobe, u_dir.x, u_dir.y];

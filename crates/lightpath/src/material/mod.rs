@@ -314,6 +314,13 @@ impl Bsdf {
         &self.tags[..self.n_tags]
     }
 
+    /// Whether nothing leaves it on the other side of its shading normal from `wo`: it
+    /// is two-sided (the frame turns towards `wo`) and no lobe transmits, so every lobe
+    /// evaluates to zero for `wi.z <= 0`.
+    pub fn reflects_only(&self) -> bool {
+        self.two_sided && self.lobes().iter().all(|t| !t.transmit)
+    }
+
     /// The colour the `U2` albedo lobe reports.
     pub fn albedo(&self) -> Vec3A {
         self.albedo

@@ -153,6 +153,63 @@ fn connected_renders_converge_to_the_unconnected_mean() {
     );
 }
 
+/// The light subpath scatters through rough glass and a translucent sheet (lobes that
+/// transmit, valued as the camera sees them: a subpath sampled from the light's side must
+/// still weigh the path as path tracing does), and stops at a ball regularised after a
+/// diffuse bounce (which Bsdf the path tracer uses there depends on the camera's side)
+/// while still being joined to it: each scene's means, per bounce and through the
+/// transmitting lobes, agree with path tracing's as in the test above.
+#[test]
+fn light_subpaths_through_transmission_and_regularised_glass_converge() {
+    let rough = ROOM
+        .replace(
+            "[materials.glass]\ntype = \"dielectric\"\nior = 1.5",
+            "[materials.glass]\ntype = \"dielectric\"\nior = 1.5\nroughness = 0.3\n\
+             [materials.leaf]\ntype = \"translucent\"\nreflect = [0.3, 0.4, 0.2]\n\
+             transmit = [0.5, 0.5, 0.3]",
+        )
+        .replace(
+            "[[lights]]",
+            "[[objects]]\nname = \"sheet\"\nshape = \"quad\"\nmaterial = \"leaf\"\n\
+             corners = [[0.6, -1, -0.6], [0.6, -1, 0.3], [0.6, 0.5, 0.3], [0.6, 0.5, -0.6]]\n\
+             [[lights]]",
+        );
+    let regularised = ROOM.replace("[render]\n", "[render]\nregularize = 0.5\n");
+    let mut extra = bounces();
+    extra.push(AovSpec::new("through", "C.*<T.>.*<L.>"));
+    let names = ["beauty", "b1", "b2", "b3", "through"];
+    for (scene, text) in [
+        ("rough", rough.as_str()),
+        ("regularised", regularised.as_str()),
+    ] {
+        let runs = 16;
+        let means = |on: bool| -> Vec<Vec<f64>> {
+            (1..=runs)
+                .map(|seed| {
+                    let s = scene_in(text, 32, on, seed, extra.clone());
+                    let film = render_spp(&s, 32, 0);
+                    names
+                        .iter()
+                        .map(|n| image_mean(&film, index(&s, n)))
+                        .collect()
+                })
+                .collect()
+        };
+        let (plain, joined) = (means(false), means(true));
+        for (k, name) in names.iter().enumerate() {
+            let column = |runs: &[Vec<f64>]| runs.iter().map(|r| r[k]).collect::<Vec<_>>();
+            let (p, se_p) = mean_and_se(&column(&plain));
+            let (j, se_j) = mean_and_se(&column(&joined));
+            let se = (se_p * se_p + se_j * se_j).sqrt();
+            assert!(p > 1e-4, "{scene} {name} is lit: {p}");
+            assert!(
+                (p - j).abs() <= 5.0 * se,
+                "{scene} {name}: path tracing {p} ± {se_p}, with connections {j} ± {se_j}"
+            );
+        }
+    }
+}
+
 /// Connections add paths through every lobe pair's own events: the standard partition
 /// and per-bounce AOVs still sum to the beauty.
 #[test]
