@@ -55,7 +55,7 @@ use crate::scene::{Material, Scene};
 use glam::{Vec2, Vec3A};
 use lpe::{ClassId, ScatterClass};
 use std::cell::Cell;
-use std::f32::consts::PI;
+use std::f32::consts::{FRAC_1_PI, PI};
 
 /// Whether renders trace light subpaths and join them to camera paths
 /// (`[render] light_connections`, `--light-connections`).
@@ -233,20 +233,57 @@ impl LightPath {
     }
 }
 
-/// A Bsdf shaded with `wo` along some direction: the pdfs with which it samples others
-/// (a subpath's pdf of a vertex as the other subpath would sample it).
+/// A Bsdf shaded with `wo` along some direction: what it does for other directions (a
+/// subpath's pdf of a vertex as the other subpath would sample it).
 #[derive(Clone, Copy)]
-pub(super) struct Turned {
-    sh: Shading,
-    at: Option<AtWo>,
+pub(super) enum Turned {
+    /// A lone Lambert lobe (`Bsdf::lone_lambert`): its albedo and the normal turned as
+    /// `Shading::new` turns it, without the frame (~80 instructions a use on the
+    /// indirect box).
+    Lambert {
+        albedo: Vec3A,
+        n: Vec3A,
+        cos_o: f32,
+    },
+    Shaded {
+        sh: Shading,
+        at: Option<AtWo>,
+    },
 }
 
 impl Turned {
-    /// The pdf of lobe `k` of `bsdf` (the one shaded) sampling the world direction `wi`.
+    /// Lobe `k`'s value (with |cos θi|) and pdf for the world direction `wi`; `bsdf` is
+    /// the one shaded.
+    #[inline]
+    fn eval(&self, bsdf: &Bsdf, k: usize, wi: Vec3A) -> (Vec3A, f32) {
+        match self {
+            Turned::Lambert { albedo, n, cos_o } => {
+                let cos_i = n.dot(wi);
+                if *cos_o <= 0.0 || cos_i <= 0.0 {
+                    (Vec3A::ZERO, 0.0)
+                } else {
+                    (*albedo * (FRAC_1_PI * cos_i), cos_i * FRAC_1_PI)
+                }
+            }
+            Turned::Shaded { sh, at } => {
+                bsdf.eval_lobe_at(k, sh, at.as_ref(), sh.frame.to_local(wi))
+            }
+        }
+    }
+
+    /// Lobe `k`'s pdf of the world direction `wi`.
     #[inline]
     fn pdf(&self, bsdf: &Bsdf, k: usize, wi: Vec3A) -> f32 {
-        let local = self.sh.frame.to_local(wi);
-        bsdf.eval_lobe_at(k, &self.sh, self.at.as_ref(), local).1
+        self.eval(bsdf, k, wi).1
+    }
+
+    /// The shading normal, turned as the frame turns it.
+    #[inline]
+    fn normal(&self) -> Vec3A {
+        match self {
+            Turned::Lambert { n, .. } => *n,
+            Turned::Shaded { sh, .. } => sh.frame.n,
+        }
     }
 }
 
@@ -311,8 +348,14 @@ impl Tracer<'_> {
         ns: Vec3A,
         wo: Vec3A,
     ) -> Option<Turned> {
+        if let Some(albedo) = bsdf.lone_lambert() {
+            // As `Shading::new` turns a two-sided Bsdf's normal.
+            let n = if wo.dot(hit.ng) < 0.0 { -ns } else { ns };
+            let cos_o = n.dot(wo);
+            return (cos_o != 0.0).then_some(Turned::Lambert { albedo, n, cos_o });
+        }
         let sh = self.oriented(Shading::new(bsdf, ns, hit.ng, wo), material, hit);
-        (sh.wo.z != 0.0).then(|| Turned {
+        (sh.wo.z != 0.0).then(|| Turned::Shaded {
             sh,
             at: bsdf.at_wo(sh.wo),
         })
@@ -620,7 +663,14 @@ impl Tracer<'_> {
             None => &material.bsdf,
         };
         let (u_lobe, u_dir, u_rr) = sampler.light_vertex(j);
-        let Some(bs) = bsdf.sample_at(&from_light.sh, from_light.at.as_ref(), u_lobe, u_dir) else {
+        let (sh, at) = match from_light {
+            Turned::Shaded { sh, at } => (sh, at),
+            Turned::Lambert { .. } => {
+                let sh = self.oriented(Shading::new(bsdf, y.ns, hit.ng, y.to_prev), material, &hit);
+                (sh, None)
+            }
+        };
+        let Some(bs) = bsdf.sample_at(&sh, at.as_ref(), u_lobe, u_dir) else {
             return false;
         };
         if bs.delta || bsdf.subsurface(bs.lobe).is_some() || bs.pdf.is_nan() || bs.pdf <= 0.0 {
@@ -629,12 +679,14 @@ impl Tracer<'_> {
         let Some(seen) = self.turned(bsdf, material, &hit, y.ns, bs.wi) else {
             return false;
         };
-        let local_prev = seen.sh.frame.to_local(y.to_prev);
-        let (f, pdf_rev) = bsdf.eval_lobe_at(bs.lobe, &seen.sh, seen.at.as_ref(), local_prev);
+        let (f, pdf_rev) = seen.eval(bsdf, bs.lobe, y.to_prev);
         let cos_next = hit.ng.dot(bs.wi).abs();
         let step = f * (cos_next / (y.cos_prev * bs.pdf));
         let mut beta = walk.beta * step;
-        if j >= scene.settings.rr_depth {
+        // Roulette by the vertex's albedo from y2 on (sooner than the camera path's:
+        // a light vertex costs a join with every camera vertex; +12 % efficiency on the
+        // indirect box, measured against `rr_depth`).
+        if j >= scene.settings.rr_depth.min(2) {
             let q = step.max_element().min(0.95);
             if u_rr >= q || q.is_nan() {
                 return false;
@@ -645,7 +697,7 @@ impl Tracer<'_> {
             return false;
         }
         let dvcm = if j == 1 {
-            self.first_dvcm(lp, seen.sh.frame.n)
+            self.first_dvcm(lp, seen.normal())
         } else {
             y.dvcm
         };
@@ -762,9 +814,7 @@ impl Tracer<'_> {
                 if a.accepting(s_l).is_empty() {
                     continue;
                 }
-                let (f_j, pdf_j) = ys
-                    .bsdf
-                    .eval_lobe_at(j, &ys.sh, ys.at_wo.as_ref(), ys.wi_prev);
+                let (f_j, pdf_j) = ys.turned.eval(ys.bsdf, j, lv.to_prev);
                 if f_j == Vec3A::ZERO {
                     continue;
                 }
@@ -843,22 +893,13 @@ impl Tracer<'_> {
             (None, Some(rough)) if after_diffuse => (rough, y.ns),
             (None, _) => (&material.bsdf, y.ns),
         };
-        let sh = self.oriented(Shading::new(bsdf, ns, y.ng, -w), material, y);
-        if sh.wo.z == 0.0 {
-            return None;
-        }
+        let turned = self.turned(bsdf, material, y, ns, -w)?;
         let dvcm = if s == 0 {
-            self.first_dvcm(lp, sh.frame.n)
+            self.first_dvcm(lp, turned.normal())
         } else {
             lv.dvcm
         };
-        Some(YShading {
-            wi_prev: sh.frame.to_local(lv.to_prev),
-            bsdf,
-            at_wo: bsdf.at_wo(sh.wo),
-            dvcm,
-            sh,
-        })
+        Some(YShading { bsdf, turned, dvcm })
     }
 
     /// Light sampling's pdf at y1 with shading normal `n` for the subpath's start
@@ -883,10 +924,7 @@ impl Tracer<'_> {
 /// A light vertex shaded for one connection.
 struct YShading<'m> {
     bsdf: &'m Bsdf,
-    sh: Shading,
-    at_wo: Option<AtWo>,
-    /// Towards the vertex before, in `sh`'s frame.
-    wi_prev: Vec3A,
+    turned: Turned,
     /// The vertex's `dvcm` for this shading.
     dvcm: f32,
 }

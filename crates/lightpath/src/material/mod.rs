@@ -321,6 +321,18 @@ impl Bsdf {
         self.two_sided && self.lobes().iter().all(|t| !t.transmit)
     }
 
+    /// The albedo of a Bsdf that is one two-sided Lambert lobe and nothing else: its
+    /// value and pdf need no frame (`Lambert::eval`: `albedo / π · cos θi` and
+    /// `cos θi / π` about the normal turned towards `wo`).
+    pub fn lone_lambert(&self) -> Option<Vec3A> {
+        match &self.lobes[0] {
+            Lobe::Lambert(l) if self.n_lobes == 1 && self.n_layers == 0 && self.two_sided => {
+                Some(l.albedo)
+            }
+            _ => None,
+        }
+    }
+
     /// The colour the `U2` albedo lobe reports.
     pub fn albedo(&self) -> Vec3A {
         self.albedo
