@@ -1,6 +1,6 @@
-"""Light-vertex connections (`--light-connections on|off`, integrator/connect.rs): the
-efficiency of a render with them over one without, on the scenes docs/performance.md,
-"Light-vertex connections", reports.
+"""Bidirectional path tracing (`--light-connections on|off`, integrator/connect.rs): the
+efficiency of a render with it over one without, on the scenes docs/performance.md,
+"Bidirectional path tracing", reports (and "Light-vertex connections" before it).
 
     python3 benches/guiding/connections.py LIGHTPATH_BINARY OUT_DIR [--seeds 3]
 
@@ -29,6 +29,8 @@ ROOT = os.path.dirname(os.path.dirname(HERE))
 SCENES = [
     ("room", f"{HERE}/room.toml", None, []),
     ("door", f"{HERE}/door.toml", None, []),
+    # Held out: never tuned on (a lamp hidden on a cove shelf; glossy and rough metal balls).
+    ("cove", f"{HERE}/cove.toml", None, []),
     ("indirect_box", f"{HERE}/indirect_box.toml", f"{HERE}/out/indirect_box_ref.exr", []),
     ("cornell-classic", f"{ROOT}/scenes/cornell-classic.toml",
      f"{ROOT}/benches/peer/ref/cornell_ref.exr", ["--spp", "64"]),

@@ -253,11 +253,11 @@ settings! {
         range: Range::Any,
         role: Shared,
         header: Header::Setting,
-        help: "Light-vertex connections (Veach and Guibas' bidirectional strategy for light \
-               subpaths of one bounce): each camera sample also traces a ray from an area \
-               light and joins every scattering vertex to the surface it lit, weighted by \
-               MIS against light and BSDF sampling; for rooms lit by light bouncing off a \
-               ceiling or baffle (integrator/connect.rs). on or off.",
+        help: "Bidirectional path tracing (Veach and Guibas): each camera sample also traces \
+               a light subpath from an area light and joins every camera vertex to every \
+               light vertex, weighted by MIS over every way to make the path; for rooms lit \
+               by light off a ceiling or baffle or through a door (integrator/connect.rs). \
+               on or off.",
     }
     frame: Option<f32> = None, {
         section: Render,

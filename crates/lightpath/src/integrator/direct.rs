@@ -1,8 +1,9 @@
 //! Direct light with multiple importance sampling: light samples at each scattering
 //! vertex (every non-delta lobe through its own event, then `L`, or a glow's `O`), lights
 //! and sampled glows found by BSDF rays with the complementary weight, and the lights-only test that `unoccluded` and
-//! `shadows` AOVs see. The renderer's power heuristic lives here, over two strategies and
-//! over three where light-vertex connections (connect.rs) add theirs (docs/architecture.md).
+//! `shadows` AOVs see. The renderer's power heuristic lives here: over two strategies, and
+//! from the sums of pdf ratios bidirectional path tracing carries (connect.rs) over all of
+//! its strategies (`weight_over`; docs/architecture.md).
 
 use super::guided::LobeValues;
 use super::path::{PathState, Vertex};
@@ -115,8 +116,9 @@ impl Tracer<'_> {
     }
 
     /// [`bsdf_weight`](Self::bsdf_weight), for a ray that `reached` the light or (the
-    /// lights-only test) was blocked before it: only a reached light weighs against a
-    /// light-vertex connection (connect.rs), which never makes a blocked segment.
+    /// lights-only test) was blocked before it: only a reached light weighs against the
+    /// light subpaths of bidirectional path tracing (connect.rs), which never make a
+    /// blocked segment.
     #[inline]
     pub(super) fn bsdf_weight_reached(
         &self,

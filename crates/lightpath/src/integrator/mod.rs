@@ -69,7 +69,7 @@ struct Tracer<'a> {
     path_rng: bool,
     /// Boxes around the declared triangle lights, for the lights-only test (direct.rs).
     light_boxes: Vec<Option<(Vec3A, Vec3A)>>,
-    /// Light-vertex connections, if the render makes them (connect.rs).
+    /// Bidirectional path tracing's light subpaths, if the render traces them (connect.rs).
     connect: Option<connect::Connect>,
 }
 

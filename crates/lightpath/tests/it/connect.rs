@@ -1,6 +1,7 @@
-//! Light-vertex connections (`--light-connections on`, crates/lightpath/src/integrator/
-//! connect.rs): a third way of finding the same paths, weighted by MIS, so the image
-//! converges to path tracing's mean (per bounce, too), partitions still sum to the beauty,
+//! Bidirectional path tracing (`--light-connections on`, crates/lightpath/src/integrator/
+//! connect.rs): light subpaths joined to camera paths make the same paths in more ways,
+//! weighted by MIS, so the image converges to path tracing's mean (per bounce, too, and
+//! through transmitting and regularised lobes), partitions still sum to the beauty,
 //! renders stay deterministic across thread counts and sample ranges, and scenes the
 //! strategy does not apply to render exactly as without it.
 
