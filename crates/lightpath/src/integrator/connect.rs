@@ -211,25 +211,10 @@ pub(super) struct LightPath {
 }
 
 impl LightPath {
-    /// The worker's buffers (`Sink::light_path`) for a path about to be traced, if it
-    /// `joins`; its subpath is traced when first joined.
+    /// A new camera path: the subpath is traced again when first joined.
     #[inline(always)]
-    pub(super) fn borrow(kept: &mut LightPath, joins: bool) -> LightPath {
-        let mut lp = if joins {
-            std::mem::take(kept)
-        } else {
-            LightPath::default()
-        };
-        lp.traced = false;
-        lp
-    }
-
-    /// The buffers back to the worker, for its next path.
-    #[inline(always)]
-    pub(super) fn give_back(self, kept: &mut LightPath, joins: bool) {
-        if joins {
-            *kept = self;
-        }
+    pub(super) fn reset(&mut self) {
+        self.traced = false;
     }
 }
 
@@ -307,21 +292,20 @@ impl CameraSide {
 }
 
 impl PathState {
-    /// `v` with the camera subpath's sums there, if the path `joins`, reached along `dir`.
+    /// The camera subpath's sums at `hit`, if the path `joins`, reached along `dir` from
+    /// the vertex the path scattered at last, on `material`: none scatter a light subpath
+    /// through a material regularised after a diffuse bounce (module doc).
     #[inline(always)]
-    pub(super) fn with_sums<'a>(&self, v: Vertex<'a>, joins: bool, dir: Vec3A) -> Vertex<'a> {
+    pub(super) fn sums_at(
+        &self,
+        joins: bool,
+        hit: &Hit,
+        dir: Vec3A,
+        material: &Material,
+    ) -> (f32, f32) {
         if !joins {
-            return v;
+            return (0.0, 0.0);
         }
-        let (dvcm, dvc) = self.sums_at(v.hit, dir, v.material);
-        Vertex { dvcm, dvc, ..v }
-    }
-
-    /// The camera subpath's sums at `hit`, reached along `dir` from the vertex the path
-    /// scattered at last, on `material`: none scatter a light subpath through a material
-    /// regularised after a diffuse bounce (module doc).
-    #[inline]
-    pub(super) fn sums_at(&self, hit: &Hit, dir: Vec3A, material: &Material) -> (f32, f32) {
         let c = hit.ng.dot(dir).abs();
         if c == 0.0 || (self.dvcm == 0.0 && self.dvc == 0.0) {
             return (0.0, 0.0);
@@ -444,12 +428,14 @@ impl Tracer<'_> {
         path: &PathState,
         v: &Vertex,
         sampler: &mut S,
-        lp: &mut LightPath,
     ) {
         let Some(conn) = self.connect.as_ref().filter(|_| !RICH) else {
             return;
         };
-        self.join_with(out, path, v, sampler, conn, lp);
+        // The worker's subpath, out of the sink while the joins add to it.
+        let mut lp = std::mem::take(&mut out.light_path);
+        self.join_with(out, path, v, sampler, conn, &mut lp);
+        out.light_path = lp;
     }
 
     fn join_with<S: Sampler>(

@@ -227,7 +227,7 @@ impl Tracer<'_> {
         let (part, glow) = (light.part, light.glow);
         let (light_pdf, estimate_pdf) = (chosen.mis_pdf, chosen.estimate_pdf);
         // The camera side of light subpaths that make the same paths (connect.rs).
-        let direct = RICH || ls.delta || light.shadow_linked;
+        let direct = RICH || self.connect.is_none() || ls.delta || light.shadow_linked;
         let camera_side = (!direct).then(|| self.camera_side(v, ls.wi)).flatten();
         // The shadow ray is traced once, and only if some lobe's contribution counts.
         let mut visible: Option<bool> = None;

@@ -2,7 +2,6 @@
 //! data lobes, direct light (direct.rs), BSDF sampling and continuation, and Russian
 //! roulette. Each step reads the path state; only `scatter` and `roulette` change it.
 
-use super::connect::LightPath;
 use super::guided::GuideAt;
 use super::routing::{Origin, Via};
 use super::volume::{media_seed, Coincident, Flight, MAX_CROSSINGS};
@@ -155,7 +154,9 @@ impl Tracer<'_> {
         let mut tmin = 0.0;
         // The sample's light subpath (connect.rs), traced at its first vertex that joins.
         let joins = !RICH && self.connect.is_some();
-        let mut light_path = LightPath::borrow(&mut out.light_path, joins);
+        if joins {
+            out.light_path.reset();
+        }
         loop {
             out.rays += 1;
             let mask = [Visibility::INDIRECT, Visibility::CAMERA][(path.depth == 0) as usize];
@@ -230,6 +231,7 @@ impl Tracer<'_> {
             if sh.wo.z == 0.0 {
                 break;
             }
+            let sums = path.sums_at(joins, &hit, ray.dir, material);
             let v = Vertex {
                 hit: &hit,
                 obj,
@@ -240,13 +242,12 @@ impl Tracer<'_> {
                 dir: ray.dir,
                 guide: RICH.then(|| self.guide_at(bsdf, hit.p, &sh)).flatten(),
                 ns,
-                dvcm: 0.0,
-                dvc: 0.0,
+                dvcm: sums.0,
+                dvc: sums.1,
             };
-            let v = path.with_sums(v, joins, ray.dir);
             self.data_lobes(out, &path, &v);
             self.direct_light::<S, RICH>(out, &mut path, &v, sampler);
-            self.join::<S, RICH>(out, &path, &v, sampler, &mut light_path);
+            self.join::<S, RICH>(out, &path, &v, sampler);
             let Some(mut next) = self.scatter(out, &mut path, &v, sampler) else {
                 break;
             };
@@ -258,7 +259,6 @@ impl Tracer<'_> {
                 break;
             }
         }
-        light_path.give_back(&mut out.light_path, joins);
         alpha
     }
 
