@@ -109,19 +109,20 @@ fn bounces() -> Vec<AovSpec> {
     ]
 }
 
-/// The image means of independent renders (seeds 1…runs) agree with and without
-/// connections within 5 standard errors of their difference (estimated from the runs'
-/// spread), for the beauty, each bounce count, and the paths joined next to the lamp's
-/// plane (a connection ending a fixed length short of its end crossed the ceiling at
-/// grazing angles there: 3–14 % of that light was lost).
-#[test]
-fn connected_renders_converge_to_the_unconnected_mean() {
+/// The image means of AOVs `names` over independent renders of `text` (seeds 1…16) agree
+/// with and without connections within 5 standard errors of their difference (estimated
+/// from the runs' spread); returns each run's means, without and with.
+fn assert_means_agree(
+    scene: &str,
+    text: &str,
+    names: &[&str],
+    extra: Vec<AovSpec>,
+) -> (Vec<Vec<f64>>, Vec<Vec<f64>>) {
     let runs = 16;
-    let names = ["beauty", "b1", "b2", "b3", "near"];
     let means = |on: bool| -> Vec<Vec<f64>> {
         (1..=runs)
             .map(|seed| {
-                let s = scene_in(ROOM, 32, on, seed, bounces());
+                let s = scene_in(text, 32, on, seed, extra.clone());
                 let film = render_spp(&s, 32, 0);
                 names
                     .iter()
@@ -136,12 +137,24 @@ fn connected_renders_converge_to_the_unconnected_mean() {
         let (p, se_p) = mean_and_se(&column(&plain));
         let (j, se_j) = mean_and_se(&column(&joined));
         let se = (se_p * se_p + se_j * se_j).sqrt();
-        assert!(p > 1e-4, "{name} is lit: {p}");
+        assert!(p > 1e-4, "{scene} {name} is lit: {p}");
         assert!(
             (p - j).abs() <= 5.0 * se,
-            "{name}: path tracing {p} ± {se_p}, with connections {j} ± {se_j}"
+            "{scene} {name}: path tracing {p} ± {se_p}, with connections {j} ± {se_j}"
         );
     }
+    (plain, joined)
+}
+
+/// The image means of independent renders (seeds 1…runs) agree with and without
+/// connections within 5 standard errors of their difference (estimated from the runs'
+/// spread), for the beauty, each bounce count, and the paths joined next to the lamp's
+/// plane (a connection ending a fixed length short of its end crossed the ceiling at
+/// grazing angles there: 3–14 % of that light was lost).
+#[test]
+fn connected_renders_converge_to_the_unconnected_mean() {
+    let names = ["beauty", "b1", "b2", "b3", "near"];
+    let (plain, joined) = assert_means_agree("room", ROOM, &names, bounces());
     // Connections did change the render: light after two bounces, which a connection
     // at the first vertex finds by itself, has a fifth of path tracing's spread (the
     // runs' means; ~10× lower here).
@@ -183,31 +196,7 @@ fn light_subpaths_through_transmission_and_regularised_glass_converge() {
         ("rough", rough.as_str()),
         ("regularised", regularised.as_str()),
     ] {
-        let runs = 16;
-        let means = |on: bool| -> Vec<Vec<f64>> {
-            (1..=runs)
-                .map(|seed| {
-                    let s = scene_in(text, 32, on, seed, extra.clone());
-                    let film = render_spp(&s, 32, 0);
-                    names
-                        .iter()
-                        .map(|n| image_mean(&film, index(&s, n)))
-                        .collect()
-                })
-                .collect()
-        };
-        let (plain, joined) = (means(false), means(true));
-        for (k, name) in names.iter().enumerate() {
-            let column = |runs: &[Vec<f64>]| runs.iter().map(|r| r[k]).collect::<Vec<_>>();
-            let (p, se_p) = mean_and_se(&column(&plain));
-            let (j, se_j) = mean_and_se(&column(&joined));
-            let se = (se_p * se_p + se_j * se_j).sqrt();
-            assert!(p > 1e-4, "{scene} {name} is lit: {p}");
-            assert!(
-                (p - j).abs() <= 5.0 * se,
-                "{scene} {name}: path tracing {p} ± {se_p}, with connections {j} ± {se_j}"
-            );
-        }
+        assert_means_agree(scene, text, &names, extra.clone());
     }
 }
 
