@@ -237,6 +237,16 @@ pub(super) enum Turned {
 }
 
 impl Turned {
+    /// A lone Lambert lobe of `albedo` (shading normal `ns`, geometric `ng`) shaded with
+    /// `wo`, its normal turned as `Shading::new` turns a two-sided Bsdf's; `None` where
+    /// `wo` grazes it.
+    #[inline]
+    fn lambert(albedo: Vec3A, ns: Vec3A, ng: Vec3A, wo: Vec3A) -> Option<Turned> {
+        let n = if wo.dot(ng) < 0.0 { -ns } else { ns };
+        let cos_o = n.dot(wo);
+        (cos_o != 0.0).then_some(Turned::Lambert { albedo, n, cos_o })
+    }
+
     /// Lobe `k`'s value (with |cos θi|) and pdf for the world direction `wi`; `bsdf` is
     /// the one shaded.
     #[inline]
@@ -333,10 +343,7 @@ impl Tracer<'_> {
         wo: Vec3A,
     ) -> Option<Turned> {
         if let Some(albedo) = bsdf.lone_lambert() {
-            // As `Shading::new` turns a two-sided Bsdf's normal.
-            let n = if wo.dot(hit.ng) < 0.0 { -ns } else { ns };
-            let cos_o = n.dot(wo);
-            return (cos_o != 0.0).then_some(Turned::Lambert { albedo, n, cos_o });
+            return Turned::lambert(albedo, ns, hit.ng, wo);
         }
         let sh = self.oriented(Shading::new(bsdf, ns, hit.ng, wo), material, hit);
         (sh.wo.z != 0.0).then(|| Turned::Shaded {
@@ -926,4 +933,59 @@ fn point_on(t: &crate::light::Triangles, prims: &[Prim], u: Vec2) -> Option<(Vec
     };
     let (b1, b2) = uniform_triangle(Vec2::new(ux, u.y));
     Some((*p0 + *e1 * b1 + *e2 * b2, *t.normals.get(k)?))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::sampling::Rng;
+
+    fn unit(rng: &mut Rng) -> Vec3A {
+        loop {
+            let v = Vec3A::new(rng.next_f32(), rng.next_f32(), rng.next_f32()) * 2.0 - 1.0;
+            let l = v.length();
+            if l > 0.1 && l <= 1.0 {
+                return v / l;
+            }
+        }
+    }
+
+    /// The frameless Lambert form gives the value and pdf the Bsdf's own evaluation in
+    /// its frame gives, both sides of the surface, with shading normals off the
+    /// geometric one; and only a lone two-sided Lambert lobe takes that form.
+    #[test]
+    fn a_lone_lambert_lobe_needs_no_frame() {
+        let albedo = Vec3A::new(0.8, 0.5, 0.2);
+        let bsdf = Bsdf::diffuse(albedo);
+        assert_eq!(bsdf.lone_lambert(), Some(albedo));
+        for other in [
+            Bsdf::plastic(Vec3A::splat(0.5), 1.5, 0.3),
+            Bsdf::translucent(Vec3A::splat(0.3), Vec3A::splat(0.6)),
+            Bsdf::conductor(Vec3A::splat(0.9), 0.2),
+        ] {
+            assert_eq!(other.lone_lambert(), None);
+        }
+        let mut rng = Rng::for_sample(7, 0, 0);
+        let mut compared = 0;
+        for _ in 0..2000 {
+            let ng = unit(&mut rng);
+            let ns = (ng + unit(&mut rng) * 0.3).normalize();
+            let (wo, wi) = (unit(&mut rng), unit(&mut rng));
+            let sh = Shading::new(&bsdf, ns, ng, wo);
+            let shaded = Turned::Shaded {
+                sh,
+                at: bsdf.at_wo(sh.wo),
+            };
+            let Some(fast) = Turned::lambert(albedo, ns, ng, wo) else {
+                assert_eq!(sh.wo.z, 0.0);
+                continue;
+            };
+            let ((f, p), (g, q)) = (shaded.eval(&bsdf, 0, wi), fast.eval(&bsdf, 0, wi));
+            assert!((f - g).abs().max_element() <= 1e-5, "{f} {g}");
+            assert!((p - q).abs() <= 1e-5, "{p} {q}");
+            assert!((shaded.normal() - fast.normal()).length() <= 1e-5);
+            compared += (p > 0.0) as u32;
+        }
+        assert!(compared > 200, "{compared} lit pairs");
+    }
 }
