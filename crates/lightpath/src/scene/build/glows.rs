@@ -86,8 +86,7 @@ fn shape(range: &Range<u32>, accel: &Accel) -> Option<LightShape> {
     }
     let area: f32 = areas.iter().sum();
     // A glowing rectangle (two triangles) is sampled in solid angle, as a rect light.
-    let tris: Vec<Prim> = slots.iter().map(|&s| prims[s as usize]).collect();
-    let parallelogram = super::lights::either_order(&tris);
+    let parallelogram = super::lights::either_order(&slots, prims);
     (area > 0.0 && area.is_finite()).then(|| {
         Mesh(Triangles {
             prims: slots,

@@ -260,8 +260,7 @@ pub fn mesh_surfaces(
         *by_area = Distribution1D::new(&areas);
         // A rectangle of two triangles (an OBJ's or glTF's emissive quad) is sampled in
         // solid angle, as a rect light.
-        let tris: Vec<Prim> = ids.iter().map(|&s| accel.prims()[s as usize]).collect();
-        *quad = either_order(&tris);
+        *quad = either_order(ids, accel.prims());
         *rect = quad.and_then(|[p0, e1, e2]| Rect::new(p0, e1, e2));
     }
     let n = prims.len();
@@ -273,10 +272,14 @@ pub fn mesh_surfaces(
     ))
 }
 
-/// [`parallelogram`] of two triangles in either order (a BVH's slot order may swap them).
-pub(super) fn either_order(prims: &[Prim]) -> Option<[Vec3A; 3]> {
-    match prims {
-        [a, b] => parallelogram(&[*a, *b]).or_else(|| parallelogram(&[*b, *a])),
+/// [`parallelogram`] of the two triangles in `slots` of `prims`, in either order (a BVH's
+/// slot order may swap them).
+pub(super) fn either_order(slots: &[u32], prims: &[Prim]) -> Option<[Vec3A; 3]> {
+    match slots {
+        &[a, b] => {
+            let (a, b) = (*prims.get(a as usize)?, *prims.get(b as usize)?);
+            parallelogram(&[a, b]).or_else(|| parallelogram(&[b, a]))
+        }
         _ => None,
     }
 }
