@@ -9,7 +9,8 @@ the mean squared error of the beauty against the reference (median over seeds), 
 variant's MSE relative to uniform's, its CPU time, and its efficiency (1 / (MSE x CPU
 time)) relative to uniform's. VARIANTS is a comma-separated list of `uniform`, `power`,
 `tree` (the light selections, one candidate) and `tree:M` / `power:M` (M candidates
-resampled, `--light-candidates M`), each optionally with `/independent` (the sampler of
+resampled, `--light-candidates M`), `tree*N` (N light samples at the first rough vertex,
+`--light-samples N`), each optionally with `/independent` (the sampler of
 the old build: `uniform/independent`); default `uniform,power,tree`. RECIPES=a,b in the
 environment runs only those recipes. 128 x 128, clamps off, lamps hidden from the camera (their sub-pixel
 coverage is noise no light selection touches). Needs numpy and OpenEXR.
@@ -51,12 +52,15 @@ if os.environ.get("RECIPES"):
 
 def render(scene, img, variant, n, seed):
     variant, _, sampler = variant.partition("/")
+    variant, _, samples = variant.partition("*")
     selection, _, candidates = variant.partition(":")
     args = [binary, "render", scene, "-o", img, "--aovs", "none", "--resolution", "128x128",
             "--spp", str(n), "--seed", str(seed), "--light-selection", selection,
             "--clamp-indirect", "0", "--threads", "1", "--quiet"]
     if candidates:
         args += ["--light-candidates", candidates]
+    if samples:
+        args += ["--light-samples", samples]
     if sampler:
         args += ["--sampler", sampler]
     t0 = os.times()
@@ -78,7 +82,7 @@ for recipe in RECIPES:
     for sel in variants:
         mses, secs = [], []
         for seed in range(1, seeds + 1):
-            tag = sel.replace(":", "_").replace("/", "_")
+            tag = sel.replace(":", "_").replace("/", "_").replace("*", "x")
             img = os.path.join(out, f"{recipe.__name__}_{tag}_{seed}.exr")
             secs.append(render(scene, img, sel, spp, seed))
             mses.append(float(((rgb(channels(img)) - r) ** 2).mean()))

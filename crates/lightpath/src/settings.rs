@@ -186,6 +186,17 @@ settings! {
                importance sampling on its unshadowed contribution (1: the light \
                selection's choice alone; a few help with many lights).",
     }
+    light_samples: u32 = 1, {
+        section: Render,
+        flag: "light-samples",
+        range: Range::Between(1.0, 64.0),
+        role: Shared,
+        header: Header::Setting,
+        help: "Direct light at a camera path's first rough vertex (seen directly or through \
+               mirrors and smooth glass): light samples taken there, their choices \
+               stratified over the light selection (RenderMan's numLightSamples); \
+               deeper vertices take one.",
+    }
     volume_sampling: VolumeSampling = VolumeSampling::Mis, {
         section: Render,
         flag: "volume-sampling",

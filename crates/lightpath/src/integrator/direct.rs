@@ -13,8 +13,11 @@ use crate::geometry::{Hit, Ray, Visibility};
 use crate::light::{Light, LightModel, LightShape};
 use crate::sampler::{dim, Sampler};
 use crate::sampling::Rng;
-use glam::Vec3A;
+use glam::{Vec2, Vec3A};
 use std::f32::consts::FRAC_1_PI;
+
+/// The largest f32 below 1.
+const ONE_BELOW: f32 = 1.0 - f32::EPSILON / 2.0;
 
 /// A box around each declared triangle light (rect, quad, disk), padded far past float
 /// rounding (1e-4 of the scene's size): the lights-only test tries a light's triangles
@@ -138,6 +141,7 @@ impl Tracer<'_> {
             let light_pdf = scene
                 .light_select
                 .pmf(li as usize, path.prev_p, path.prev_n)
+                * path.prev_light_samples
                 * light_pdf(&scene.lights[li as usize]);
             // With light subpaths that make the same path (connect.rs): never a blocked one.
             match self
@@ -197,9 +201,25 @@ impl Tracer<'_> {
         self.contribute(out, s, path.throughput, le, weight, origin);
     }
 
-    /// Light sampling at a scattering vertex: one light, one point on it, and every
+    /// How many light samples direct light takes at the vertex `path` has reached:
+    /// `light_samples` at the first rough vertex, seen directly or through mirrors and
+    /// smooth glass, where its noise is seen undimmed; one deeper.
+    #[inline(always)]
+    pub(super) fn light_samples(&self, path: &PathState) -> f32 {
+        if path.only_delta {
+            self.scene.settings.light_samples.max(1) as f32
+        } else {
+            1.0
+        }
+    }
+
+    /// Light sampling at a scattering vertex: `light_samples` lights, their choices
+    /// stratified (the i-th of n from (i + u)/n), each with one point on it and every
     /// non-delta lobe through its own event, then `L`, weighted against BSDF sampling.
-    /// `RICH` as in `trace_path` (path.rs): without it, no medium or guide is tested.
+    /// n samples are Veach's multi-sample model: light sampling's density is n times
+    /// one sample's, in these weights and in the weight of a BSDF ray that finds a light
+    /// (`PathState::prev_light_samples`). `RICH` as in `trace_path` (path.rs): without
+    /// it, no medium or guide is tested.
     #[inline(always)]
     pub(super) fn direct_light<S: Sampler, const RICH: bool>(
         &self,
@@ -209,14 +229,39 @@ impl Tracer<'_> {
         sampler: &mut S,
     ) {
         let scene = self.scene;
-        let a = &scene.automaton;
         let u_light = sampler.vertex_1d(path.depth, dim::LIGHT_CHOICE);
         let u_point = sampler.vertex_2d(path.depth, dim::LIGHT_POINT);
-        let bsdf = v.bsdf;
-        let lobes = bsdf.lobes();
-        if scene.lights.is_empty() || lobes.iter().all(|l| l.delta) {
+        if scene.lights.is_empty() || v.bsdf.lobes().iter().all(|l| l.delta) {
             return;
         }
+        let n = self.light_samples(path);
+        if n == 1.0 {
+            return self.light_sample::<RICH>(out, path, v, (u_light, u_point), 1.0);
+        }
+        for i in 0..n as u32 {
+            // Each point shifted by the R2 sequence's step (Roberts 2018), so that two
+            // samples of one light do not take one point.
+            let shift = Vec2::new(0.754_877_7, 0.569_840_3) * i as f32;
+            let u_i = ((i as f32 + u_light) / n).min(ONE_BELOW);
+            let p_i = (u_point + shift).fract();
+            self.light_sample::<RICH>(out, path, v, (u_i, p_i), n);
+        }
+    }
+
+    /// One light sample of `n` at `v` (`direct_light`), from the numbers `u`.
+    #[inline(always)]
+    fn light_sample<const RICH: bool>(
+        &self,
+        out: &mut Sink,
+        path: &mut PathState,
+        v: &Vertex,
+        (u_light, u_point): (f32, Vec2),
+        n: f32,
+    ) {
+        let scene = self.scene;
+        let a = &scene.automaton;
+        let bsdf = v.bsdf;
+        let lobes = bsdf.lobes();
         // One candidate, or several resampled (light_choice.rs).
         let Some(chosen) = self.choose_light(path, v, u_light, u_point) else {
             return;
@@ -225,7 +270,7 @@ impl Tracer<'_> {
         let light = &scene.lights[li];
         let l_class = light.classes.light;
         let (part, glow) = (light.part, light.glow);
-        let (light_pdf, estimate_pdf) = (chosen.mis_pdf, chosen.estimate_pdf);
+        let (light_pdf, estimate_pdf) = (chosen.mis_pdf * n, chosen.estimate_pdf * n);
         // The camera side of light subpaths that make the same paths (connect.rs).
         let direct = RICH || self.connect.is_none() || ls.delta || light.shadow_linked;
         let camera_side = (!direct).then(|| self.camera_side(v, ls.wi)).flatten();

@@ -31,6 +31,13 @@ pub(super) struct PathState {
     pub prev_n: Vec3A,
     pub prev_pdf: f32,
     pub prev_delta: bool,
+    /// Light samples taken there (`light_samples` where it split, else 1): light
+    /// sampling's density there is that many times one sample's.
+    pub prev_light_samples: f32,
+    /// Whether every scatter so far went through a delta lobe: the vertex the ray finds
+    /// is seen directly, or through mirrors and smooth glass (where light sampling takes
+    /// `light_samples`).
+    pub only_delta: bool,
     /// The object scattered from last (`u32::MAX`: the camera), for light linking.
     pub prev_object: u32,
     pub diffuse: u32,
@@ -99,6 +106,8 @@ impl PathState {
             prev_n: Vec3A::ZERO,
             prev_pdf: 0.0,
             prev_delta: true,
+            prev_light_samples: 1.0,
+            only_delta: true,
             prev_object: u32::MAX,
             diffuse: 0,
             specular: 0,
@@ -500,6 +509,8 @@ impl Tracer<'_> {
         path.prev_n = v.sh.frame.n;
         path.prev_pdf = bs.pdf;
         path.prev_delta = bs.delta;
+        path.prev_light_samples = self.light_samples(path);
+        path.only_delta &= bs.delta;
         path.prev_object = v.hit.object;
         if let (Some(g), false) = (v.guide, bs.delta) {
             self.record_vertex(out, path, g, &bs, pdfs, before);

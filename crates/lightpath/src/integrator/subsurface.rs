@@ -381,6 +381,8 @@ impl Tracer<'_> {
         path.prev_n = n;
         path.prev_pdf = cosine_hemisphere_pdf(local.z);
         path.prev_delta = false;
+        path.prev_light_samples = 1.0;
+        path.only_delta = false;
         path.prev_object = v.hit.object;
         path.travelled = 0.0;
         path.cone_spread = path.cone_spread.max(super::shading::SCATTERED_SPREAD);

@@ -453,6 +453,8 @@ impl Tracer<'_> {
         path.prev_n = Vec3A::ZERO;
         path.prev_pdf = pdf;
         path.prev_delta = false;
+        path.prev_light_samples = 1.0;
+        path.only_delta = false;
         path.prev_object = v.object;
         if let Some(g) = guide {
             let bs = BsdfSample {

@@ -42,6 +42,7 @@ const EXAMPLES: &[Example] = &[
         ("random", "\"random\""),
     ),
     ex("light_candidates", ("4", "4"), ("65", "65")),
+    ex("light_samples", ("3", "3"), ("0", "0")),
     ex(
         "volume_sampling",
         ("distance", "\"distance\""),
@@ -228,6 +229,7 @@ fn the_header_keeps_its_attribute_names_and_values() {
         ("lightpath/setting/guiding_passes", "4"),
         ("lightpath/setting/light_candidates", "1"),
         ("lightpath/setting/light_connections", "off"),
+        ("lightpath/setting/light_samples", "1"),
         ("lightpath/setting/light_selection", "tree"),
         ("lightpath/setting/max_depth", "8"),
         ("lightpath/setting/max_diffuse_depth", "none"),

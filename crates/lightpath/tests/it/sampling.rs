@@ -149,6 +149,51 @@ fn resampled_light_candidates_are_unbiased_and_less_noisy() {
     assert!(eight < one, "8 candidates {eight} vs 1 candidate {one}");
 }
 
+/// Several light samples at the first rough vertex (`--light-samples`, direct.rs) are
+/// unbiased: with 4 from the tree and 3 from uniform selection, the images agree with
+/// one uniform sample's within noise, block by block (a BSDF ray's weight that left out
+/// the samples' count would not: its weights and the light samples' would no longer sum
+/// to one); and 4 samples are less noisy than one from the same selection.
+#[test]
+fn light_samples_are_unbiased_and_less_noisy() {
+    let src = many_lights();
+    let render_with = |selection: LightSelection, samples: u32, seed: u64| {
+        let (_, film) = run(
+            &src,
+            |d| {
+                d.render.resolution = [48, 48];
+                d.render.spp = 24;
+                d.render.seed = seed;
+                d.render.light_selection = selection;
+                d.render.light_samples = samples;
+                d.render.clamp_direct = 0.0;
+                d.render.clamp_indirect = 0.0;
+            },
+            vec![],
+        );
+        pixels(&film, 0)
+    };
+    let uniform = render_with(LightSelection::Uniform, 1, 1);
+    for (selection, n) in [(LightSelection::Tree, 4), (LightSelection::Uniform, 3)] {
+        agree_within_noise(&render_with(selection, n, 2), &uniform, 48);
+    }
+    let spread = |a: &[Vec3A], b: &[Vec3A]| {
+        a.iter()
+            .zip(b)
+            .map(|(x, y)| ((*x - *y).length_squared()) as f64)
+            .sum::<f64>()
+    };
+    let one = spread(
+        &render_with(LightSelection::Tree, 1, 3),
+        &render_with(LightSelection::Tree, 1, 4),
+    );
+    let four = spread(
+        &render_with(LightSelection::Tree, 4, 3),
+        &render_with(LightSelection::Tree, 4, 4),
+    );
+    assert!(four < one, "4 light samples {four} vs 1 {one}");
+}
+
 /// Relighting from light-group AOVs: with uniform selection it is exact (see
 /// tests/it/workflow.rs); with the tree, making the key 1.5× brighter changes which lights
 /// are sampled, so relit and re-rendered images agree within their noise.
