@@ -149,6 +149,46 @@ fn resampled_light_candidates_are_unbiased_and_less_noisy() {
     assert!(eight < one, "8 candidates {eight} vs 1 candidate {one}");
 }
 
+/// A glossy floor under a large lamp and beside a point light, a mirror on the wall.
+const GLOSSY_UNDER_LAMPS: &str = r#"
+[camera]
+position = [0, 1.2, 3]
+look_at = [0, -0.6, 0]
+fov = 45
+[render]
+max_depth = 4
+clamp_direct = 0
+clamp_indirect = 0
+[materials.floor]
+type = "plastic"
+albedo = [0.3, 0.3, 0.3]
+roughness = 0.15
+[materials.mirror]
+type = "conductor"
+f0 = [0.9, 0.9, 0.9]
+roughness = 0
+[[objects]]
+name = "floor"
+shape = "quad"
+material = "floor"
+corners = [[-2, -1, 2], [2, -1, 2], [2, -1, -2], [-2, -1, -2]]
+[[objects]]
+name = "mirror"
+shape = "quad"
+material = "mirror"
+corners = [[-1.5, -1, -1.5], [1.5, -1, -1.5], [1.5, 1, -1.5], [-1.5, 1, -1.5]]
+[[lights]]
+type = "quad"
+name = "lamp"
+radiance = [4, 4, 4]
+corners = [[-0.8, -0.2, -0.8], [0.8, -0.2, -0.8], [0.8, -0.2, 0.8], [-0.8, -0.2, 0.8]]
+[[lights]]
+type = "point"
+name = "bulb"
+position = [1.2, -0.5, 0.5]
+intensity = [2, 2, 2]
+"#;
+
 /// Several light samples at the first rough vertex (`--light-samples`, direct.rs) are
 /// unbiased: with 4 from the tree and 3 from uniform selection, the images agree with
 /// one uniform sample's within noise, block by block (a BSDF ray's weight that left out
@@ -177,6 +217,27 @@ fn light_samples_are_unbiased_and_less_noisy() {
     for (selection, n) in [(LightSelection::Tree, 4), (LightSelection::Uniform, 3)] {
         agree_within_noise(&render_with(selection, n, 2), &uniform, 48);
     }
+    // Where BSDF rays find the lights as often as light samples do: a glossy floor
+    // under a large lamp, seen directly and in a mirror.
+    let glossy = lightpath::Source {
+        name: "glossy.toml".into(),
+        text: GLOSSY_UNDER_LAMPS.into(),
+        dir: Default::default(),
+    };
+    let glossy_with = |samples: u32, seed: u64| {
+        let (_, film) = run(
+            &glossy,
+            |d| {
+                d.render.resolution = [48, 48];
+                d.render.spp = 16;
+                d.render.seed = seed;
+                d.render.light_samples = samples;
+            },
+            vec![],
+        );
+        pixels(&film, 0)
+    };
+    agree_within_noise(&glossy_with(3, 2), &glossy_with(1, 1), 48);
     let spread = |a: &[Vec3A], b: &[Vec3A]| {
         a.iter()
             .zip(b)
