@@ -2,8 +2,9 @@
 //! Techniques for Monte Carlo Rendering" (Veach's thesis, 1997, ch. 10), with the
 //! recursive form of its MIS weights of Georgiev et al. 2012, "Light Transport
 //! Simulation with Vertex Connection and Merging" (tech. report, §4–5). Each camera
-//! sample also traces a light subpath from an area light (the light chosen by power, a
-//! point uniform in its area, a cosine-distributed direction, then BSDF sampling at each
+//! sample also traces a light subpath from an area, point or spot light (the light
+//! chosen by power; a point uniform in its area and a cosine-distributed direction, or a
+//! direction uniform over the sphere or the spot's outer cone; then BSDF sampling at each
 //! surface it lands on: y1, y2, …), and every scattering vertex x of the camera path is
 //! joined to every light vertex by a shadow ray. A path of n scattering vertices is then
 //! made n + 1 ways: a BSDF ray that finds the light, light sampling, and a join of a
@@ -39,8 +40,12 @@
 //! that indirect rays see but shadow rays do not (the light subpath's rays and the path
 //! tracer's shadow rays must find the same surfaces): `Connect::new` returns `None`
 //! otherwise and the render is path tracing's alone. Lights that emit subpaths: the
-//! declared triangle lights (rect, quad, disk) that are not shadow-linked; the others
-//! keep two-way weights, as no subpath starts on them (their `density` is 0).
+//! declared triangle lights (rect, quad, disk), point and spot lights, that are not
+//! shadow-linked; the others keep two-way weights, as no subpath starts on them (their
+//! `density` is 0). Point and spot lights are Georgiev et al.'s delta lights (Georgiev et al.'s delta lights): no ray finds them, so
+//! y1 carries no `dvc`, light sampling's density of such a light is 1 in its own measure
+//! (over a subpath's area density at y1 the squared distance stays: `light_pdf_at`, and
+//! `light_sample_weight`'s `dist`), and a light sample's weight has no BSDF term.
 
 use super::direct::weight_over;
 use super::path::{PathState, Vertex};
@@ -50,7 +55,10 @@ use crate::geometry::{Hit, Prim, Ray, Visibility};
 use crate::light::LightShape;
 use crate::material::{AtWo, Bsdf, Shading};
 use crate::sampler::Sampler;
-use crate::sampling::{cosine_hemisphere, uniform_triangle, Distribution1D, Frame};
+use crate::sampling::{
+    cosine_hemisphere, uniform_cone, uniform_cone_pdf, uniform_sphere, uniform_triangle,
+    Distribution1D, Frame,
+};
 use crate::scene::{Material, Scene};
 use glam::{Vec2, Vec3A};
 use lpe::{ClassId, ScatterClass};
@@ -91,7 +99,8 @@ pub(super) struct Connect {
     lights: Vec<u32>,
     choice: Distribution1D,
     /// Per light of the scene: its choice's probability over its area, π and its
-    /// emitting sides (the connection's pdf, module doc); 0 where no subpath starts.
+    /// emitting sides, or over the solid angle a point or spot light emits into (the
+    /// connection's pdf, module doc); 0 where no subpath starts.
     pub density: Vec<f32>,
 }
 
@@ -107,22 +116,26 @@ impl Connect {
         {
             return None;
         }
-        // Each light's index, power, and area × π × emitting sides.
+        // Each light's index, power, and the measure its start is uniform in (module
+        // doc): area × π × emitting sides, or the solid angle a point or spot emits into.
         let mut chosen = Vec::new();
         for (li, light) in scene.lights[..scene.first_glow_light as usize]
             .iter()
             .enumerate()
         {
-            let LightShape::Triangles(t) = &light.shape else {
-                continue;
+            let spread = match &light.shape {
+                LightShape::Triangles(t) if light.object.is_some() => {
+                    t.area * PI * if t.two_sided { 2.0 } else { 1.0 }
+                }
+                LightShape::Point(_) => 4.0 * PI,
+                LightShape::Spot(s) => 1.0 / uniform_cone_pdf(s.cos_outer),
+                _ => continue,
             };
             let p = light.power(scene.scene_radius);
-            let emits = t.area > 0.0 && p > 0.0;
-            if light.shadow_linked || light.object.is_none() || !emits {
+            if light.shadow_linked || !(spread > 0.0 && spread.is_finite() && p > 0.0) {
                 continue;
             }
-            let sides = if t.two_sided { 2.0 } else { 1.0 };
-            chosen.push((li as u32, p, t.area * PI * sides));
+            chosen.push((li as u32, p, spread));
         }
         if chosen.is_empty() {
             return None;
@@ -199,9 +212,12 @@ struct Walk {
 pub(super) struct LightPath {
     traced: bool,
     li: u32,
-    /// The light's normal at the subpath's start, and `Connect::density` of the light.
+    /// The light's normal at the subpath's start (zero for a point or spot light), and
+    /// `Connect::density` of the light.
     light_ng: Vec3A,
     density: f32,
+    /// Whether the light is a point (a point or spot light: no ray finds it).
+    delta: bool,
     vertices: Vec<LightVertex>,
     textured: Vec<(Bsdf, Vec3A)>,
     /// Light sampling's pdf at y1 for the start (selection included), by shading normal:
@@ -405,14 +421,15 @@ impl Tracer<'_> {
     }
 
     /// Light sampling's weight at `v` for light `li` towards `wi` through lobe `k` (pdf
-    /// `lobe_pdf`; the light's `light_pdf`), with the light subpaths that make the same
-    /// path (`camera`: `camera_side` towards `wi`).
+    /// `lobe_pdf`; the light's `light_pdf`; for a point or spot light, `dist`: its
+    /// distance), with the light subpaths that make the same path (`camera`:
+    /// `camera_side` towards `wi`).
     #[inline]
     pub(super) fn light_sample_weight(
         &self,
         v: &Vertex,
         camera: &CameraSide,
-        (li, wi, light_pdf): (u32, Vec3A, f32),
+        (li, wi, light_pdf, dist): (u32, Vec3A, f32, Option<f32>),
         (k, lobe_pdf): (usize, f32),
     ) -> Option<f32> {
         let conn = self.connect.as_ref()?;
@@ -421,8 +438,13 @@ impl Tracer<'_> {
             return None;
         }
         let cos_x = v.hit.ng.dot(wi).abs();
+        // A point's sample: density 1 in its own measure, and no BSDF ray finds it.
+        let (light_pdf, bsdf_ratio) = match dist {
+            Some(d) => (light_pdf * d * d, 0.0),
+            None => (light_pdf, sq(lobe_pdf / light_pdf)),
+        };
         let w_camera = sq(e * cos_x / light_pdf) * camera.sum(v.bsdf, k, -v.dir);
-        Some(weight_over(sq(lobe_pdf / light_pdf) + w_camera))
+        Some(weight_over(bsdf_ratio + w_camera))
     }
 
     /// Joins the path's vertex `v` to every vertex of the sample's light subpath, tracing
@@ -514,8 +536,12 @@ impl Tracer<'_> {
         let (k, pmf, _) = conn.choice.sample(u_choice);
         let li = conn.lights[k];
         let light = &scene.lights[li as usize];
-        let LightShape::Triangles(t) = &light.shape else {
-            return None;
+        let t = match &light.shape {
+            LightShape::Triangles(t) => t,
+            LightShape::Point(_) | LightShape::Spot(_) => {
+                return self.point_start(conn, lp, (li, pmf), u_dir);
+            }
+            _ => return None,
         };
         let (p0, n) = point_on(t, scene.accel.prims(), u_point)?;
         let (side, u_dir) = if t.two_sided {
@@ -540,6 +566,7 @@ impl Tracer<'_> {
         lp.li = li;
         lp.light_ng = n;
         lp.density = conn.density[li as usize];
+        lp.delta = false;
         // pdf_area = 1 / area, pdf_dir = cos θ0 / (π · sides): the cosines cancel.
         let sides = if t.two_sided { 2.0 } else { 1.0 };
         Some(Walk {
@@ -550,6 +577,53 @@ impl Tracer<'_> {
             },
             prev_p: p0,
             beta: le * (t.area * PI * sides / pmf),
+            dvcm_pre: 0.0,
+            dvc_pre: 0.0,
+            travelled: 0.0,
+            diffuse: 0,
+            specular: 0,
+        })
+    }
+
+    /// The start from point or spot light `li` (chosen with probability `pmf`): a
+    /// direction uniform over the sphere, or over the spot's outer cone, the intensity
+    /// in it over that density.
+    fn point_start(
+        &self,
+        conn: &Connect,
+        lp: &mut LightPath,
+        (li, pmf): (u32, f32),
+        u_dir: Vec2,
+    ) -> Option<Walk> {
+        let light = &self.scene.lights[li as usize];
+        let (p0, dir, spread) = match &light.shape {
+            LightShape::Point(p) => (p.position, uniform_sphere(u_dir), 4.0 * PI),
+            LightShape::Spot(s) => (
+                s.position,
+                Frame::new(s.axis).to_world(uniform_cone(u_dir, s.cos_outer)),
+                1.0 / uniform_cone_pdf(s.cos_outer),
+            ),
+            _ => return None,
+        };
+        // The intensity towards `dir`: what light sampling gets one unit along it.
+        let intensity = light
+            .sample(p0 + dir, Vec3A::ZERO, Vec2::ZERO, self.scene.accel.prims())
+            .map_or(Vec3A::ZERO, |ls| ls.radiance);
+        if intensity == Vec3A::ZERO {
+            return None;
+        }
+        lp.li = li;
+        lp.light_ng = Vec3A::ZERO;
+        lp.density = conn.density[li as usize];
+        lp.delta = true;
+        Some(Walk {
+            ray: Ray {
+                origin: p0,
+                dir,
+                tmax: f32::INFINITY,
+            },
+            prev_p: p0,
+            beta: intensity * (spread / pmf),
             dvcm_pre: 0.0,
             dvc_pre: 0.0,
             travelled: 0.0,
@@ -586,8 +660,14 @@ impl Tracer<'_> {
         }
         walk.travelled += dist;
         let (dvcm, dvc) = if j == 1 {
-            // dvcm: `first_dvcm`; dvc: the BSDF ray from y1 that finds the light.
-            (0.0, 1.0 / sq(lp.density * cos_prev))
+            // dvcm: `first_dvcm`; dvc: the BSDF ray from y1 that finds the light (none
+            // finds a point).
+            let dvc = if lp.delta {
+                0.0
+            } else {
+                1.0 / sq(lp.density * cos_prev)
+            };
+            (0.0, dvc)
         } else {
             let d2 = dist * dist;
             (
@@ -905,8 +985,14 @@ impl Tracer<'_> {
         let scene = self.scene;
         let y1 = &lp.vertices[0];
         let light = &scene.lights[lp.li as usize];
-        let pdf = scene.light_select.pmf(lp.li as usize, y1.hit.p, n)
-            * light.pdf_hit(y1.hit.p, n, y1.to_prev, y1.dist_prev, lp.light_ng);
+        let select = scene.light_select.pmf(lp.li as usize, y1.hit.p, n);
+        // A point's light sample has density 1 in its own measure: over the subpath's
+        // area density at y1 the squared distance stays (module doc).
+        let pdf = if lp.delta {
+            select * sq(y1.dist_prev)
+        } else {
+            select * light.pdf_hit(y1.hit.p, n, y1.to_prev, y1.dist_prev, lp.light_ng)
+        };
         if let Some(free) = lp.light_pdfs.iter().find(|slot| slot.get().is_none()) {
             free.set(Some((n, pdf)));
         }

@@ -272,7 +272,7 @@ impl Tracer<'_> {
         let (part, glow) = (light.part, light.glow);
         let (light_pdf, estimate_pdf) = (chosen.mis_pdf * n, chosen.estimate_pdf * n);
         // The camera side of light subpaths that make the same paths (connect.rs).
-        let direct = RICH || self.connect.is_none() || ls.delta || light.shadow_linked;
+        let direct = RICH || self.connect.is_none() || light.shadow_linked;
         let camera_side = (!direct).then(|| self.camera_side(v, ls.wi)).flatten();
         // The shadow ray is traced once, and only if some lobe's contribution counts.
         let mut visible: Option<bool> = None;
@@ -354,7 +354,7 @@ impl Tracer<'_> {
                 }
             };
             if let Some(camera) = camera_side.as_ref().filter(|_| vis) {
-                let sample = (li as u32, ls.wi, light_pdf);
+                let sample = (li as u32, ls.wi, light_pdf, ls.delta.then_some(ls.dist));
                 w = self
                     .light_sample_weight(v, camera, sample, (k, lobe_pdf))
                     .unwrap_or(w);

@@ -200,6 +200,37 @@ fn light_subpaths_through_transmission_and_regularised_glass_converge() {
     }
 }
 
+/// Light subpaths start at point and spot lights too: the room lit by a spot aimed at
+/// the ceiling above the plate and a bare bulb in a corner (no ray finds either, so a
+/// path ending there is made by light sampling and the joins alone): the means per
+/// bounce and per light agree with path tracing's, and the two-bounce light off the
+/// spot-lit ceiling is less noisy with the joins.
+#[test]
+fn point_and_spot_light_subpaths_converge() {
+    let start = ROOM.find("[[lights]]").unwrap();
+    let lit = format!(
+        "{}{}",
+        &ROOM[..start],
+        "[[lights]]\ntype = \"spot\"\nname = \"spot\"\nposition = [0, 0.92, 0]\n\
+         direction = [0, 1, 0]\ncone_angle = 120\ncone_softness = 30\n\
+         intensity = [6, 6, 6]\n\
+         [[lights]]\ntype = \"point\"\nname = \"bulb\"\nposition = [0.7, -0.7, -0.7]\n\
+         intensity = [0.4, 0.4, 0.4]\n"
+    );
+    let mut extra = bounces();
+    extra.push(AovSpec::new("spot", "C.*<L.'spot'>"));
+    extra.push(AovSpec::new("bulb", "C.*<L.'bulb'>"));
+    let names = ["beauty", "b1", "b2", "b3", "spot", "bulb"];
+    let (plain, joined) = assert_means_agree("point lights", &lit, &names, extra);
+    let spread = |runs: &[Vec<f64>]| mean_and_se(&runs.iter().map(|r| r[2]).collect::<Vec<_>>()).1;
+    assert!(
+        spread(&joined) < 0.5 * spread(&plain),
+        "two bounces' standard error with connections {} against {}",
+        spread(&joined),
+        spread(&plain)
+    );
+}
+
 /// Connections add paths through every lobe pair's own events: the standard partition
 /// and per-bounce AOVs still sum to the beauty.
 #[test]
