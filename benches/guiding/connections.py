@@ -31,6 +31,8 @@ SCENES = [
     ("door", f"{HERE}/door.toml", None, []),
     # Held out: never tuned on (a lamp hidden on a cove shelf; glossy and rough metal balls).
     ("cove", f"{HERE}/cove.toml", None, []),
+    # Held out: point and spot lights' subpaths (two hidden uplights, a bulb behind a screen).
+    ("uplights", f"{HERE}/uplights.toml", None, []),
     ("indirect_box", f"{HERE}/indirect_box.toml", f"{HERE}/out/indirect_box_ref.exr", []),
     ("cornell-classic", f"{ROOT}/scenes/cornell-classic.toml",
      f"{ROOT}/benches/peer/ref/cornell_ref.exr", ["--spp", "64"]),
