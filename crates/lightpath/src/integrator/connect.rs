@@ -42,10 +42,11 @@
 //! otherwise and the render is path tracing's alone. Lights that emit subpaths: the
 //! declared triangle lights (rect, quad, disk), point and spot lights, that are not
 //! shadow-linked; the others keep two-way weights, as no subpath starts on them (their
-//! `density` is 0). Point and spot lights are Georgiev et al.'s delta lights (Georgiev et al.'s delta lights): no ray finds them, so
-//! y1 carries no `dvc`, light sampling's density of such a light is 1 in its own measure
-//! (over a subpath's area density at y1 the squared distance stays: `light_pdf_at`, and
-//! `light_sample_weight`'s `dist`), and a light sample's weight has no BSDF term.
+//! `density` is 0). Point and spot lights are Georgiev et al.'s delta lights: no ray
+//! finds them, so y1 carries no `dvc`, light sampling's density of such a light is 1 in
+//! its own measure (over a subpath's area density at y1 the squared distance stays:
+//! `light_pdf_at`, and `light_sample_weight`'s `dist`), and a light sample's weight has
+//! no BSDF term.
 
 use super::direct::weight_over;
 use super::path::{PathState, Vertex};
