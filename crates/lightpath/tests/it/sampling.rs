@@ -77,27 +77,43 @@ fn pixels(film: &Film, k: usize) -> Vec<Vec3A> {
         .collect()
 }
 
+/// The many-light scene at 48², 24 spp, clamps off, with `selection`, `seed` and then
+/// `edit`: its beauty's pixels.
+fn many_lights_image(
+    selection: LightSelection,
+    seed: u64,
+    edit: impl FnOnce(&mut SceneDesc),
+) -> Vec<Vec3A> {
+    let (_, film) = run(
+        &many_lights(),
+        |d| {
+            d.render.resolution = [48, 48];
+            d.render.spp = 24;
+            d.render.seed = seed;
+            d.render.light_selection = selection;
+            d.render.clamp_direct = 0.0;
+            d.render.clamp_indirect = 0.0;
+            edit(d);
+        },
+        vec![],
+    );
+    pixels(&film, 0)
+}
+
+/// The summed squared difference of two images: of two seeds' images, their noise.
+fn spread(a: &[Vec3A], b: &[Vec3A]) -> f64 {
+    a.iter()
+        .zip(b)
+        .map(|(x, y)| ((*x - *y).length_squared()) as f64)
+        .sum::<f64>()
+}
+
 /// The light tree and power selection are unbiased: on a scene with a key, a dim dome
 /// and 48 small lamps (clamps off), their images agree with uniform selection's within
 /// noise, block by block — and a selection pdf left out of a weight would not.
 #[test]
 fn light_selection_is_unbiased_against_uniform() {
-    let src = many_lights();
-    let render_with = |selection: LightSelection, seed: u64| {
-        let (_, film) = run(
-            &src,
-            |d| {
-                d.render.resolution = [48, 48];
-                d.render.spp = 24;
-                d.render.seed = seed;
-                d.render.light_selection = selection;
-                d.render.clamp_direct = 0.0;
-                d.render.clamp_indirect = 0.0;
-            },
-            vec![],
-        );
-        pixels(&film, 0)
-    };
+    let render_with = |selection, seed| many_lights_image(selection, seed, |_| {});
     let uniform = render_with(LightSelection::Uniform, 1);
     for selection in [LightSelection::Tree, LightSelection::Power] {
         agree_within_noise(&render_with(selection, 2), &uniform, 48);
@@ -111,33 +127,13 @@ fn light_selection_is_unbiased_against_uniform() {
 /// the mean squared difference between two seeds' images is lower.
 #[test]
 fn resampled_light_candidates_are_unbiased_and_less_noisy() {
-    let src = many_lights();
-    let render_with = |selection: LightSelection, candidates: u32, seed: u64| {
-        let (_, film) = run(
-            &src,
-            |d| {
-                d.render.resolution = [48, 48];
-                d.render.spp = 24;
-                d.render.seed = seed;
-                d.render.light_selection = selection;
-                d.render.light_candidates = candidates;
-                d.render.clamp_direct = 0.0;
-                d.render.clamp_indirect = 0.0;
-            },
-            vec![],
-        );
-        pixels(&film, 0)
+    let render_with = |selection, candidates, seed| {
+        many_lights_image(selection, seed, |d| d.render.light_candidates = candidates)
     };
     let uniform = render_with(LightSelection::Uniform, 1, 1);
     for (selection, m) in [(LightSelection::Tree, 4), (LightSelection::Uniform, 16)] {
         agree_within_noise(&render_with(selection, m, 2), &uniform, 48);
     }
-    let spread = |a: &[Vec3A], b: &[Vec3A]| {
-        a.iter()
-            .zip(b)
-            .map(|(x, y)| ((*x - *y).length_squared()) as f64)
-            .sum::<f64>()
-    };
     let one = spread(
         &render_with(LightSelection::Uniform, 1, 3),
         &render_with(LightSelection::Uniform, 1, 4),
@@ -196,22 +192,8 @@ intensity = [2, 2, 2]
 /// to one); and 4 samples are less noisy than one from the same selection.
 #[test]
 fn light_samples_are_unbiased_and_less_noisy() {
-    let src = many_lights();
-    let render_with = |selection: LightSelection, samples: u32, seed: u64| {
-        let (_, film) = run(
-            &src,
-            |d| {
-                d.render.resolution = [48, 48];
-                d.render.spp = 24;
-                d.render.seed = seed;
-                d.render.light_selection = selection;
-                d.render.light_samples = samples;
-                d.render.clamp_direct = 0.0;
-                d.render.clamp_indirect = 0.0;
-            },
-            vec![],
-        );
-        pixels(&film, 0)
+    let render_with = |selection, samples, seed| {
+        many_lights_image(selection, seed, |d| d.render.light_samples = samples)
     };
     let uniform = render_with(LightSelection::Uniform, 1, 1);
     for (selection, n) in [(LightSelection::Tree, 4), (LightSelection::Uniform, 3)] {
@@ -238,12 +220,6 @@ fn light_samples_are_unbiased_and_less_noisy() {
         pixels(&film, 0)
     };
     agree_within_noise(&glossy_with(3, 2), &glossy_with(1, 1), 48);
-    let spread = |a: &[Vec3A], b: &[Vec3A]| {
-        a.iter()
-            .zip(b)
-            .map(|(x, y)| ((*x - *y).length_squared()) as f64)
-            .sum::<f64>()
-    };
     let one = spread(
         &render_with(LightSelection::Tree, 1, 3),
         &render_with(LightSelection::Tree, 1, 4),
