@@ -540,7 +540,7 @@ impl Tracer<'_> {
         let t = match &light.shape {
             LightShape::Triangles(t) => t,
             LightShape::Point(_) | LightShape::Spot(_) => {
-                return self.point_start(conn, lp, (li, pmf), u_dir);
+                return self.point_start(conn, lp, li, u_dir);
             }
             _ => return None,
         };
@@ -586,23 +586,22 @@ impl Tracer<'_> {
         })
     }
 
-    /// The start from point or spot light `li` (chosen with probability `pmf`): a
-    /// direction uniform over the sphere, or over the spot's outer cone, the intensity
-    /// in it over that density.
+    /// The start from point or spot light `li`: a direction uniform over the sphere, or
+    /// over the spot's outer cone, the intensity in it over the start's density
+    /// (`Connect::density`: the light's choice over the solid angle it emits into).
     fn point_start(
         &self,
         conn: &Connect,
         lp: &mut LightPath,
-        (li, pmf): (u32, f32),
+        li: u32,
         u_dir: Vec2,
     ) -> Option<Walk> {
         let light = &self.scene.lights[li as usize];
-        let (p0, dir, spread) = match &light.shape {
-            LightShape::Point(p) => (p.position, uniform_sphere(u_dir), 4.0 * PI),
+        let (p0, dir) = match &light.shape {
+            LightShape::Point(p) => (p.position, uniform_sphere(u_dir)),
             LightShape::Spot(s) => (
                 s.position,
                 Frame::new(s.axis).to_world(uniform_cone(u_dir, s.cos_outer)),
-                1.0 / uniform_cone_pdf(s.cos_outer),
             ),
             _ => return None,
         };
@@ -624,7 +623,7 @@ impl Tracer<'_> {
                 tmax: f32::INFINITY,
             },
             prev_p: p0,
-            beta: intensity * (spread / pmf),
+            beta: intensity / lp.density,
             dvcm_pre: 0.0,
             dvc_pre: 0.0,
             travelled: 0.0,
