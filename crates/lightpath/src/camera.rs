@@ -85,6 +85,48 @@ impl PixelFilter {
             PixelFilter::BlackmanHarris { width } => blackman_harris::offset(u, width),
         }
     }
+
+    /// The density of `offset` from the pixel centre (per pixel area) among the offsets
+    /// `offset` makes; 0 on a Gaussian's 3σ ring, where the truncation piles the tail up
+    /// with no density (light tracing leaves those offsets to camera rays, connect.rs).
+    pub fn pdf(&self, offset: Vec2) -> f32 {
+        match *self {
+            PixelFilter::Box => (offset.x.abs() <= 0.5 && offset.y.abs() <= 0.5) as u32 as f32,
+            PixelFilter::Gaussian { stddev } => {
+                let var = stddev * stddev;
+                let r2 = offset.length_squared();
+                if r2 < 9.0 * var * (1.0 - 1e-4) {
+                    (-r2 / (2.0 * var)).exp() / (2.0 * std::f32::consts::PI * var)
+                } else {
+                    0.0
+                }
+            }
+            PixelFilter::BlackmanHarris { width } => blackman_harris::pdf(offset, width),
+        }
+    }
+
+    /// How far from its pixel centre an offset may reach, in pixels along each axis.
+    pub fn radius(&self) -> f32 {
+        match *self {
+            PixelFilter::Box => 0.5,
+            PixelFilter::Gaussian { stddev } => 3.0 * stddev,
+            PixelFilter::BlackmanHarris { width } => width,
+        }
+    }
+}
+
+/// Where a pinhole camera sees a point (light tracing, connect.rs).
+#[derive(Clone, Copy, Debug)]
+pub struct Projection {
+    /// The film position in pixels (origin top-left), as `Camera::ray` takes it.
+    pub film: Vec2,
+    /// The unit direction from the camera to the point, and the distance.
+    pub dir: Vec3A,
+    pub dist: f32,
+    /// The solid-angle density of camera rays there per unit film density: d² / cos³,
+    /// d being the distance of the image plane on which a pixel has unit area and cos
+    /// the angle off the view axis.
+    pub to_solid_angle: f32,
 }
 
 #[derive(Clone, Debug)]
@@ -206,13 +248,51 @@ impl Camera {
         projection * self.world_to_camera()
     }
 
-    /// The primary ray through film position `film` (in pixels, origin top-left).
+    /// Where the camera sees `p`, if it is a pinhole and `p` is in front of it (film
+    /// positions off the frame included: a pixel filter reaches past the edge).
+    pub fn project(&self, p: Vec3A) -> Option<Projection> {
+        if self.aperture_radius > 0.0 {
+            return None;
+        }
+        let d = p - self.position;
+        let dist = d.length();
+        if !(dist > 0.0 && dist.is_finite()) {
+            return None;
+        }
+        let dir = d / dist;
+        let cos = dir.dot(self.forward);
+        if cos <= 0.0 {
+            return None;
+        }
+        let x = dir.dot(self.right) / (cos * self.tan_half.x);
+        let y = dir.dot(self.up) / (cos * self.tan_half.y);
+        let (w, h) = (self.width as f32, self.height as f32);
+        Some(Projection {
+            film: Vec2::new((x + 1.0) * 0.5 * w, (1.0 - y) * 0.5 * h),
+            dir,
+            dist,
+            to_solid_angle: self.to_solid_angle(cos),
+        })
+    }
+
+    /// `Projection::to_solid_angle` at `cos` off the view axis.
+    pub fn to_solid_angle(&self, cos: f32) -> f32 {
+        let image = self.width as f32 / (2.0 * self.tan_half.x);
+        image * image / (cos * cos * cos)
+    }
+
+    /// The cosine between a direction from the camera and the view axis.
+    pub fn cos_off_axis(&self, dir: Vec3A) -> f32 {
+        dir.dot(self.forward)
+    }
+
     /// Camera-space depth of `p`: its distance from the camera along the view axis
     /// (what compositors call Z).
     pub fn depth(&self, p: Vec3A) -> f32 {
         (p - self.position).dot(self.forward)
     }
 
+    /// The primary ray through film position `film` (in pixels, origin top-left).
     pub fn ray(&self, film: Vec2, lens: Vec2) -> Ray {
         let ndc = Vec2::new(
             2.0 * film.x / self.width as f32 - 1.0,

@@ -33,6 +33,20 @@ pub fn window(t: f64) -> f64 {
     A[0] + A[1] * (PI * t).cos() + A[2] * (2.0 * PI * t).cos() + A[3] * (3.0 * PI * t).cos()
 }
 
+/// The density of a 2-D offset (in pixels) among those `offset` makes: the product of
+/// the two axes' windows over their integrals, 2 a0 · width each.
+pub fn pdf(offset: Vec2, width: f32) -> f32 {
+    let axis = |d: f32| {
+        let t = (d / width) as f64;
+        if t.abs() > 1.0 {
+            0.0
+        } else {
+            window(t) / (2.0 * A[0] * width as f64)
+        }
+    };
+    (axis(offset.x) * axis(offset.y)) as f32
+}
+
 /// The window's CDF from −1 to t, minus ½: odd in t, 0 at the centre, ±½ at the ends.
 pub fn half_cdf(t: f64) -> f64 {
     let sines: f64 = (1..4)

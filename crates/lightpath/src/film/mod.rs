@@ -4,6 +4,7 @@
 //! the peak memory stays about one film.
 
 pub mod mattes;
+pub mod splats;
 
 use crate::error::InvalidValue;
 
@@ -369,6 +370,25 @@ impl SampleAccumulator {
             self.values[k]
         } else {
             Vec3A::ZERO
+        }
+    }
+
+    /// The number of AOVs it holds.
+    pub fn aovs(&self) -> usize {
+        self.values.len()
+    }
+
+    /// Hands each AOV the sample touched and its value to `f`, and clears the sample
+    /// (squares are not kept: light tracing's splats, film/splats.rs).
+    #[inline]
+    pub fn drain(&mut self, mut f: impl FnMut(usize, Vec3A)) {
+        for (w, word) in self.touched.iter_mut().enumerate() {
+            let mut bits = std::mem::take(word);
+            while bits != 0 {
+                let k = w * 64 + bits.trailing_zeros() as usize;
+                bits &= bits - 1;
+                f(k, self.values[k]);
+            }
         }
     }
 

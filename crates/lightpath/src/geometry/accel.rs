@@ -42,6 +42,8 @@ pub struct Accel {
     pub(super) visibility: Vec<u8>,
     /// See [`Accel::shadows_match_indirect`] (instances included).
     shadows_match_indirect: bool,
+    /// See [`Accel::shadows_match_camera`] (instances included).
+    shadows_match_camera: bool,
     /// When set (`use_embree`), `intersect` and `occluded` ask Embree instead of the tree.
     #[cfg(feature = "embree")]
     embree: Option<Box<EmbreeScene>>,
@@ -76,8 +78,12 @@ impl Accel {
         let shadows_match_indirect = visibility
             .iter()
             .all(|&v| (v & Visibility::INDIRECT != 0) == (v & Visibility::SHADOW != 0));
+        let shadows_match_camera = visibility
+            .iter()
+            .all(|&v| (v & Visibility::CAMERA != 0) == (v & Visibility::SHADOW != 0));
         Accel {
             shadows_match_indirect,
+            shadows_match_camera,
             tree: laid.tree,
             objects: laid.order.iter().map(|&i| objects[i as usize]).collect(),
             face_normals: laid.prims.iter().map(Prim::face_normal).collect(),
@@ -101,6 +107,13 @@ impl Accel {
     /// round: then a shadow ray is blocked exactly where an indirect ray stops.
     pub fn shadows_match_indirect(&self) -> bool {
         self.shadows_match_indirect
+    }
+
+    /// Whether every primitive that camera rays see casts shadows and the other way
+    /// round: then a shadow ray towards the camera is blocked exactly where a camera ray
+    /// from there would stop (light tracing, connect.rs).
+    pub fn shadows_match_camera(&self) -> bool {
+        self.shadows_match_camera
     }
 
     /// Which ray kinds see each primitive of `prims()`.
@@ -152,6 +165,7 @@ impl Accel {
     pub fn with_instances(mut self, meshes: Vec<Accel>, instances: Vec<Instance>) -> Accel {
         debug_assert!(meshes.iter().all(|m| m.instances.is_empty()));
         self.shadows_match_indirect &= meshes.iter().all(|m| m.shadows_match_indirect);
+        self.shadows_match_camera &= meshes.iter().all(|m| m.shadows_match_camera);
         self.meshes = meshes;
         self.instances = instances;
         self

@@ -48,6 +48,10 @@
 //! `light_pdf_at`, and `light_sample_weight`'s `dist`), and a light sample's weight has
 //! no BSDF term.
 
+mod light_tracing;
+
+pub(super) use light_tracing::traces_to_camera;
+
 use super::direct::weight_over;
 use super::path::{PathState, Vertex};
 use super::routing::{Origin, Via};
@@ -506,7 +510,13 @@ impl Tracer<'_> {
         lp.vertices.clear();
         lp.textured.clear();
         lp.light_pdfs = Default::default();
-        let max_vertices = self.scene.settings.max_depth.saturating_sub(2);
+        // The shortest join has one camera vertex; light tracing's has none.
+        let camera_vertices = if self.splats.is_some() { 1 } else { 2 };
+        let max_vertices = self
+            .scene
+            .settings
+            .max_depth
+            .saturating_sub(camera_vertices);
         if max_vertices == 0 {
             return;
         }

@@ -71,6 +71,9 @@ struct Tracer<'a> {
     light_boxes: Vec<Option<(Vec3A, Vec3A)>>,
     /// Bidirectional path tracing's light subpaths, if the render traces them (connect.rs).
     connect: Option<connect::Connect>,
+    /// Light tracing's film, if the render joins light subpaths to the camera
+    /// (connect/light_tracing.rs).
+    splats: Option<&'a crate::film::splats::Splats>,
 }
 
 /// Where a worker's paths put what they find: the sample's AOV values and counters.
@@ -90,6 +93,9 @@ struct Sink<'b> {
     sobol: Option<Box<crate::sampler::SobolPixel>>,
     /// The current sample's light subpath (connect.rs), its buffers reused.
     light_path: connect::LightPath,
+    /// What one join of a light vertex to the camera adds to one pixel, before it goes
+    /// to the splat film (connect/light_tracing.rs); sized on first use.
+    splat_acc: SampleAccumulator,
 }
 
 impl<'b> Sink<'b> {
@@ -104,6 +110,7 @@ impl<'b> Sink<'b> {
             record: guided::PathRecord::default(),
             sobol: None,
             light_path: connect::LightPath::default(),
+            splat_acc: SampleAccumulator::new(0),
         }
     }
 }
@@ -126,6 +133,7 @@ impl<'a> Tracer<'a> {
                 || (scene.settings.light_candidates > 1 && scene.lights.len() > 1),
             light_boxes: direct::light_boxes(scene),
             connect: None,
+            splats: None,
         }
     }
 
@@ -297,6 +305,12 @@ fn render_passes(
     let mut tracer = Tracer::new(scene);
     tracer.guide = guide.as_ref();
     tracer.connect = connect::Connect::new(scene, tracer.guide.is_some());
+    // Light tracing's splats (connect/light_tracing.rs), for the whole frame for now.
+    let splats = (tracer.connect.is_some()
+        && connect::traces_to_camera(scene)
+        && win == PixelWindow::full(scene.camera.width, scene.camera.height))
+    .then(|| crate::film::splats::Splats::new(win, scene.aovs.len()));
+    tracer.splats = splats.as_ref();
     let frame = FrameRender {
         tracer,
         options,
@@ -334,6 +348,9 @@ fn render_passes(
     match &mut pilot {
         None => frame.run_pass(&mut Pass::All, &mut output),
         Some(p) => frame.run_adaptive(p, &mut output, radius),
+    }
+    if let Some(s) = &splats {
+        s.add_to(&mut film);
     }
     if let Some(t) = frame.table {
         film.mattes = Some(Mattes {

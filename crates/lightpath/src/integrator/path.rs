@@ -129,16 +129,27 @@ impl PathState {
 }
 
 impl Tracer<'_> {
-    /// Traces one camera path; returns its alpha. A training pass's path then records
-    /// its vertices into the guide (guided.rs).
-    pub(super) fn trace<S: Sampler>(&self, ray: Ray, sampler: &mut S, out: &mut Sink) -> f32 {
+    /// Traces one camera path (`film_pdf`: the pixel filter's density of the ray's
+    /// offset in its pixel); returns its alpha. A training pass's path then records its
+    /// vertices into the guide (guided.rs). Where the render traces light to the camera,
+    /// the sample's light subpath is joined to it after (connect/light_tracing.rs).
+    pub(super) fn trace<S: Sampler>(
+        &self,
+        ray: Ray,
+        film_pdf: f32,
+        sampler: &mut S,
+        out: &mut Sink,
+    ) -> f32 {
         let scene = self.scene;
         let alpha = if scene.has_media || scene.has_presence || self.guide.is_some() {
-            self.trace_path::<S, true>(ray, sampler, out)
+            self.trace_path::<S, true>(ray, film_pdf, sampler, out)
         } else {
-            self.trace_path::<S, false>(ray, sampler, out)
+            self.trace_path::<S, false>(ray, film_pdf, sampler, out)
         };
         self.flush_record(out);
+        if self.splats.is_some() {
+            self.splat(out, sampler);
+        }
         alpha
     }
 
@@ -149,6 +160,7 @@ impl Tracer<'_> {
     fn trace_path<S: Sampler, const RICH: bool>(
         &self,
         mut ray: Ray,
+        film_pdf: f32,
         sampler: &mut S,
         out: &mut Sink,
     ) -> f32 {
@@ -165,6 +177,7 @@ impl Tracer<'_> {
         let joins = !RICH && self.connect.is_some();
         if joins {
             out.light_path.reset();
+            path.dvcm = self.camera_dvcm(film_pdf, ray.dir);
         }
         loop {
             out.rays += 1;

@@ -74,7 +74,8 @@ impl Tracer<'_> {
             let offset = scene.filter.offset(u_filter);
             let film_pos = Vec2::new(job.x as f32 + 0.5, job.y as f32 + 0.5) + offset;
             let ray = cam.ray(film_pos, u_lens);
-            let alpha = self.trace(ray, &mut sampler, out);
+            let film_pdf = scene.filter.pdf(offset);
+            let alpha = self.trace(ray, film_pdf, &mut sampler, out);
             (job.after_sample)(out);
             if let Some(m) = &mut moments {
                 // The beauty is AOV 0 (aov::plan puts it first).
