@@ -325,6 +325,105 @@ impl Camera {
 mod tests {
     use super::*;
 
+    /// Light tracing's projection undoes `ray`: a point on the ray through a film
+    /// position (off the frame too) lands back there, and the solid angle a small patch of
+    /// film subtends is its area over `to_solid_angle` (finite differences).
+    #[test]
+    fn a_point_projects_to_the_film_position_of_its_ray() {
+        let c = Camera::new(
+            Vec3A::new(0.3, -0.2, 3.9),
+            Vec3A::new(0.1, 0.0, 0.0),
+            Vec3A::Y,
+            50.0,
+            FovAxis::Larger,
+            64,
+            48,
+            0.0,
+            1.0,
+        );
+        for film in [
+            Vec2::new(32.0, 24.0),
+            Vec2::new(0.25, 47.5),
+            Vec2::new(63.0, 3.0),
+            Vec2::new(-1.2, 50.0),
+        ] {
+            let ray = c.ray(film, Vec2::ZERO);
+            for t in [0.5, 7.0] {
+                let p = c.project(ray.origin + ray.dir * t).unwrap();
+                assert!((p.film - film).length() < 1e-3, "{film} {}", p.film);
+                assert!((p.dist - t).abs() < 1e-4 && (p.dir - ray.dir).length() < 1e-5);
+                let d = 1e-2;
+                let (dx, dy) = (
+                    c.ray(film + Vec2::new(d, 0.0), Vec2::ZERO).dir - ray.dir,
+                    c.ray(film + Vec2::new(0.0, d), Vec2::ZERO).dir - ray.dir,
+                );
+                let solid_angle = dx.cross(dy).length() / (d * d);
+                assert!((solid_angle * p.to_solid_angle - 1.0).abs() < 1e-2);
+            }
+        }
+        assert!(
+            c.project(Vec3A::new(0.3, -0.2, 5.0)).is_none(),
+            "behind the camera"
+        );
+        let lens = Camera {
+            aperture_radius: 0.1,
+            ..c
+        };
+        assert!(
+            lens.project(Vec3A::ZERO).is_none(),
+            "a thin lens is not a pinhole"
+        );
+    }
+
+    /// Each filter's `pdf` is the density of the offsets `offset` makes: χ² of 20 000
+    /// offsets' histogram over 16 × 16 cells against the density integrated over each
+    /// (the Gaussian's truncated tail, on its 3σ ring, has none and is left out).
+    #[test]
+    fn a_filters_pdf_is_the_density_of_its_offsets() {
+        let mut rng = crate::sampling::Rng::for_sample(7, 0, 0);
+        for filter in [
+            PixelFilter::Box,
+            PixelFilter::Gaussian { stddev: 0.5 },
+            PixelFilter::BlackmanHarris { width: 1.5 },
+        ] {
+            let (n, cells) = (20_000, 16);
+            let r = filter.radius();
+            let cell = 2.0 * r / cells as f32;
+            let mut seen = vec![0.0f64; cells * cells];
+            for _ in 0..n {
+                let o = filter.offset(rng.next_2d());
+                if filter.pdf(o) == 0.0 {
+                    continue;
+                }
+                let (i, j) = (((o.x + r) / cell) as usize, ((o.y + r) / cell) as usize);
+                seen[j.min(cells - 1) * cells + i.min(cells - 1)] += 1.0;
+            }
+            let (mut chi2, mut dof) = (0.0, 0);
+            for j in 0..cells {
+                for i in 0..cells {
+                    // The density integrated over the cell by an 8 × 8 midpoint rule.
+                    let mut mass = 0.0;
+                    for b in 0..8 {
+                        for a in 0..8 {
+                            let o = Vec2::new(
+                                -r + (i as f32 + (a as f32 + 0.5) / 8.0) * cell,
+                                -r + (j as f32 + (b as f32 + 0.5) / 8.0) * cell,
+                            );
+                            mass += filter.pdf(o) as f64 * (cell * cell) as f64 / 64.0;
+                        }
+                    }
+                    let expected = mass * n as f64;
+                    if expected >= 10.0 {
+                        chi2 += (seen[j * cells + i] - expected).powi(2) / expected;
+                        dof += 1;
+                    }
+                }
+            }
+            let bound = dof as f64 + 5.0 * (2.0 * dof as f64).sqrt();
+            assert!(chi2 < bound, "{filter:?}: χ² {chi2} over {dof} cells");
+        }
+    }
+
     #[test]
     fn image_x_is_world_right_and_row_zero_is_top() {
         let c = Camera::new(

@@ -32,7 +32,7 @@ use crate::output::atomic;
 use std::io::{BufWriter, Write};
 use std::path::{Path, PathBuf};
 
-const MAGIC: &[u8; 8] = b"LPCKPT03";
+const MAGIC: &[u8; 8] = b"LPCKPT04";
 
 /// What every version's magic starts with.
 const MAGIC_FAMILY: &[u8; 6] = b"LPCKPT";
@@ -45,6 +45,8 @@ pub struct Checkpoint {
     pub rows_done: Vec<bool>,
     /// An adaptive render's pilot pass.
     pub pilot: Option<Pilot>,
+    /// Light tracing's splat sums, which `film` does not hold (film/splats.rs).
+    pub splats: Option<Vec<i64>>,
 }
 
 /// The pass byte of a checkpoint.
@@ -123,6 +125,7 @@ pub fn write(
         film,
         rows_done,
         pilot,
+        splats,
     } = *snapshot;
     atomic::atomically(path, |file| {
         let mut out = Summed {
@@ -161,6 +164,14 @@ pub fn write(
                     chunk.extend(sums.iter().flatten().flat_map(|v| v.to_le_bytes()));
                     out.put(&chunk)?;
                 }
+            }
+            // Light tracing's splats: a count (0 without), then the sums.
+            let units = splats.map(|s| s.units()).unwrap_or_default();
+            out.put(&(units.len() as u64).to_le_bytes())?;
+            for values in units.chunks(4 * row) {
+                chunk.clear();
+                chunk.extend(values.iter().flat_map(|v| v.to_le_bytes()));
+                out.put(&chunk)?;
             }
             let total = out.sum.finish();
             out.out.write_all(&total.to_le_bytes())?;
@@ -277,10 +288,22 @@ fn film_of(data: &[u8], shape: FilmShape) -> Option<Checkpoint> {
     let pixels = width as usize * height as usize;
     let header = 16 + 1;
     let adaptive_bytes = if adaptive { pixels * (4 + 16) } else { 0 };
-    let expected = header + height as usize + planes * pixels * 4 + adaptive_bytes;
-    if data.len() != expected {
+    let before_splats = header + height as usize + planes * pixels * 4 + adaptive_bytes;
+    if data.len() < before_splats + 8 {
         return None;
     }
+    let splat_count = u64_at(data, before_splats);
+    let splat_bytes = usize::try_from(splat_count).ok()?.checked_mul(8)?;
+    if data.len() != before_splats + 8 + splat_bytes {
+        return None;
+    }
+    let splats = (splat_count > 0).then(|| {
+        data[before_splats + 8..]
+            .chunks_exact(8)
+            .map(|b| u64_at(b, 0) as i64)
+            .collect()
+    });
+    let data = &data[..before_splats];
     let found = (
         u32_at(data, 0),
         u32_at(data, 4),
@@ -319,6 +342,7 @@ fn film_of(data: &[u8], shape: FilmShape) -> Option<Checkpoint> {
         film,
         rows_done,
         pilot,
+        splats,
     })
 }
 
@@ -358,6 +382,7 @@ mod tests {
             film,
             rows_done,
             pilot,
+            splats: None,
         }
     }
 
@@ -392,6 +417,23 @@ mod tests {
         for (a, b) in back.film.planes.iter().zip(&film.planes) {
             assert!(a.iter().zip(b).all(|(x, y)| x.to_bits() == y.to_bits()));
         }
+        assert_eq!(back.splats, None);
+        // Light tracing's splat sums, as they were.
+        let splats = crate::film::splats::Splats::new(crate::film::PixelWindow::full(3, 2), 1);
+        splats.add(2, 1, 0, glam::Vec3A::new(0.25, -3.0, 1e-9));
+        let with_splats = Snapshot {
+            splats: Some(&splats),
+            ..snapshot(&film, &[true, false], None)
+        };
+        write(&path, stamp(&id, 42), &with_splats).unwrap();
+        let back = read(&path, stamp(&id, 42), shape(1, vec![0])).unwrap();
+        assert_eq!(back.splats, Some(splats.units()));
+        write(
+            &path,
+            stamp(&id, 42),
+            &snapshot(&film, &[true, false], None),
+        )
+        .unwrap();
         assert!(read(&path, stamp(&id, 43), shape(1, vec![0]))
             .unwrap_err()
             .to_string()

@@ -603,8 +603,8 @@ impl PreparedRender {
                 last_checkpoint = std::time::Instant::now();
             }
         };
-        let (film, rows_done, pilot) = resume.map_or((None, Vec::new(), None), |c| {
-            (Some(c.film), c.rows_done, c.pilot)
+        let (film, rows_done, pilot, splats) = resume.map_or((None, Vec::new(), None, None), |c| {
+            (Some(c.film), c.rows_done, c.pilot, c.splats)
         });
         let rendered = crate::integrator::render_resumable(
             &scene,
@@ -615,6 +615,7 @@ impl PreparedRender {
                 film,
                 rows_done,
                 pilot,
+                splats,
                 cancel: job.cancel.as_deref(),
                 after_band: Some(&mut save),
                 // Checkpoints come between bands: about 64 of them per frame.
@@ -628,10 +629,11 @@ impl PreparedRender {
         }
         let complete = rendered.finished();
         let Rendered {
-            film,
+            mut film,
             stats,
             rows_done,
             pilot,
+            splats,
         } = rendered;
         let interrupted = (!complete)
             .then(|| Interrupted::of(&film, &rows_done, pilot.as_ref(), &checkpoint_path));
@@ -640,8 +642,14 @@ impl PreparedRender {
                 film: &film,
                 rows_done: &rows_done,
                 pilot: pilot.as_ref(),
+                splats: splats.as_ref(),
             };
             checkpoint::write(&checkpoint_path, stamp, &snapshot).map_err(Error::Output)?;
+        }
+        // The partial picture shows what light tracing found so far, the checkpoint
+        // keeps it apart.
+        if let Some(s) = &splats {
+            s.add_to(&mut film);
         }
         let overflowed = non_finite_values(&film);
         let header = exr_header(&job, &source, &scene, metadata, &film, interrupted.as_ref());

@@ -20,6 +20,7 @@ pub mod subsurface;
 mod volume;
 
 use crate::film::mattes::{MatteTable, PixelMatte};
+use crate::film::splats::Splats;
 use crate::film::{Film, Mattes, PixelWindow, SampleAccumulator};
 use crate::geometry::{Hit, Ray};
 use crate::progress::{Progress, Silent};
@@ -73,7 +74,7 @@ struct Tracer<'a> {
     connect: Option<connect::Connect>,
     /// Light tracing's film, if the render joins light subpaths to the camera
     /// (connect/light_tracing.rs).
-    splats: Option<&'a crate::film::splats::Splats>,
+    splats: Option<&'a Splats>,
 }
 
 /// Where a worker's paths put what they find: the sample's AOV values and counters.
@@ -207,6 +208,10 @@ pub struct Resumable<'a> {
     /// An adaptive render's pilot pass (a checkpoint's): once it is complete, `rows_done`
     /// are rows of the second pass. An adaptive render resumed without it starts afresh.
     pub pilot: Option<Pilot>,
+    /// Light tracing's splat sums of the finished rows (a checkpoint's; film/splats.rs),
+    /// which `film` does not hold. A render that traces light to the camera resumed
+    /// without them, or one that does not resumed with them, starts afresh.
+    pub splats: Option<Vec<i64>>,
     /// When set, rows not yet started are skipped: the render ends with the rows in
     /// flight (a row is never left half-rendered).
     pub cancel: Option<&'a AtomicBool>,
@@ -224,6 +229,8 @@ pub struct Snapshot<'s> {
     pub rows_done: &'s [bool],
     /// An adaptive render's pilot.
     pub pilot: Option<&'s Pilot>,
+    /// Light tracing's splats of the finished rows, which `film` does not hold yet.
+    pub splats: Option<&'s Splats>,
 }
 
 /// What `Resumable::after_band` is given.
@@ -238,6 +245,10 @@ pub struct Rendered {
     pub rows_done: Vec<bool>,
     /// An adaptive render's pilot (complete unless it was cancelled during the pilot).
     pub pilot: Option<Pilot>,
+    /// Light tracing's splats, when the render did not finish: `film` does not hold
+    /// them (a checkpoint keeps them apart; `Splats::add_to` for a picture). A finished
+    /// film holds its splats.
+    pub splats: Option<Splats>,
 }
 
 impl Rendered {
@@ -282,6 +293,7 @@ fn render_passes(
         film: mut resumed,
         rows_done: mut resumed_rows,
         pilot,
+        splats: resumed_splats,
         cancel,
         mut after_band,
         max_band_rows,
@@ -305,11 +317,18 @@ fn render_passes(
     let mut tracer = Tracer::new(scene);
     tracer.guide = guide.as_ref();
     tracer.connect = connect::Connect::new(scene, tracer.guide.is_some());
-    // Light tracing's splats (connect/light_tracing.rs), for the whole frame for now.
-    let splats = (tracer.connect.is_some()
-        && connect::traces_to_camera(scene)
-        && win == PixelWindow::full(scene.camera.width, scene.camera.height))
-    .then(|| crate::film::splats::Splats::new(win, scene.aovs.len()));
+    // Light tracing's splats (connect/light_tracing.rs).
+    let splats = (tracer.connect.is_some() && connect::traces_to_camera(scene))
+        .then(|| Splats::new(win, scene.aovs.len()));
+    // Finished rows carry on only with the splats they made.
+    let splats_resumed = match (&splats, &resumed_splats) {
+        (Some(s), Some(units)) => s.set_units(units),
+        (None, None) => true,
+        _ => false,
+    };
+    if !splats_resumed {
+        (resumed, resumed_rows) = (None, Vec::new());
+    }
     tracer.splats = splats.as_ref();
     let frame = FrameRender {
         tracer,
@@ -349,9 +368,6 @@ fn render_passes(
         None => frame.run_pass(&mut Pass::All, &mut output),
         Some(p) => frame.run_adaptive(p, &mut output, radius),
     }
-    if let Some(s) = &splats {
-        s.add_to(&mut film);
-    }
     if let Some(t) = frame.table {
         film.mattes = Some(Mattes {
             table: t.clone(),
@@ -367,11 +383,20 @@ fn render_passes(
         nonfinite: c.nonfinite.into_inner(),
         seconds: start.elapsed().as_secs_f64(),
     };
+    let finished = pilot.as_ref().is_none_or(|p| p.complete) && rows_done.iter().all(|d| *d);
+    let splats = match splats {
+        Some(s) if finished => {
+            s.add_to(&mut film);
+            None
+        }
+        unfinished => unfinished,
+    };
     Rendered {
         film,
         stats,
         rows_done,
         pilot,
+        splats,
     }
 }
 
@@ -651,6 +676,7 @@ impl FrameRender<'_> {
                     film,
                     rows_done: &self.rows_done(),
                     pilot: pass.pilot(),
+                    splats: self.tracer.splats,
                 });
             }
         }
@@ -708,6 +734,7 @@ impl FrameRender<'_> {
         let matte_stride = self.table.map_or(0, |t| t.stride());
         let mut out = Sink::new(acc);
         let mut samples = 0u64;
+        let row_index = y;
         let y = self.window.y0 + y as u32;
         let rule = self.rule;
         for (col, x) in (self.window.x0..self.window.x1).enumerate() {
@@ -751,6 +778,17 @@ impl FrameRender<'_> {
             }
             if let Some(t) = self.table {
                 matte.flush(t, &mut matte_row[matte_run]);
+            }
+        }
+        // A window's splats come from the whole frame's light subpaths: this row also
+        // traces its share of those of the pixels outside it (connect/light_tracing.rs).
+        if self.tracer.splats.is_some() {
+            let scene = self.tracer.scene;
+            let frame = [scene.camera.width, scene.camera.height];
+            let first = self.options.first_sample;
+            for (x, y) in connect::outside_pixels(frame, self.window, row_index) {
+                self.tracer
+                    .splat_pixel(x, y, first..first + self.options.spp, &mut out);
             }
         }
         let c = &self.counters;

@@ -58,6 +58,42 @@ impl Tracer<'_> {
         }
     }
 
+    /// Traces the light subpaths of samples `samples` of frame pixel (`x`, `y`) and
+    /// joins them to the camera, with no camera paths (a pixel outside the window:
+    /// connect/light_tracing.rs). Their numbers are those the pixel's own samples use.
+    pub(super) fn splat_pixel(
+        &self,
+        x: u32,
+        y: u32,
+        samples: std::ops::Range<u32>,
+        out: &mut Sink,
+    ) {
+        let index = y as u64 * self.scene.camera.width as u64 + x as u64;
+        match self.scene.settings.sampler {
+            SamplerKind::Sobol => {
+                let mut pixel = match out.sobol.take() {
+                    Some(mut pixel) => {
+                        pixel.reset(self.seed, index);
+                        pixel
+                    }
+                    None => Box::new(SobolPixel::new(self.seed, index)),
+                };
+                for s in samples {
+                    out.light_path.reset();
+                    self.splat(out, &mut pixel.sample(s as u64));
+                }
+                out.sobol = Some(pixel);
+            }
+            SamplerKind::Independent => {
+                let mut pixel = IndependentPixel::new(self.seed, index);
+                for s in samples {
+                    out.light_path.reset();
+                    self.splat(out, &mut pixel.sample(s as u64));
+                }
+            }
+        }
+    }
+
     fn pixel_samples(
         &self,
         job: PixelJob,

@@ -443,6 +443,7 @@ fn a_cancelled_render_resumed_from_its_checkpoint_equals_the_uninterrupted_one_b
         film: &part.film,
         rows_done: &part.rows_done,
         pilot: None,
+        splats: None,
     };
     // A checkpoint of some scene: its identity does not matter here.
     let identity = lightpath::identity::Identity::new(std::path::Path::new(""), &[], Vec::new());

@@ -31,6 +31,7 @@ use super::super::routing::{Origin, Via};
 use super::super::{Sink, Tracer};
 use super::{sq, LightPath};
 use crate::film::splats::Splats;
+use crate::film::PixelWindow;
 use crate::sampler::Sampler;
 use glam::Vec3A;
 use lpe::ScatterClass;
@@ -41,6 +42,42 @@ pub(in crate::integrator) fn traces_to_camera(scene: &crate::scene::Scene) -> bo
     scene.camera.aperture_radius <= 0.0
         && scene.settings.noise_threshold <= 0.0
         && scene.accel.shadows_match_camera()
+}
+
+/// The frame pixels outside `window` whose light subpaths row `row` of the window
+/// traces (module doc): the outside pixels, numbered row by row through the frame,
+/// shared out evenly over the window's rows.
+pub(in crate::integrator) fn outside_pixels(
+    frame: [u32; 2],
+    window: PixelWindow,
+    row: usize,
+) -> impl Iterator<Item = (u32, u32)> {
+    let [fw, fh] = frame.map(u64::from);
+    let (w, h) = (u64::from(window.width()), u64::from(window.height()));
+    let outside = fw * fh - w * h;
+    let row = row as u64;
+    let share = match (
+        (outside * row).checked_div(h),
+        (outside * (row + 1)).checked_div(h),
+    ) {
+        (Some(a), Some(b)) => a..b,
+        _ => 0..0,
+    };
+    let above = u64::from(window.y0) * fw;
+    let beside = fw - w;
+    share.map(move |k| {
+        let (x, y) = if k < above {
+            (k % fw, k / fw)
+        } else if k < above + h * beside {
+            let k = k - above;
+            let (x, y) = (k % beside, u64::from(window.y0) + k / beside);
+            (if x < u64::from(window.x0) { x } else { x + w }, y)
+        } else {
+            let k = k - above - h * beside;
+            (k % fw, u64::from(window.y1) + k / fw)
+        };
+        (x as u32, y as u32)
+    })
 }
 
 impl Tracer<'_> {
@@ -240,5 +277,55 @@ impl Tracer<'_> {
             tmax: len * (1.0 - 1e-4),
         };
         !self.scene.accel.occluded(&ray, 0.0, u32::MAX)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The rows of a window share out every pixel outside it once, and none inside.
+    #[test]
+    fn a_windows_rows_share_the_outside_pixels_once() {
+        let frame = [7, 5];
+        for window in [
+            PixelWindow {
+                x0: 2,
+                y0: 1,
+                x1: 5,
+                y1: 3,
+            },
+            PixelWindow {
+                x0: 0,
+                y0: 0,
+                x1: 7,
+                y1: 2,
+            },
+            PixelWindow {
+                x0: 0,
+                y0: 4,
+                x1: 3,
+                y1: 5,
+            },
+            PixelWindow::full(7, 5),
+        ] {
+            let mut seen = [0; 35];
+            for row in 0..window.height() as usize {
+                for (x, y) in outside_pixels(frame, window, row) {
+                    seen[(y * 7 + x) as usize] += 1;
+                }
+            }
+            for y in 0..5 {
+                for x in 0..7 {
+                    let inside =
+                        (window.x0..window.x1).contains(&x) && (window.y0..window.y1).contains(&y);
+                    assert_eq!(
+                        seen[(y * 7 + x) as usize],
+                        !inside as u32,
+                        "{window:?} ({x}, {y})"
+                    );
+                }
+            }
+        }
     }
 }
