@@ -421,7 +421,9 @@ impl Tracer<'_> {
     ) -> Option<f32> {
         let conn = self.connect.as_ref()?;
         let e = conn.density[li as usize];
-        (path.dvc > 0.0 && e > 0.0)
+        // After one vertex only light tracing would make the path, and it leaves direct
+        // light alone (connect/light_tracing.rs).
+        (path.dvc > 0.0 && e > 0.0 && path.depth >= 2)
             .then(|| weight_over(sq(light_pdf / path.prev_pdf) + sq(e) * path.dvc))
     }
 

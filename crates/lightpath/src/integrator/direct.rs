@@ -271,8 +271,10 @@ impl Tracer<'_> {
         let l_class = light.classes.light;
         let (part, glow) = (light.part, light.glow);
         let (light_pdf, estimate_pdf) = (chosen.mis_pdf * n, chosen.estimate_pdf * n);
-        // The camera side of light subpaths that make the same paths (connect.rs).
-        let direct = RICH || self.connect.is_none() || light.shadow_linked;
+        // The camera side of light subpaths that make the same paths (connect.rs); none
+        // at the camera's first vertex, where only light tracing would, and it leaves
+        // direct light alone (connect/light_tracing.rs).
+        let direct = RICH || self.connect.is_none() || light.shadow_linked || path.depth == 0;
         let camera_side = (!direct).then(|| self.camera_side(v, ls.wi)).flatten();
         // The shadow ray is traced once, and only if some lobe's contribution counts.
         let mut visible: Option<bool> = None;

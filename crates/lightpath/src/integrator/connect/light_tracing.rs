@@ -11,6 +11,14 @@
 //! ceiling over a lamp that camera rays reach through a few bounces, but onto which
 //! many light subpaths land.
 //!
+//! **Not y1.** Joined to the camera, y1 would be direct light, and there the power
+//! heuristic's pdfs mislead: many subpaths land on a ceiling right above a lamp, so
+//! their density beats a light sample's, but where each lands is random while a
+//! solid-angle light sample of a diffuse ceiling is nearly exact. With y1 joined the
+//! test room's error doubled (`benches/guiding/connections.py`); so light tracing starts
+//! at y2, and the camera side leaves the strategy out of direct light's weights (light
+//! sampling at the camera's first vertex, and a BSDF ray from it that finds a light).
+//!
 //! **Where it applies.** Where light subpaths are traced (the parent module), from a
 //! pinhole camera (a thin lens would need its lens sampled from each vertex), where
 //! every surface that camera rays see casts shadows and none else (the join's shadow ray
@@ -121,7 +129,9 @@ impl Tracer<'_> {
             lp.traced = true;
             self.trace_light_path(out, conn, sampler, &mut lp);
         }
-        for s in 0..lp.vertices.len() {
+        // From y2 on: y1 joined to the camera is direct light, which light sampling
+        // estimates far better than the heuristic's pdfs say (module doc).
+        for s in 1..lp.vertices.len() {
             self.to_camera(out, &lp, s, splats);
         }
         out.light_path = lp;
