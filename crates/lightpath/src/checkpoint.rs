@@ -419,7 +419,8 @@ mod tests {
         }
         assert_eq!(back.splats, None);
         // Light tracing's splat sums, as they were.
-        let splats = crate::film::splats::Splats::new(crate::film::PixelWindow::full(3, 2), 1);
+        let splats =
+            crate::film::splats::Splats::new(crate::film::PixelWindow::full(3, 2), 1, &[0]);
         splats.add(2, 1, 0, glam::Vec3A::new(0.25, -3.0, 1e-9));
         let with_splats = Snapshot {
             splats: Some(&splats),

@@ -50,7 +50,8 @@
 
 mod light_tracing;
 
-pub(super) use light_tracing::{outside_pixels, traces_to_camera};
+pub(super) use light_tracing::outside_pixels;
+pub use light_tracing::traces_to_camera;
 
 use super::direct::weight_over;
 use super::path::{PathState, Vertex};

@@ -319,7 +319,7 @@ fn render_passes(
     tracer.connect = connect::Connect::new(scene, tracer.guide.is_some());
     // Light tracing's splats (connect/light_tracing.rs).
     let splats = (tracer.connect.is_some() && connect::traces_to_camera(scene))
-        .then(|| Splats::new(win, scene.aovs.len()));
+        .then(|| Splats::new(win, scene.aovs.len(), &scene.variance_aovs));
     // Finished rows carry on only with the splats they made.
     let splats_resumed = match (&splats, &resumed_splats) {
         (Some(s), Some(units)) => s.set_units(units),

@@ -5,6 +5,7 @@
 
 use crate::error::{Error, OutputError, SettingError};
 use crate::film::Film;
+use crate::integrator::connect::LightConnections;
 use crate::limits::Limits;
 use crate::output::naming::OutputPaths;
 use crate::output::target;
@@ -40,6 +41,13 @@ pub fn film(scene: &Scene) -> Result<(), Error> {
         // Adaptive sampling: the pilot's moments (2 f64), counts, predictions, targets
         // and the max filter's rows (u32 each) per pixel.
         bytes += w * h * (16 + 4 * 4);
+    }
+    if scene.settings.light_connections == LightConnections::On
+        && crate::integrator::connect::traces_to_camera(scene)
+    {
+        // Light tracing's splat sums: an i64 per channel of each AOV and of each
+        // variance's squares (film/splats.rs).
+        bytes += w * h * (scene.aovs.len() + scene.variance_aovs.len()) as u64 * 3 * 8;
     }
     Limits::current().check_memory(
         bytes,

@@ -451,3 +451,41 @@ fn light_traced_windows_and_resumed_renders_equal_the_whole_frame() {
     assert!(resumed.finished() && resumed.splats.is_none());
     assert_eq!(resumed.film.planes, whole.planes);
 }
+
+/// With light tracing the beauty's variance (`--variance`) counts the splats too (their
+/// squares, film/splats.rs): over 16 seeds of independent samples, the spread of each
+/// pixel's mean matches the variance the renders estimated, summed over the image,
+/// within a quarter.
+#[test]
+fn light_traced_variance_estimates_the_spread_of_the_pixel_means() {
+    let text = ROOM.replace("[render]\n", "[render]\nsampler = \"independent\"\n");
+    let (res, spp, runs) = (24u32, 8u32, 16);
+    let pixels = (res * res) as usize;
+    let mut values = vec![Vec::new(); pixels];
+    let mut estimated = 0.0;
+    for seed in 1..=runs {
+        let mut s = scene_in(&text, res, true, seed, vec![]);
+        s.variance_aovs = vec![0]; // the beauty's (`--variance beauty`)
+        let film = render_spp(&s, spp, 0);
+        let squares = &film.planes[3 * film.aovs + 1];
+        for (i, v) in values.iter_mut().enumerate() {
+            let mean = film.planes[1][i] / spp as f32;
+            let mean_square = squares[i] / spp as f32;
+            estimated += lightpath::film::variance_of_mean(mean, mean_square, spp) as f64;
+            v.push(mean as f64);
+        }
+    }
+    estimated /= runs as f64;
+    let measured: f64 = values
+        .iter()
+        .map(|v| {
+            let m = v.iter().sum::<f64>() / v.len() as f64;
+            v.iter().map(|x| (x - m) * (x - m)).sum::<f64>() / (v.len() - 1) as f64
+        })
+        .sum();
+    let ratio = estimated / measured;
+    assert!(
+        (0.75..1.33).contains(&ratio),
+        "estimated {estimated}, measured {measured}: {ratio}"
+    );
+}

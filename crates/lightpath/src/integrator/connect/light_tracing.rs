@@ -46,7 +46,7 @@ use lpe::ScatterClass;
 
 /// Whether a render that traces light subpaths also joins them to the camera (module
 /// doc): a pinhole, shadows that match camera rays, no adaptive sampling.
-pub(in crate::integrator) fn traces_to_camera(scene: &crate::scene::Scene) -> bool {
+pub fn traces_to_camera(scene: &crate::scene::Scene) -> bool {
     scene.camera.aperture_radius <= 0.0
         && scene.settings.noise_threshold <= 0.0
         && scene.accel.shadows_match_camera()
