@@ -265,9 +265,9 @@ settings! {
         role: Shared,
         header: Header::Setting,
         help: "Bidirectional path tracing (Veach and Guibas): each camera sample also traces \
-               a light subpath from an area, point or spot light and joins every camera \
-               vertex to every \
-               light vertex, weighted by MIS over every way to make the path; for rooms lit \
+               a light subpath from an area, point or spot light, joins every camera \
+               vertex to every light vertex and light vertices to a pinhole camera (light \
+               tracing), weighted by MIS over every way to make the path; for rooms lit \
                by light off a ceiling or baffle or through a door (integrator/connect.rs). \
                on or off.",
     }

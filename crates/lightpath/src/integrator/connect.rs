@@ -6,17 +6,17 @@
 //! chosen by power; a point uniform in its area and a cosine-distributed direction, or a
 //! direction uniform over the sphere or the spot's outer cone; then BSDF sampling at each
 //! surface it lands on: y1, y2, …), and every scattering vertex x of the camera path is
-//! joined to every light vertex by a shadow ray. A path of n scattering vertices is then
-//! made n + 1 ways: a BSDF ray that finds the light, light sampling, and a join of a
-//! camera subpath of k ≥ 1 vertices to a light subpath of n − k; the power heuristic
-//! weighs them by their pdfs of the whole path. (Joining light vertices to the camera,
-//! light tracing, would splat across pixels, which neither farm parts nor adaptive
-//! sampling allow: that strategy is left out, and the weights sum over the others.)
+//! joined to every light vertex by a shadow ray, and every light vertex from y2 on to the
+//! camera (light tracing: light_tracing.rs). A path of n ≥ 2 scattering vertices is then
+//! made n + 2 ways: a BSDF ray that finds the light, light sampling, a join of a camera
+//! subpath of k ≥ 1 vertices to a light subpath of n − k, and the light subpath of n
+//! vertices joined to the camera; the power heuristic weighs them by their pdfs of the
+//! whole path. Direct light (n = 1) is made by the first two alone.
 //!
 //! A room lit only by light off a ceiling or a baffle is where this pays: path tracing
 //! must find the small bright patch of ceiling, and the light trapped above the baffle,
 //! with BSDF rays from every surface, while light subpaths carry that light out to
-//! where the camera's vertices are.
+//! where the camera's vertices are, and light tracing lands it on the patch itself.
 //!
 //! **The weights.** Each subpath carries two sums of pdf ratios (squared: the power
 //! heuristic), `dvcm` and `dvc` in the report's notation, updated at each vertex from
