@@ -181,10 +181,12 @@ mod tests {
         let s = Splats::new(window, 2, &[]);
         assert!(s.set_units(&a));
         s.add_to(&mut film);
-        let pixel = 3;
+        let pixel = 4; // (3, 2) in a window from (2, 1), 3 wide
         let expected: f64 = values.iter().map(|&v| v as f64).sum();
         assert!((film.planes[3][pixel] as f64 - expected).abs() < 1e-5 * expected);
-        assert!((film.planes[4][pixel] as f64 - 200e-7).abs() < 1e-9);
+        // Each splat is exact to half a unit (2⁻³³).
+        let unit = 1.0 / SCALE;
+        assert!((film.planes[4][pixel] as f64 - 200e-7).abs() <= 200.0 * 0.5 * unit);
         assert_eq!(film.planes[0].iter().sum::<f32>(), 0.0);
     }
 }
