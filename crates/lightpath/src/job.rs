@@ -638,18 +638,8 @@ impl PreparedRender {
         let interrupted = (!complete)
             .then(|| Interrupted::of(&film, &rows_done, pilot.as_ref(), &checkpoint_path));
         if interrupted.is_some() {
-            let snapshot = Snapshot {
-                film: &film,
-                rows_done: &rows_done,
-                pilot: pilot.as_ref(),
-                splats: splats.as_ref(),
-            };
-            checkpoint::write(&checkpoint_path, stamp, &snapshot).map_err(Error::Output)?;
-        }
-        // The partial picture shows what light tracing found so far, the checkpoint
-        // keeps it apart.
-        if let Some(s) = &splats {
-            s.add_to(&mut film);
+            let done = (rows_done.as_slice(), pilot.as_ref(), splats);
+            keep_interrupted(&checkpoint_path, stamp, &mut film, done)?;
         }
         let overflowed = non_finite_values(&film);
         let header = exr_header(&job, &source, &scene, metadata, &film, interrupted.as_ref());
@@ -691,6 +681,32 @@ impl PreparedRender {
             denoised,
         })
     }
+}
+
+/// Writes an interrupted render's checkpoint: its film, rows, pilot and light tracing's
+/// splats, which the film then takes (the partial picture shows what light tracing found
+/// so far; the checkpoint keeps it apart: film/splats.rs).
+fn keep_interrupted(
+    path: &std::path::Path,
+    stamp: checkpoint::Stamp,
+    film: &mut Film,
+    (rows_done, pilot, splats): (
+        &[bool],
+        Option<&crate::integrator::adaptive::Pilot>,
+        Option<crate::film::splats::Splats>,
+    ),
+) -> Result<(), Error> {
+    let snapshot = Snapshot {
+        film,
+        rows_done,
+        pilot,
+        splats: splats.as_ref(),
+    };
+    checkpoint::write(path, stamp, &snapshot).map_err(Error::Output)?;
+    if let Some(s) = &splats {
+        s.add_to(film);
+    }
+    Ok(())
 }
 
 /// A finished render's checkpoint and the interrupted render's partial images (its own
