@@ -29,12 +29,18 @@
 //! sampling's pdf at y1 depends on the shading normal there (the light tree's
 //! probabilities), so y1's `dvcm` is worked out where it is used.
 //!
-//! **Where a subpath may go.** Light subpaths stop at delta lobes, subsurface walks and
+//! **Where a subpath may go.** Light subpaths pass through a lone delta lobe (smooth
+//! glass, a mirror: `scatter_light_delta`), where nothing is joined, so light tracing
+//! makes caustics through them, even of point and spot lights, which no BSDF ray finds.
+//! They stop at the delta lobes of several-lobed materials, subsurface walks and
 //! materials regularised after a diffuse bounce (`[render] regularize`: which Bsdf the
 //! path tracer uses there depends on the camera's side of the path); such a vertex is
 //! still joined to. Camera vertices there carry no `dvc` (no strategy scatters a light
-//! subpath through them), and a delta lobe or walk clears both sums. Textures at light
-//! vertices are filtered with the light subpath's own ray cone.
+//! subpath through them), and such a delta lobe or a walk clears both sums; a lone
+//! delta lobe clears `dvcm` and keeps `dvc` (the pdfs both ways cancel). A BSDF ray
+//! that finds a light through a delta lobe is then weighted against light tracing
+//! (`Via::Hit` with `light_sampled`, routing.rs). Textures at light vertices are
+//! filtered with the light subpath's own ray cone.
 //!
 //! **Where it applies.** Scenes without media, cut-outs, holdouts, a guide, or objects
 //! that indirect rays see but shadow rays do not (the light subpath's rays and the path
@@ -180,6 +186,9 @@ pub(super) struct LightVertex {
     /// The shading normal, and whether the Bsdf only reflects (`Bsdf::reflects_only`).
     ns: Vec3A,
     reflects: bool,
+    /// Whether anything joins here: a lobe that is not delta (or a regularised material,
+    /// rough after a diffuse bounce). Smooth glass and mirrors are passed through only.
+    joinable: bool,
     /// The sums of the weights here (module doc); y1's `dvcm` depends on the normal it
     /// is shaded with and is worked out where used (`Tracer::first_dvcm`).
     dvcm: f32,
@@ -423,9 +432,15 @@ impl Tracer<'_> {
         let conn = self.connect.as_ref()?;
         let e = conn.density[li as usize];
         // After one vertex only light tracing would make the path, and it leaves direct
-        // light alone (connect/light_tracing.rs).
+        // light alone (connect/light_tracing.rs). Light sampling makes none through a
+        // delta lobe (`light_pdf` 0).
+        let sampled = if light_pdf > 0.0 {
+            sq(light_pdf / path.prev_pdf)
+        } else {
+            0.0
+        };
         (path.dvc > 0.0 && e > 0.0 && path.depth >= 2)
-            .then(|| weight_over(sq(light_pdf / path.prev_pdf) + sq(e) * path.dvc))
+            .then(|| weight_over(sampled + sq(e) * path.dvc))
     }
 
     /// Light sampling's weight at `v` for light `li` towards `wi` through lobe `k` (pdf
@@ -711,6 +726,12 @@ impl Tracer<'_> {
             beta: walk.beta,
             ns,
             reflects: bsdf.reflects_only(),
+            joinable: material.regularized.is_some()
+                || bsdf
+                    .lobes()
+                    .iter()
+                    .enumerate()
+                    .any(|(k, t)| !t.delta && bsdf.subsurface(k).is_none()),
             dvcm,
             dvc,
             light_side,
@@ -759,14 +780,21 @@ impl Tracer<'_> {
         let Some(bs) = bsdf.sample_at(&sh, at.as_ref(), u_lobe, u_dir) else {
             return false;
         };
-        if bs.delta || bsdf.subsurface(bs.lobe).is_some() || bs.pdf.is_nan() || bs.pdf <= 0.0 {
+        if bsdf.subsurface(bs.lobe).is_some() || bs.pdf.is_nan() || bs.pdf <= 0.0 {
             return false;
+        }
+        if bs.delta && !bsdf.lone_lobe() {
+            return false;
+        }
+        let cos_next = hit.ng.dot(bs.wi).abs();
+        if bs.delta {
+            let class = bsdf.lobes()[bs.lobe].scatter.class;
+            return self.scatter_light_delta(lp, walk, (j, u_rr), (&sh, &bs, class), cos_next);
         }
         let Some(seen) = self.turned(bsdf, material, &hit, y.ns, bs.wi) else {
             return false;
         };
         let (f, pdf_rev) = seen.eval(bsdf, bs.lobe, y.to_prev);
-        let cos_next = hit.ng.dot(bs.wi).abs();
         let step = f * (cos_next / (y.cos_prev * bs.pdf));
         let mut beta = walk.beta * step;
         // Roulette by the vertex's albedo from y2 on (sooner than the camera path's:
@@ -804,6 +832,62 @@ impl Tracer<'_> {
         true
     }
 
+    /// Scatters `walk` through the delta lobe `bs` sampled at `lp`'s last vertex (y_j,
+    /// shaded as `sh` from the light's side; a lone lobe: `Bsdf::lone_lobe`): Georgiev et
+    /// al.'s specular vertex, no join there and the pdfs both ways cancelling, so `dvcm`
+    /// is 0 and `dvc` takes the outgoing cosine. The throughput takes what the camera's
+    /// sample of the reverse direction weighs: the tint, without the 1/η² radiance
+    /// compression the light's side sample carries (flux is not compressed; the
+    /// compression cancels the étendue's η² between the two directions' deltas), and
+    /// the shading normal's cosines as a non-delta lobe's adjoint takes them.
+    fn scatter_light_delta(
+        &self,
+        lp: &mut LightPath,
+        walk: &mut Walk,
+        (j, u_rr): (u32, f32),
+        (sh, bs, class): (&Shading, &crate::material::BsdfSample, ScatterClass),
+        cos_next: f32,
+    ) -> bool {
+        let scene = self.scene;
+        let Some(y) = lp.vertices.last() else {
+            return false;
+        };
+        let hit = y.hit;
+        let cos_s_out = sh.frame.n.dot(bs.wi).abs();
+        if cos_s_out == 0.0 {
+            return false;
+        }
+        let step =
+            bs.weight * (bs.eta * bs.eta * sh.wo.z.abs() / cos_s_out) * (cos_next / y.cos_prev);
+        let mut beta = walk.beta * step;
+        if j >= scene.settings.rr_depth.min(2) {
+            let q = step.max_element().min(0.95);
+            if u_rr >= q || q.is_nan() {
+                return false;
+            }
+            beta /= q;
+        }
+        if !(beta.max_element() > 0.0 && beta.is_finite()) {
+            return false;
+        }
+        walk.dvc_pre = sq(cos_next) * y.dvc;
+        walk.dvcm_pre = 0.0;
+        let obj = &scene.objects[hit.object as usize];
+        if j >= 2 {
+            match class {
+                ScatterClass::Diffuse => walk.diffuse += 1,
+                _ => walk.specular += 1,
+            }
+        }
+        walk.beta = beta;
+        walk.prev_p = hit.p;
+        walk.ray = self.spawn(&hit, bs.wi, f32::INFINITY);
+        if let Some(last) = lp.vertices.last_mut() {
+            last.class_out = Some(obj.lobe_classes[bs.lobe]);
+        }
+        true
+    }
+
     /// y1's `dvcm` shaded with normal `n`: light sampling's pdf there over the light
     /// subpath's, both of y1's segment to the light.
     fn first_dvcm(&self, lp: &LightPath, n: Vec3A) -> f32 {
@@ -818,6 +902,9 @@ impl Tracer<'_> {
         let scene = self.scene;
         let a = &scene.automaton;
         let lv = &lp.vertices[s];
+        if !lv.joinable {
+            return;
+        }
         let light = &scene.lights[lp.li as usize];
         let y = &lv.hit;
         let obj = &scene.objects[y.object as usize];

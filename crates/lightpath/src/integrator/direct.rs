@@ -131,7 +131,11 @@ impl Tracer<'_> {
         reached: bool,
     ) -> f32 {
         if path.prev_delta {
-            1.0
+            // Light sampling cannot make a path through a delta lobe; a light subpath
+            // through it can (connect.rs).
+            self.found_light_weight(path, li, 0.0)
+                .filter(|_| reached)
+                .unwrap_or(1.0)
         } else if self.scene.lights[li as usize].shadow_linked {
             // Its light samples see past the objects that cast no shadow from it; a BSDF
             // ray stops at them: light sampling alone estimates it.
@@ -182,8 +186,11 @@ impl Tracer<'_> {
             };
             (light.classes.seen, 1.0, origin)
         } else {
+            let weight = self.bsdf_weight(path, li, light_pdf);
+            // Weighted where another strategy makes the path too: light sampling, or
+            // (through a delta lobe) a light subpath joined to the camera (connect.rs).
             let via = Via::Hit {
-                light_sampled: !path.prev_delta,
+                light_sampled: !path.prev_delta || weight < 1.0,
                 light_after_scatter: true,
             };
             let origin = Origin {
@@ -191,11 +198,7 @@ impl Tracer<'_> {
                 scatters: path.depth,
                 part,
             };
-            (
-                light.classes.light,
-                self.bsdf_weight(path, li, light_pdf),
-                origin,
-            )
+            (light.classes.light, weight, origin)
         };
         let s = scene.automaton.step(path.state, class);
         self.contribute(out, s, path.throughput, le, weight, origin);

@@ -505,11 +505,15 @@ impl Tracer<'_> {
         path.throughput *= bs.weight;
         path.eta_scale *= bs.eta;
         // The camera subpath's sums (connect.rs): no light subpath scatters through a
-        // delta lobe or a subsurface walk, nor is joined to one.
+        // subsurface walk or a delta lobe of several, nor is joined to one; through a
+        // lone delta lobe they scatter, but none is joined there (`dvcm` 0, and the pdfs
+        // both ways cancel in `dvc`).
         if self.connect.is_some() {
             let walks = v.bsdf.subsurface(bs.lobe).is_some();
-            (path.dvcm, path.dvc) = if bs.delta || walks {
+            (path.dvcm, path.dvc) = if walks || (bs.delta && !v.bsdf.lone_lobe()) {
                 (0.0, 0.0)
+            } else if bs.delta {
+                (0.0, v.dvc * v.hit.ng.dot(bs.wi).powi(2))
             } else {
                 self.sums_after(v, bs.lobe, bs.wi, bs.pdf)
             };

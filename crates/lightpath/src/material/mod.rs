@@ -333,6 +333,13 @@ impl Bsdf {
         }
     }
 
+    /// Whether the Bsdf is one lobe under no layer: its lobe choice is certain from either
+    /// side, so a delta sample's pdf (a dielectric's Fresnel choice, F(θi) = F(θt)) is
+    /// the same both ways (light subpaths through delta lobes, integrator/connect.rs).
+    pub fn lone_lobe(&self) -> bool {
+        self.n_lobes == 1 && self.n_layers == 0
+    }
+
     /// The colour the `U2` albedo lobe reports.
     pub fn albedo(&self) -> Vec3A {
         self.albedo

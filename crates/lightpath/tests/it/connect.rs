@@ -200,17 +200,26 @@ fn light_subpaths_through_transmission_and_regularised_glass_converge() {
     }
 }
 
-/// Light subpaths start at point and spot lights too: the room lit by a spot aimed at
-/// the ceiling above the plate and a bare bulb in a corner (no ray finds either, so a
+/// Light subpaths start at point and spot lights too: the room (without its glass ball)
+/// lit by a spot aimed at the ceiling above the plate and a bare bulb in a corner (no ray finds either, so a
 /// path ending there is made by light sampling and the joins alone): the means per
 /// bounce and per light agree with path tracing's, and the two-bounce light off the
 /// spot-lit ceiling is less noisy with the joins.
 #[test]
 fn point_and_spot_light_subpaths_converge() {
-    let start = ROOM.find("[[lights]]").unwrap();
+    // Without the glass ball: through smooth glass only light tracing makes a point
+    // light's caustic (`light_subpaths_through_smooth_glass_and_mirrors_converge`), so
+    // path tracing's mean would lack it.
+    let without_ball = ROOM.replace(
+        "[[objects]]\nname = \"ball\"\nshape = \"sphere\"\nmaterial = \"glass\"\n\
+         center = [0.4, -0.6, 0.2]\nradius = 0.35\n",
+        "",
+    );
+    assert!(!without_ball.contains("\"ball\""));
+    let start = without_ball.find("[[lights]]").unwrap();
     let lit = format!(
         "{}{}",
-        &ROOM[..start],
+        &without_ball[..start],
         "[[lights]]\ntype = \"spot\"\nname = \"spot\"\nposition = [0, 0.92, 0]\n\
          direction = [0, 1, 0]\ncone_angle = 120\ncone_softness = 30\n\
          intensity = [6, 6, 6]\n\
@@ -488,4 +497,75 @@ fn light_traced_variance_estimates_the_spread_of_the_pixel_means() {
         (0.75..1.33).contains(&ratio),
         "estimated {estimated}, measured {measured}: {ratio}"
     );
+}
+
+/// A floor under a smooth glass ball and a mirror ball, lit by a lamp above them: their
+/// caustics on the floor are made by BSDF rays from the floor that find the lamp through
+/// the balls and, with connections, by light subpaths that pass through the balls' delta
+/// lobes and are joined to the camera. The means agree with path tracing's, per bounce
+/// and for the caustics. With a bulb (a point light) instead no BSDF ray finds the light,
+/// so path tracing has no caustic at all and light tracing alone makes it.
+const CAUSTICS: &str = r#"
+[camera]
+position = [0, 0.8, 3.0]
+look_at = [0, -0.7, 0]
+fov = 40
+[render]
+max_depth = 8
+[materials.white]
+type = "diffuse"
+albedo = [0.8, 0.8, 0.8]
+[materials.glass]
+type = "dielectric"
+ior = 1.5
+[materials.mirror]
+type = "conductor"
+f0 = [0.9, 0.9, 0.9]
+roughness = 0
+[[objects]]
+name = "floor"
+shape = "quad"
+material = "white"
+corners = [[-1.5, -1, 1.5], [1.5, -1, 1.5], [1.5, -1, -1.5], [-1.5, -1, -1.5]]
+[[objects]]
+name = "ball"
+shape = "sphere"
+material = "glass"
+center = [-0.35, -0.6, 0]
+radius = 0.3
+[[objects]]
+name = "chrome"
+shape = "sphere"
+material = "mirror"
+center = [0.45, -0.75, 0.1]
+radius = 0.22
+"#;
+
+#[test]
+fn light_subpaths_through_smooth_glass_and_mirrors_converge() {
+    let lamp = |half: f32, height: f32, radiance: f32| {
+        format!(
+            "{CAUSTICS}[[lights]]\ntype = \"quad\"\nname = \"lamp\"\n\
+             radiance = [{radiance}, {radiance}, {radiance}]\nmaterial = \"white\"\n\
+             corners = [[-{half}, {height}, -{half}], [{half}, {height}, -{half}], \
+             [{half}, {height}, {half}], [-{half}, {height}, {half}]]\n"
+        )
+    };
+    let mut extra = bounces();
+    extra.push(AovSpec::new("caustic", "C<RD'floor'><.S>+<L.>"));
+    let names = ["beauty", "b1", "b2", "caustic"];
+    // A small lamp high up, whose caustics light subpaths make best, and a wide one just
+    // above the balls, which BSDF rays find as often.
+    assert_means_agree("caustics", &lamp(0.3, 0.8, 20.0), &names, extra.clone());
+    assert_means_agree("wide lamp", &lamp(1.4, 0.0, 2.0), &names, extra.clone());
+    let bulb = format!(
+        "{CAUSTICS}[[lights]]\ntype = \"point\"\nname = \"bulb\"\nposition = [0, 0.8, 0]\n\
+         intensity = [2, 2, 2]\n"
+    );
+    let caustic = |on: bool| {
+        let s = scene_in(&bulb, 32, on, 1, extra.clone());
+        image_mean(&render_spp(&s, 16, 0), index(&s, "caustic"))
+    };
+    assert_eq!(caustic(false), 0.0, "no BSDF ray finds a point light");
+    assert!(caustic(true) > 1e-3, "light tracing makes the caustic");
 }

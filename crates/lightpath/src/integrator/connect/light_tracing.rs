@@ -150,6 +150,9 @@ impl Tracer<'_> {
         let cam = &scene.camera;
         let lv = &lp.vertices[s];
         let y = &lv.hit;
+        if !lv.joinable {
+            return;
+        }
         let Some(proj) = cam.project(y.p) else {
             return;
         };
