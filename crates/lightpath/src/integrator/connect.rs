@@ -30,7 +30,7 @@
 //! probabilities), so y1's `dvcm` is worked out where it is used.
 //!
 //! **Where a subpath may go.** Light subpaths pass through a lone delta lobe (smooth
-//! glass, a mirror: `scatter_light_delta`), where nothing is joined, so light tracing
+//! glass, a mirror: `delta_step`), where nothing is joined, so light tracing
 //! makes caustics through them, even of point and spot lights, which no BSDF ray finds.
 //! They stop at the delta lobes of several-lobed materials, subsurface walks and
 //! materials regularised after a diffuse bounce (`[render] regularize`: which Bsdf the
@@ -173,6 +173,23 @@ fn sq(x: f32) -> f32 {
     x * x
 }
 
+/// The throughput's step through a lone delta lobe `bs` sampled from the light's side
+/// (`sh` shaded with `wo` towards the light; `Bsdf::lone_lobe`): what the camera's sample
+/// of the reverse direction weighs, the tint, without the 1/η² radiance compression the
+/// light's side sample carries (flux is not compressed: the compression cancels the
+/// étendue's η² between the two directions' deltas), and the shading normal's cosines as
+/// a non-delta lobe's adjoint takes them; `None` where the outgoing direction grazes.
+fn delta_step(
+    sh: &Shading,
+    bs: &crate::material::BsdfSample,
+    cos_next: f32,
+    cos_prev: f32,
+) -> Option<Vec3A> {
+    let cos_s_out = sh.frame.n.dot(bs.wi).abs();
+    (cos_s_out > 0.0)
+        .then(|| bs.weight * (bs.eta * bs.eta * sh.wo.z.abs() / cos_s_out) * (cos_next / cos_prev))
+}
+
 /// One vertex of the sample's light subpath, y_j.
 pub(super) struct LightVertex {
     hit: Hit,
@@ -242,6 +259,27 @@ pub(super) struct LightPath {
 }
 
 impl LightPath {
+    /// The automaton's state from `from` (the camera's side) through `class` (the event
+    /// of a lobe at vertex `s`), the events the subpath scattered through before `s`
+    /// back to the light, and the light's `light` event.
+    pub(super) fn state_to_light(
+        &self,
+        a: &lpe::Automaton,
+        from: lpe::StateId,
+        class: ClassId,
+        s: usize,
+        light: ClassId,
+    ) -> lpe::StateId {
+        let mut state = a.step(from, class);
+        for before in self.vertices[..s].iter().rev() {
+            if a.is_dead(state) {
+                break;
+            }
+            state = before.class_out.map_or(state, |c| a.step(state, c));
+        }
+        a.step(state, light)
+    }
+
     /// A new camera path: the subpath is traced again when first joined.
     #[inline(always)]
     pub(super) fn reset(&mut self) {
@@ -787,15 +825,30 @@ impl Tracer<'_> {
             return false;
         }
         let cos_next = hit.ng.dot(bs.wi).abs();
-        if bs.delta {
-            let class = bsdf.lobes()[bs.lobe].scatter.class;
-            return self.scatter_light_delta(lp, walk, (j, u_rr), (&sh, &bs, class), cos_next);
-        }
-        let Some(seen) = self.turned(bsdf, material, &hit, y.ns, bs.wi) else {
-            return false;
+        // The throughput's step and the sums before the next vertex.
+        let (step, dvc_pre, dvcm_pre) = if bs.delta {
+            let Some(step) = delta_step(&sh, &bs, cos_next, y.cos_prev) else {
+                return false;
+            };
+            // Georgiev et al.'s specular vertex: nothing is joined here and the pdfs
+            // both ways cancel, so `dvcm` is 0 and `dvc` takes the outgoing cosine.
+            (step, sq(cos_next) * y.dvc, 0.0)
+        } else {
+            let Some(seen) = self.turned(bsdf, material, &hit, y.ns, bs.wi) else {
+                return false;
+            };
+            let (f, pdf_rev) = seen.eval(bsdf, bs.lobe, y.to_prev);
+            let dvcm = if j == 1 {
+                self.first_dvcm(lp, seen.normal())
+            } else {
+                y.dvcm
+            };
+            (
+                f * (cos_next / (y.cos_prev * bs.pdf)),
+                sq(cos_next / bs.pdf) * (y.dvc * sq(pdf_rev) + dvcm),
+                1.0 / sq(bs.pdf),
+            )
         };
-        let (f, pdf_rev) = seen.eval(bsdf, bs.lobe, y.to_prev);
-        let step = f * (cos_next / (y.cos_prev * bs.pdf));
         let mut beta = walk.beta * step;
         // Roulette by the vertex's albedo from y2 on (sooner than the camera path's:
         // a light vertex costs a join with every camera vertex; +12 % efficiency on the
@@ -810,71 +863,10 @@ impl Tracer<'_> {
         if !(beta.max_element() > 0.0 && beta.is_finite()) {
             return false;
         }
-        let dvcm = if j == 1 {
-            self.first_dvcm(lp, seen.normal())
-        } else {
-            y.dvcm
-        };
-        walk.dvc_pre = sq(cos_next / bs.pdf) * (y.dvc * sq(pdf_rev) + dvcm);
-        walk.dvcm_pre = 1.0 / sq(bs.pdf);
+        walk.dvc_pre = dvc_pre;
+        walk.dvcm_pre = dvcm_pre;
         if j >= 2 {
             match bsdf.lobes()[bs.lobe].scatter.class {
-                ScatterClass::Diffuse => walk.diffuse += 1,
-                _ => walk.specular += 1,
-            }
-        }
-        walk.beta = beta;
-        walk.prev_p = hit.p;
-        walk.ray = self.spawn(&hit, bs.wi, f32::INFINITY);
-        if let Some(last) = lp.vertices.last_mut() {
-            last.class_out = Some(obj.lobe_classes[bs.lobe]);
-        }
-        true
-    }
-
-    /// Scatters `walk` through the delta lobe `bs` sampled at `lp`'s last vertex (y_j,
-    /// shaded as `sh` from the light's side; a lone lobe: `Bsdf::lone_lobe`): Georgiev et
-    /// al.'s specular vertex, no join there and the pdfs both ways cancelling, so `dvcm`
-    /// is 0 and `dvc` takes the outgoing cosine. The throughput takes what the camera's
-    /// sample of the reverse direction weighs: the tint, without the 1/η² radiance
-    /// compression the light's side sample carries (flux is not compressed; the
-    /// compression cancels the étendue's η² between the two directions' deltas), and
-    /// the shading normal's cosines as a non-delta lobe's adjoint takes them.
-    fn scatter_light_delta(
-        &self,
-        lp: &mut LightPath,
-        walk: &mut Walk,
-        (j, u_rr): (u32, f32),
-        (sh, bs, class): (&Shading, &crate::material::BsdfSample, ScatterClass),
-        cos_next: f32,
-    ) -> bool {
-        let scene = self.scene;
-        let Some(y) = lp.vertices.last() else {
-            return false;
-        };
-        let hit = y.hit;
-        let cos_s_out = sh.frame.n.dot(bs.wi).abs();
-        if cos_s_out == 0.0 {
-            return false;
-        }
-        let step =
-            bs.weight * (bs.eta * bs.eta * sh.wo.z.abs() / cos_s_out) * (cos_next / y.cos_prev);
-        let mut beta = walk.beta * step;
-        if j >= scene.settings.rr_depth.min(2) {
-            let q = step.max_element().min(0.95);
-            if u_rr >= q || q.is_nan() {
-                return false;
-            }
-            beta /= q;
-        }
-        if !(beta.max_element() > 0.0 && beta.is_finite()) {
-            return false;
-        }
-        walk.dvc_pre = sq(cos_next) * y.dvc;
-        walk.dvcm_pre = 0.0;
-        let obj = &scene.objects[hit.object as usize];
-        if j >= 2 {
-            match class {
                 ScatterClass::Diffuse => walk.diffuse += 1,
                 _ => walk.specular += 1,
             }
@@ -976,14 +968,7 @@ impl Tracer<'_> {
                 if self.over_depth(path, lv, diffuse_i, at_y) {
                     continue;
                 }
-                let mut state = a.step(s_i, obj.lobe_classes[j]);
-                for before in lp.vertices[..s].iter().rev() {
-                    if a.is_dead(state) {
-                        break;
-                    }
-                    state = before.class_out.map_or(state, |c| a.step(state, c));
-                }
-                let s_l = a.step(state, light.classes.light);
+                let s_l = lp.state_to_light(a, s_i, obj.lobe_classes[j], s, light.classes.light);
                 if a.accepting(s_l).is_empty() {
                     continue;
                 }

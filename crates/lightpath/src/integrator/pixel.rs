@@ -41,13 +41,7 @@ impl Tracer<'_> {
         let index = job.y as u64 * self.scene.camera.width as u64 + job.x as u64;
         match settings.sampler {
             SamplerKind::Sobol => {
-                let mut pixel = match out.sobol.take() {
-                    Some(mut pixel) => {
-                        pixel.reset(self.seed, index);
-                        pixel
-                    }
-                    None => Box::new(SobolPixel::new(self.seed, index)),
-                };
+                let mut pixel = self.sobol_pixel(out, index);
                 let held = self.pixel_samples(job, out, &mut *pixel);
                 out.sobol = Some(pixel);
                 held
@@ -55,6 +49,18 @@ impl Tracer<'_> {
             SamplerKind::Independent => {
                 self.pixel_samples(job, out, &mut IndependentPixel::new(self.seed, index))
             }
+        }
+    }
+
+    /// The Sobol sampler of frame pixel `index`: the worker's, made over (`Sink::sobol`),
+    /// or a new one.
+    fn sobol_pixel(&self, out: &mut Sink, index: u64) -> Box<SobolPixel> {
+        match out.sobol.take() {
+            Some(mut pixel) => {
+                pixel.reset(self.seed, index);
+                pixel
+            }
+            None => Box::new(SobolPixel::new(self.seed, index)),
         }
     }
 
@@ -71,13 +77,7 @@ impl Tracer<'_> {
         let index = y as u64 * self.scene.camera.width as u64 + x as u64;
         match self.scene.settings.sampler {
             SamplerKind::Sobol => {
-                let mut pixel = match out.sobol.take() {
-                    Some(mut pixel) => {
-                        pixel.reset(self.seed, index);
-                        pixel
-                    }
-                    None => Box::new(SobolPixel::new(self.seed, index)),
-                };
+                let mut pixel = self.sobol_pixel(out, index);
                 for s in samples {
                     out.light_path.reset();
                     self.splat(out, &mut pixel.sample(s as u64));

@@ -199,14 +199,8 @@ impl Tracer<'_> {
             {
                 continue;
             }
-            let mut state = a.step(camera_state, obj.lobe_classes[j]);
-            for before in lp.vertices[..s].iter().rev() {
-                if a.is_dead(state) {
-                    break;
-                }
-                state = before.class_out.map_or(state, |c| a.step(state, c));
-            }
-            let s_l = a.step(state, light.classes.light);
+            let s_l =
+                lp.state_to_light(a, camera_state, obj.lobe_classes[j], s, light.classes.light);
             if a.accepting(s_l).is_empty() {
                 continue;
             }
