@@ -110,7 +110,12 @@ impl Tracer<'_> {
             let offset = scene.filter.offset(u_filter);
             let film_pos = Vec2::new(job.x as f32 + 0.5, job.y as f32 + 0.5) + offset;
             let ray = cam.ray(film_pos, u_lens);
-            let film_pdf = scene.filter.pdf(offset);
+            // The filter's density of the offset: only light tracing's weights use it.
+            let film_pdf = if self.splats.is_some() {
+                scene.filter.pdf(offset)
+            } else {
+                0.0
+            };
             let alpha = self.trace(ray, film_pdf, &mut sampler, out);
             (job.after_sample)(out);
             if let Some(m) = &mut moments {

@@ -11,8 +11,9 @@ use lpe::{Prefix, StateId};
 /// How a contribution reached the camera: decides what prefixed AOVs receive.
 #[derive(Clone, Copy, Debug)]
 pub(super) enum Via {
-    /// Emission found by a ray. `light_sampled`: light sampling covers it too (so it
-    /// carries an MIS weight); `light_after_scatter`: a light reached after a scatter,
+    /// Emission found by a ray. `light_sampled`: another strategy covers it too, so it
+    /// carries an MIS weight (light sampling; or, through a delta lobe, a light subpath
+    /// joined to the camera: connect.rs); `light_after_scatter`: a light reached after a scatter,
     /// which `unoccluded` and `shadows` AOVs take from the lights-only test instead.
     Hit {
         light_sampled: bool,

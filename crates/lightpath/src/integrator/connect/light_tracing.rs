@@ -251,6 +251,9 @@ impl Tracer<'_> {
         let last = |c: f32, n: u32| ((c - 0.5 + r).floor().max(-1.0) as i64).min(n as i64 - 1);
         let (x0, x1) = (first(f.x), last(f.x, cam.width));
         let (y0, y1) = (first(f.y), last(f.y, cam.height));
+        // The routing adds to `out.acc`: for the splats it holds the splat accumulator's
+        // buffers, drained into the splat film after each pixel.
+        std::mem::swap(out.acc, &mut out.splat_acc);
         for qy in y0 as i64..=y1 {
             for qx in x0 as i64..=x1 {
                 let centre = glam::Vec2::new(qx as f32 + 0.5, qy as f32 + 0.5);
@@ -259,13 +262,11 @@ impl Tracer<'_> {
                     continue;
                 }
                 let weight = 1.0 / (1.0 + w_per_density * sq(density));
-                std::mem::swap(out.acc, &mut out.splat_acc);
                 self.contribute(out, state, Vec3A::ONE, value * density, weight, origin);
-                std::mem::swap(out.acc, &mut out.splat_acc);
-                out.splat_acc
-                    .drain(|k, v| splats.add(qx as u32, qy as u32, k, v));
+                out.acc.drain(|k, v| splats.add(qx as u32, qy as u32, k, v));
             }
         }
+        std::mem::swap(out.acc, &mut out.splat_acc);
     }
 
     /// Whether the camera sees `y` along `dir` (from the camera) at `dist`: one shadow
