@@ -2,7 +2,7 @@
 efficiency of a render with it over one without, on the scenes docs/performance.md,
 "Bidirectional path tracing", reports (and "Light-vertex connections" before it).
 
-    python3 benches/guiding/connections.py LIGHTPATH_BINARY OUT_DIR [--seeds 3]
+    python3 benches/guiding/connections.py LIGHTPATH_BINARY OUT_DIR [--seeds 3] [--scenes a,b]
 
 For each scene, each seed and each setting (alternating), one render at the scene's own
 spp on 2 threads; its CPU seconds (the whole process) and its MSE against a reference:
@@ -34,6 +34,10 @@ SCENES = [
     # Held out: point and spot lights' subpaths (two hidden uplights, a bulb behind a screen).
     ("uplights", f"{HERE}/uplights.toml", None, []),
     ("indirect_box", f"{HERE}/indirect_box.toml", f"{HERE}/out/indirect_box_ref.exr", []),
+    # Distant lights' subpaths: a room lit by the sun through a window, and (held out) a
+    # hall lit through a roof slot by a one-direction sun.
+    ("sunroom", f"{HERE}/sunroom.toml", None, []),
+    ("skylight", f"{HERE}/skylight.toml", None, []),
     ("cornell-classic", f"{ROOT}/scenes/cornell-classic.toml",
      f"{ROOT}/benches/peer/ref/cornell_ref.exr", ["--spp", "64"]),
 ]
@@ -54,11 +58,15 @@ def main():
     ap.add_argument("binary")
     ap.add_argument("out_dir")
     ap.add_argument("--seeds", type=int, default=3)
+    ap.add_argument("--scenes", help="comma-separated names (default: all)")
     args = ap.parse_args()
+    wanted = set(args.scenes.split(",")) if args.scenes else None
     os.makedirs(args.out_dir, exist_ok=True)
     print("| scene | CPU s off / on | MSE off / on | efficiency, on ÷ off |")
     print("|---|---|---|---:|")
     for name, scene, ref, extra in SCENES:
+        if wanted is not None and name not in wanted:
+            continue
         if ref is None:
             ref = f"{args.out_dir}/{name}_ref.exr"
             if not os.path.exists(ref):

@@ -46,13 +46,19 @@
 //! that indirect rays see but shadow rays do not (the light subpath's rays and the path
 //! tracer's shadow rays must find the same surfaces): `Connect::new` returns `None`
 //! otherwise and the render is path tracing's alone. Lights that emit subpaths: the
-//! declared triangle lights (rect, quad, disk), point and spot lights, that are not
-//! shadow-linked; the others keep two-way weights, as no subpath starts on them (their
-//! `density` is 0). Point and spot lights are Georgiev et al.'s delta lights: no ray
-//! finds them, so y1 carries no `dvc`, light sampling's density of such a light is 1 in
-//! its own measure (over a subpath's area density at y1 the squared distance stays:
-//! `light_pdf_at`, and `light_sample_weight`'s `dist`), and a light sample's weight has
-//! no BSDF term.
+//! declared triangle lights (rect, quad, disk), point, spot and distant lights, that are
+//! not shadow-linked; the others (sphere, cylinder, dome) keep two-way weights, as no
+//! subpath starts on them (their `density` is 0). Point and spot lights are Georgiev et
+//! al.'s delta lights: no ray finds them, so y1 carries no `dvc`, light sampling's
+//! density of such a light is 1 in its own measure (over a subpath's area density at y1
+//! the squared distance stays: `light_pdf_at`, and `light_sample_weight`'s `dist`), and
+//! a light sample's weight has no BSDF term. A distant light's subpath starts as the
+//! report's companion code (SmallVCM) starts a background light's: a direction as its
+//! light sample picks one, and a point uniform on a disc round the scene (`Connect::disc`)
+//! facing it, so its density is over the disc's area and the direction's solid angle, and
+//! no distance converts either pdf at y1 (`LightPath::at_infinity`); one without a disc
+//! (one direction) is delta as a point is, and BSDF rays that leave the scene find one
+//! with a disc.
 
 mod light_tracing;
 
@@ -68,8 +74,8 @@ use crate::light::LightShape;
 use crate::material::{AtWo, Bsdf, Shading};
 use crate::sampler::Sampler;
 use crate::sampling::{
-    cosine_hemisphere, uniform_cone, uniform_cone_pdf, uniform_sphere, uniform_triangle,
-    Distribution1D, Frame,
+    cosine_hemisphere, square_to_disk, uniform_cone, uniform_cone_pdf, uniform_sphere,
+    uniform_triangle, Distribution1D, Frame,
 };
 use crate::scene::{Material, Scene};
 use glam::{Vec2, Vec3A};
@@ -114,6 +120,9 @@ pub(super) struct Connect {
     /// emitting sides, or over the solid angle a point or spot light emits into (the
     /// connection's pdf, module doc); 0 where no subpath starts.
     pub density: Vec<f32>,
+    /// The disc distant lights' subpaths start on: the centre and radius of a sphere
+    /// round the scene, the disc facing the light through its centre.
+    disc: (Vec3A, f32),
 }
 
 impl Connect {
@@ -130,6 +139,12 @@ impl Connect {
         }
         // Each light's index, power, and the measure its start is uniform in (module
         // doc): area × π × emitting sides, or the solid angle a point or spot emits into.
+        let (lo, hi) = scene.accel.bounds();
+        let disc = if lo.x.is_finite() {
+            (0.5 * (lo + hi), scene.scene_radius)
+        } else {
+            (Vec3A::ZERO, scene.scene_radius)
+        };
         let mut chosen = Vec::new();
         for (li, light) in scene.lights[..scene.first_glow_light as usize]
             .iter()
@@ -141,6 +156,14 @@ impl Connect {
                 }
                 LightShape::Point(_) => 4.0 * PI,
                 LightShape::Spot(s) => 1.0 / uniform_cone_pdf(s.cos_outer),
+                // The disc's area times the solid angle of directions (uniform over the
+                // light's cone: its light sample's pdf; 1 for one direction).
+                LightShape::Distant(_) => {
+                    let Some(ls) = light.sample(disc.0, Vec3A::ZERO, Vec2::splat(0.5), &[]) else {
+                        continue;
+                    };
+                    PI * sq(disc.1) / ls.pdf
+                }
                 _ => continue,
             };
             let p = light.power(scene.scene_radius);
@@ -163,6 +186,7 @@ impl Connect {
             lights,
             choice,
             density,
+            disc,
         })
     }
 }
@@ -248,8 +272,12 @@ pub(super) struct LightPath {
     /// `Connect::density` of the light.
     light_ng: Vec3A,
     density: f32,
-    /// Whether the light is a point (a point or spot light: no ray finds it).
+    /// Whether the light is a point or one direction (a point, spot or distant light
+    /// without a disc: no ray finds it).
     delta: bool,
+    /// Whether the light is at infinity (a distant light): its light samples' pdfs are
+    /// of directions alone, with no distance to convert them by.
+    at_infinity: bool,
     vertices: Vec<LightVertex>,
     textured: Vec<(Bsdf, Vec3A)>,
     /// Light sampling's pdf at y1 for the start (selection included), by shading normal:
@@ -499,9 +527,11 @@ impl Tracer<'_> {
             return None;
         }
         let cos_x = v.hit.ng.dot(wi).abs();
-        // A point's sample: density 1 in its own measure, and no BSDF ray finds it.
+        // A point's sample: density 1 in its own measure, and no BSDF ray finds it; one
+        // direction's the same, with no distance to convert by.
         let (light_pdf, bsdf_ratio) = match dist {
-            Some(d) => (light_pdf * d * d, 0.0),
+            Some(d) if d.is_finite() => (light_pdf * d * d, 0.0),
+            Some(_) => (light_pdf, 0.0),
             None => (light_pdf, sq(lobe_pdf / light_pdf)),
         };
         let w_camera = sq(e * cos_x / light_pdf) * camera.sum(v.bsdf, k, -v.dir);
@@ -608,6 +638,7 @@ impl Tracer<'_> {
             LightShape::Point(_) | LightShape::Spot(_) => {
                 return self.point_start(conn, lp, li, u_dir);
             }
+            LightShape::Distant(_) => return self.distant_start(conn, lp, li, u_point, u_dir),
             _ => return None,
         };
         let (p0, n) = point_on(t, scene.accel.prims(), u_point)?;
@@ -634,6 +665,7 @@ impl Tracer<'_> {
         lp.light_ng = n;
         lp.density = conn.density[li as usize];
         lp.delta = false;
+        lp.at_infinity = false;
         // pdf_area = 1 / area, pdf_dir = cos θ0 / (π · sides): the cosines cancel.
         let sides = if t.two_sided { 2.0 } else { 1.0 };
         Some(Walk {
@@ -682,6 +714,7 @@ impl Tracer<'_> {
         lp.light_ng = Vec3A::ZERO;
         lp.density = conn.density[li as usize];
         lp.delta = true;
+        lp.at_infinity = false;
         Some(Walk {
             ray: Ray {
                 origin: p0,
@@ -690,6 +723,52 @@ impl Tracer<'_> {
             },
             prev_p: p0,
             beta: intensity / lp.density,
+            dvcm_pre: 0.0,
+            dvc_pre: 0.0,
+            travelled: 0.0,
+            diffuse: 0,
+            specular: 0,
+        })
+    }
+
+    /// The start from distant light `li`: a direction as its light sample picks one
+    /// (uniform over its disc's cone, or its one direction), and a point uniform on the
+    /// disc of `Connect::disc` facing it, outside the scene; the radiance over the
+    /// start's density (`Connect::density`: the choice over the disc's area and the
+    /// cone's solid angle), as Georgiev et al.'s SmallVCM starts a background light's
+    /// subpath.
+    fn distant_start(
+        &self,
+        conn: &Connect,
+        lp: &mut LightPath,
+        li: u32,
+        u_point: Vec2,
+        u_dir: Vec2,
+    ) -> Option<Walk> {
+        let light = &self.scene.lights[li as usize];
+        let (center, radius) = conn.disc;
+        let ls = light.sample(center, Vec3A::ZERO, u_dir, &[])?;
+        if ls.radiance == Vec3A::ZERO || !(ls.pdf > 0.0) {
+            return None;
+        }
+        let dir = -ls.wi;
+        let d = square_to_disk(u_point);
+        let frame = Frame::new(dir);
+        let p0 = center - dir * (radius * 1.01 + self.scene.epsilon)
+            + (frame.s * d.x + frame.t * d.y) * radius;
+        lp.li = li;
+        lp.light_ng = Vec3A::ZERO;
+        lp.density = conn.density[li as usize];
+        lp.delta = ls.delta;
+        lp.at_infinity = true;
+        Some(Walk {
+            ray: Ray {
+                origin: p0,
+                dir,
+                tmax: f32::INFINITY,
+            },
+            prev_p: p0,
+            beta: ls.radiance / lp.density,
             dvcm_pre: 0.0,
             dvc_pre: 0.0,
             travelled: 0.0,
@@ -719,12 +798,21 @@ impl Tracer<'_> {
         if !(dist > 0.0 && dist.is_finite()) {
             return false;
         }
-        let to_prev = back / dist;
+        // From a distant light: exactly its sampled direction (its pdf is that of a
+        // direction in its disc), and no distance (its rays are parallel: no cone).
+        let from_infinity = j == 1 && lp.at_infinity;
+        let to_prev = if from_infinity {
+            -walk.ray.dir
+        } else {
+            back / dist
+        };
         let cos_prev = hit.ng.dot(to_prev).abs();
         if cos_prev == 0.0 {
             return false;
         }
-        walk.travelled += dist;
+        if !from_infinity {
+            walk.travelled += dist;
+        }
         let (dvcm, dvc) = if j == 1 {
             // dvcm: `first_dvcm`; dvc: the BSDF ray from y1 that finds the light (none
             // finds a point).
@@ -1072,8 +1160,16 @@ impl Tracer<'_> {
         let light = &scene.lights[lp.li as usize];
         let select = scene.light_select.pmf(lp.li as usize, y1.hit.p, n);
         // A point's light sample has density 1 in its own measure: over the subpath's
-        // area density at y1 the squared distance stays (module doc).
-        let pdf = if lp.delta {
+        // area density at y1 the squared distance stays (module doc). A distant light's
+        // is of directions, as its subpath's start is over the disc: no distance.
+        let pdf = if lp.at_infinity {
+            select
+                * if lp.delta {
+                    1.0
+                } else {
+                    light.pdf_hit(y1.hit.p, n, y1.to_prev, f32::INFINITY, Vec3A::ZERO)
+                }
+        } else if lp.delta {
             select * sq(y1.dist_prev)
         } else {
             select * light.pdf_hit(y1.hit.p, n, y1.to_prev, y1.dist_prev, lp.light_ng)
