@@ -748,7 +748,7 @@ impl Tracer<'_> {
         let light = &self.scene.lights[li as usize];
         let (center, radius) = conn.disc;
         let ls = light.sample(center, Vec3A::ZERO, u_dir, &[])?;
-        if ls.radiance == Vec3A::ZERO || !(ls.pdf > 0.0) {
+        if ls.radiance == Vec3A::ZERO || ls.pdf.is_nan() || ls.pdf <= 0.0 {
             return None;
         }
         let dir = -ls.wi;
