@@ -154,6 +154,7 @@ impl Connect {
                 LightShape::Triangles(t) if light.object.is_some() => {
                     t.area * PI * if t.two_sided { 2.0 } else { 1.0 }
                 }
+                LightShape::Sphere(s) if light.object.is_some() => 4.0 * PI * sq(s.radius) * PI,
                 LightShape::Point(_) => 4.0 * PI,
                 LightShape::Spot(s) => 1.0 / uniform_cone_pdf(s.cos_outer),
                 // The disc's area times the solid angle of directions (uniform over the
@@ -633,16 +634,24 @@ impl Tracer<'_> {
         let (k, pmf, _) = conn.choice.sample(u_choice);
         let li = conn.lights[k];
         let light = &scene.lights[li as usize];
-        let t = match &light.shape {
-            LightShape::Triangles(t) => t,
+        // A point uniform in the light's area, its normal, whether both sides emit, and
+        // the area.
+        let (p0, n, two_sided, area) = match &light.shape {
+            LightShape::Triangles(t) => {
+                let (p0, n) = point_on(t, scene.accel.prims(), u_point)?;
+                (p0, n, t.two_sided, t.area)
+            }
+            LightShape::Sphere(s) => {
+                let n = uniform_sphere(u_point);
+                (s.center + n * s.radius, n, false, 4.0 * PI * sq(s.radius))
+            }
             LightShape::Point(_) | LightShape::Spot(_) => {
                 return self.point_start(conn, lp, li, u_dir);
             }
             LightShape::Distant(_) => return self.distant_start(conn, lp, li, u_point, u_dir),
             _ => return None,
         };
-        let (p0, n) = point_on(t, scene.accel.prims(), u_point)?;
-        let (side, u_dir) = if t.two_sided {
+        let (side, u_dir) = if two_sided {
             if u_dir.x < 0.5 {
                 (1.0, Vec2::new(u_dir.x * 2.0, u_dir.y))
             } else {
@@ -667,7 +676,7 @@ impl Tracer<'_> {
         lp.delta = false;
         lp.at_infinity = false;
         // pdf_area = 1 / area, pdf_dir = cos θ0 / (π · sides): the cosines cancel.
-        let sides = if t.two_sided { 2.0 } else { 1.0 };
+        let sides = if two_sided { 2.0 } else { 1.0 };
         Some(Walk {
             ray: Ray {
                 origin: p0 + ns * scene.epsilon,
@@ -675,7 +684,7 @@ impl Tracer<'_> {
                 tmax: f32::INFINITY,
             },
             prev_p: p0,
-            beta: le * (t.area * PI * sides / pmf),
+            beta: le * (area * PI * sides / pmf),
             dvcm_pre: 0.0,
             dvc_pre: 0.0,
             travelled: 0.0,
