@@ -46,19 +46,19 @@
 //! that indirect rays see but shadow rays do not (the light subpath's rays and the path
 //! tracer's shadow rays must find the same surfaces): `Connect::new` returns `None`
 //! otherwise and the render is path tracing's alone. Lights that emit subpaths: the
-//! declared triangle lights (rect, quad, disk), point, spot and distant lights, that are
-//! not shadow-linked; the others (sphere, cylinder, dome) keep two-way weights, as no
-//! subpath starts on them (their `density` is 0). Point and spot lights are Georgiev et
+//! declared triangle lights (rect, quad, disk), sphere, point, spot and distant lights
+//! and domes, that are not shadow-linked; the others (cylinders, glowing objects) keep
+//! two-way weights, as no subpath starts on them (their `density` is 0). Point and spot lights are Georgiev et
 //! al.'s delta lights: no ray finds them, so y1 carries no `dvc`, light sampling's
 //! density of such a light is 1 in its own measure (over a subpath's area density at y1
 //! the squared distance stays: `light_pdf_at`, and `light_sample_weight`'s `dist`), and
-//! a light sample's weight has no BSDF term. A distant light's subpath starts as the
-//! report's companion code (SmallVCM) starts a background light's: a direction as its
-//! light sample picks one, and a point uniform on a disc round the scene (`Connect::disc`)
-//! facing it, so its density is over the disc's area and the direction's solid angle, and
-//! no distance converts either pdf at y1 (`LightPath::at_infinity`); one without a disc
-//! (one direction) is delta as a point is, and BSDF rays that leave the scene find one
-//! with a disc.
+//! a light sample's weight has no BSDF term. A distant light's or a dome's subpath
+//! starts as the report's companion code (SmallVCM) starts a background light's: a
+//! direction as its light sample picks one, and a point uniform on a disc round the scene
+//! (`Connect::disc`) facing it, so its density is over the disc's area times the
+//! direction's pdf (`direction_pdf`: a dome's map varies it), and no distance converts
+//! either pdf at y1 (`LightPath::at_infinity`); a distant light without a disc (one
+//! direction) is delta as a point is, and BSDF rays that leave the scene find the others.
 
 mod light_tracing;
 
@@ -118,8 +118,12 @@ pub(super) struct Connect {
     choice: Distribution1D,
     /// Per light of the scene: its choice's probability over its area, π and its
     /// emitting sides, or over the solid angle a point or spot light emits into (the
-    /// connection's pdf, module doc); 0 where no subpath starts.
+    /// connection's pdf, module doc); 0 where no subpath starts. For a light at infinity
+    /// (`at_infinity`), over the disc's area alone: a start's density is that times the
+    /// light's pdf of its direction (`direction_pdf`), which a dome's map varies.
     pub density: Vec<f32>,
+    /// Per light of the scene: whether it is at infinity (a distant light or a dome).
+    at_infinity: Vec<bool>,
     /// The disc distant lights' subpaths start on: the centre and radius of a sphere
     /// round the scene, the disc facing the light through its centre.
     disc: (Vec3A, f32),
@@ -157,14 +161,8 @@ impl Connect {
                 LightShape::Sphere(s) if light.object.is_some() => 4.0 * PI * sq(s.radius) * PI,
                 LightShape::Point(_) => 4.0 * PI,
                 LightShape::Spot(s) => 1.0 / uniform_cone_pdf(s.cos_outer),
-                // The disc's area times the solid angle of directions (uniform over the
-                // light's cone: its light sample's pdf; 1 for one direction).
-                LightShape::Distant(_) => {
-                    let Some(ls) = light.sample(disc.0, Vec3A::ZERO, Vec2::splat(0.5), &[]) else {
-                        continue;
-                    };
-                    PI * sq(disc.1) / ls.pdf
-                }
+                // The disc's area; the direction's pdf is the light's (`direction_pdf`).
+                LightShape::Distant(_) | LightShape::Dome(_) => PI * sq(disc.1),
                 _ => continue,
             };
             let p = light.power(scene.scene_radius);
@@ -182,11 +180,17 @@ impl Connect {
         for (k, &(li, _, spread)) in chosen.iter().enumerate() {
             density[li as usize] = choice.pmf(k) / spread;
         }
+        let at_infinity = scene
+            .lights
+            .iter()
+            .map(|l| matches!(l.shape, LightShape::Distant(_) | LightShape::Dome(_)))
+            .collect();
         let lights = chosen.iter().map(|c| c.0).collect();
         Some(Connect {
             lights,
             choice,
             density,
+            at_infinity,
             disc,
         })
     }
@@ -196,6 +200,17 @@ impl Connect {
 #[inline(always)]
 fn sq(x: f32) -> f32 {
     x * x
+}
+
+/// A light at infinity's pdf of direction `wi` (towards it) as its light sample picks
+/// directions: 1 for one direction (delta).
+#[inline]
+fn direction_pdf(light: &crate::light::Light, wi: Vec3A) -> f32 {
+    if light.is_delta() {
+        1.0
+    } else {
+        light.pdf_hit(Vec3A::ZERO, Vec3A::ZERO, wi, f32::INFINITY, Vec3A::ZERO)
+    }
 }
 
 /// The throughput's step through a lone delta lobe `bs` sampled from the light's side
@@ -495,9 +510,13 @@ impl Tracer<'_> {
         path: &PathState,
         li: u32,
         light_pdf: f32,
+        direction_pdf: impl FnOnce() -> f32,
     ) -> Option<f32> {
         let conn = self.connect.as_ref()?;
-        let e = conn.density[li as usize];
+        let mut e = conn.density[li as usize];
+        if conn.at_infinity[li as usize] && e > 0.0 {
+            e *= direction_pdf();
+        }
         // After one vertex only light tracing would make the path, and it leaves direct
         // light alone (connect/light_tracing.rs). Light sampling makes none through a
         // delta lobe (`light_pdf` 0).
@@ -523,9 +542,12 @@ impl Tracer<'_> {
         (k, lobe_pdf): (usize, f32),
     ) -> Option<f32> {
         let conn = self.connect.as_ref()?;
-        let e = conn.density[li as usize];
+        let mut e = conn.density[li as usize];
         if e == 0.0 || v.bsdf.subsurface(k).is_some() {
             return None;
+        }
+        if conn.at_infinity[li as usize] {
+            e *= direction_pdf(&self.scene.lights[li as usize], wi);
         }
         let cos_x = v.hit.ng.dot(wi).abs();
         // A point's sample: density 1 in its own measure, and no BSDF ray finds it; one
@@ -648,7 +670,9 @@ impl Tracer<'_> {
             LightShape::Point(_) | LightShape::Spot(_) => {
                 return self.point_start(conn, lp, li, u_dir);
             }
-            LightShape::Distant(_) => return self.distant_start(conn, lp, li, u_point, u_dir),
+            LightShape::Distant(_) | LightShape::Dome(_) => {
+                return self.infinite_start(conn, lp, li, u_point, u_dir);
+            }
             _ => return None,
         };
         let (side, u_dir) = if two_sided {
@@ -740,13 +764,13 @@ impl Tracer<'_> {
         })
     }
 
-    /// The start from distant light `li`: a direction as its light sample picks one
-    /// (uniform over its disc's cone, or its one direction), and a point uniform on the
-    /// disc of `Connect::disc` facing it, outside the scene; the radiance over the
-    /// start's density (`Connect::density`: the choice over the disc's area and the
-    /// cone's solid angle), as Georgiev et al.'s SmallVCM starts a background light's
-    /// subpath.
-    fn distant_start(
+    /// The start from distant light or dome `li`: a direction as its light sample picks
+    /// one (uniform over a distant light's disc, or its one direction; by a dome's map),
+    /// and a point uniform on the disc of `Connect::disc` facing it, outside the scene;
+    /// the radiance over the start's density (`Connect::density`: the choice over the
+    /// disc's area, times the direction's pdf), as Georgiev et al.'s SmallVCM starts a
+    /// background light's subpath.
+    fn infinite_start(
         &self,
         conn: &Connect,
         lp: &mut LightPath,
@@ -767,7 +791,7 @@ impl Tracer<'_> {
             + (frame.s * d.x + frame.t * d.y) * radius;
         lp.li = li;
         lp.light_ng = Vec3A::ZERO;
-        lp.density = conn.density[li as usize];
+        lp.density = conn.density[li as usize] * ls.pdf;
         lp.delta = ls.delta;
         lp.at_infinity = true;
         Some(Walk {
@@ -1172,12 +1196,7 @@ impl Tracer<'_> {
         // area density at y1 the squared distance stays (module doc). A distant light's
         // is of directions, as its subpath's start is over the disc: no distance.
         let pdf = if lp.at_infinity {
-            select
-                * if lp.delta {
-                    1.0
-                } else {
-                    light.pdf_hit(y1.hit.p, n, y1.to_prev, f32::INFINITY, Vec3A::ZERO)
-                }
+            select * direction_pdf(light, y1.to_prev)
         } else if lp.delta {
             select * sq(y1.dist_prev)
         } else {

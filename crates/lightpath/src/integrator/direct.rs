@@ -133,7 +133,8 @@ impl Tracer<'_> {
         if path.prev_delta {
             // Light sampling cannot make a path through a delta lobe; a light subpath
             // through it can (connect.rs).
-            self.found_light_weight(path, li, 0.0)
+            let light = &self.scene.lights[li as usize];
+            self.found_light_weight(path, li, 0.0, || light_pdf(light))
                 .filter(|_| reached)
                 .unwrap_or(1.0)
         } else if self.scene.lights[li as usize].shadow_linked {
@@ -142,14 +143,15 @@ impl Tracer<'_> {
             0.0
         } else {
             let scene = self.scene;
+            let direction_pdf = light_pdf(&scene.lights[li as usize]);
             let light_pdf = scene
                 .light_select
                 .pmf(li as usize, path.prev_p, path.prev_n)
                 * path.prev_light_samples
-                * light_pdf(&scene.lights[li as usize]);
+                * direction_pdf;
             // With light subpaths that make the same path (connect.rs): never a blocked one.
             match self
-                .found_light_weight(path, li, light_pdf)
+                .found_light_weight(path, li, light_pdf, || direction_pdf)
                 .filter(|_| reached)
             {
                 Some(w) => w,

@@ -5,7 +5,7 @@
 //! renders stay deterministic across thread counts and sample ranges, and scenes the
 //! strategy does not apply to render exactly as without it.
 
-use crate::common::{assert_sums_to_beauty, image_mean, index, mean_and_se, render_spp};
+use crate::common::{assert_sums_to_beauty, image_mean, index, mean_and_se, render_spp, Scratch};
 use lightpath::aov::{self, AovSpec};
 use lightpath::integrator::connect::LightConnections;
 use lightpath::{Scene, Source};
@@ -292,6 +292,53 @@ fn distant_light_subpaths_converge() {
     // Measured 0.41.
     assert!(
         spread(&joined) < 0.7 * spread(&plain),
+        "two bounces' standard error with connections {} against {}",
+        spread(&joined),
+        spread(&plain)
+    );
+}
+
+/// A dome starts subpaths as a distant light does, its direction drawn by its map (so
+/// the start's density varies with it): the room lit through its open sides by a sky
+/// map with a bright patch agrees per bounce with path tracing, and light after two
+/// bounces is less noisy with the joins.
+#[test]
+fn dome_light_subpaths_converge() {
+    let scratch = Scratch::new("connect-dome");
+    let (w, h) = (32usize, 16usize);
+    // Dim blue overhead, a bright patch low in the sky towards +x (through the open side).
+    let texel = |x: usize, y: usize, c: usize| -> f32 {
+        let patch = (20..23).contains(&x) && (6..8).contains(&y);
+        let base = [0.3, 0.4, 0.6][c] * (1.0 - y as f32 / h as f32 * 0.5);
+        if patch {
+            40.0
+        } else {
+            base
+        }
+    };
+    let planes = ["R", "G", "B", "A"].map(|name| {
+        let c = ["R", "G", "B", "A"]
+            .iter()
+            .position(|n| *n == name)
+            .unwrap();
+        let values = (0..w * h)
+            .map(|i| if c == 3 { 1.0 } else { texel(i % w, i / w, c) })
+            .collect();
+        (name.to_string(), values)
+    });
+    let map = scratch.join("sky.exr");
+    lightpath::output::write_channels(&map, w, h, planes.to_vec(), &[], Default::default())
+        .unwrap();
+    let lit = room_lit_by(&format!(
+        "[[lights]]\ntype = \"dome\"\nname = \"sky\"\nmap = {:?}\ncamera_visible = false\n",
+        map.to_str().unwrap()
+    ));
+    let names = ["beauty", "b1", "b2", "b3"];
+    let (plain, joined) = assert_means_agree("dome", &lit, &names, bounces());
+    let spread = |runs: &[Vec<f64>]| mean_and_se(&runs.iter().map(|r| r[2]).collect::<Vec<_>>()).1;
+    // Measured 0.55.
+    assert!(
+        spread(&joined) < 0.85 * spread(&plain),
         "two bounces' standard error with connections {} against {}",
         spread(&joined),
         spread(&plain)
