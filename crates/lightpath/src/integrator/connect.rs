@@ -47,7 +47,8 @@
 //! tracer's shadow rays must find the same surfaces): `Connect::new` returns `None`
 //! otherwise and the render is path tracing's alone. Lights that emit subpaths: the
 //! declared triangle lights (rect, quad, disk), sphere, point, spot and distant lights
-//! and domes, that are not shadow-linked; the others (cylinders, glowing objects) keep
+//! and domes without portals, that are not shadow-linked; the others (cylinders, domes
+//! sampled through portals, whose pdfs depend on the shading point, glowing objects) keep
 //! two-way weights, as no subpath starts on them (their `density` is 0). Point and spot lights are Georgiev et
 //! al.'s delta lights: no ray finds them, so y1 carries no `dvc`, light sampling's
 //! density of such a light is 1 in its own measure (over a subpath's area density at y1
@@ -162,7 +163,10 @@ impl Connect {
                 LightShape::Point(_) => 4.0 * PI,
                 LightShape::Spot(s) => 1.0 / uniform_cone_pdf(s.cos_outer),
                 // The disc's area; the direction's pdf is the light's (`direction_pdf`).
-                LightShape::Distant(_) | LightShape::Dome(_) => PI * sq(disc.1),
+                // A dome with portals samples directions by the shading point: it starts
+                // no subpaths.
+                LightShape::Distant(_) => PI * sq(disc.1),
+                LightShape::Dome(d) if d.portals.is_empty() => PI * sq(disc.1),
                 _ => continue,
             };
             let p = light.power(scene.scene_radius);

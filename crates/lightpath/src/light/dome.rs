@@ -10,6 +10,7 @@
 //! rotate = [0, 90, 0]
 //! ```
 
+use super::portal::{self, Portal};
 use super::select::Reach;
 use super::{luminance, LightModel, LightSample};
 use crate::geometry::Prim;
@@ -17,14 +18,27 @@ use crate::sampling::{uniform_sphere, Distribution1D};
 use glam::{Mat3A, Vec2, Vec3A};
 use std::f32::consts::PI;
 
-/// A dome: `map` × the light's colour, or its colour alone.
+/// A dome: `map` × the light's colour, or its colour alone; sampled through its
+/// `portals` if it has any (portal.rs).
 #[derive(Clone, Debug)]
 pub struct Dome {
     pub map: Option<EnvMap>,
+    pub portals: Vec<Portal>,
 }
 
 impl LightModel for Dome {
-    fn sample(&self, color: Vec3A, _: Vec3A, _: Vec3A, u: Vec2, _: &[Prim]) -> Option<LightSample> {
+    fn sample(&self, color: Vec3A, p: Vec3A, n: Vec3A, u: Vec2, _: &[Prim]) -> Option<LightSample> {
+        if !self.portals.is_empty() {
+            let (wi, pdf) = portal::sample(&self.portals, p, n, u)?;
+            let radiance = self.escaped(color, wi);
+            return (radiance != Vec3A::ZERO).then_some(LightSample {
+                wi,
+                dist: f32::INFINITY,
+                radiance,
+                pdf,
+                delta: false,
+            });
+        }
         match &self.map {
             None => {
                 let wi = uniform_sphere(u);
@@ -51,7 +65,10 @@ impl LightModel for Dome {
             }
         }
     }
-    fn pdf(&self, _: Vec3A, _: Vec3A, dir: Vec3A, _: f32, _: Vec3A) -> f32 {
+    fn pdf(&self, p: Vec3A, n: Vec3A, dir: Vec3A, _: f32, _: Vec3A) -> f32 {
+        if !self.portals.is_empty() {
+            return portal::pdf(&self.portals, p, n, dir);
+        }
         match &self.map {
             None => 1.0 / (4.0 * PI),
             Some(m) => m.pdf(dir),

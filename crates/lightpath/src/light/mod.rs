@@ -25,6 +25,7 @@ pub mod distant;
 pub mod dome;
 pub mod mesh;
 pub mod point;
+pub mod portal;
 pub mod select;
 pub mod sphere;
 pub mod spherical_rect;

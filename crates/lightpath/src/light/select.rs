@@ -635,7 +635,13 @@ mod tests {
             },
             30.0,
         ));
-        lights.push(light(Dome { map: None }, 0.05));
+        lights.push(light(
+            Dome {
+                map: None,
+                portals: Vec::new(),
+            },
+            0.05,
+        ));
         lights.push(light(
             Distant::new(Vec3A::new(0.3, -1.0, 0.1).normalize(), 0.0),
             1.0,

@@ -433,9 +433,11 @@ pub enum LightKind {
         direction: [f32; 3],
         angle: f32,
     },
-    /// An optional equirectangular EXR (resolved path, and where it was named).
+    /// An optional equirectangular EXR (resolved path, and where it was named), and the
+    /// corners of the portals it is sampled through (light/portal.rs).
     Dome {
         map: Option<(PathBuf, Origin)>,
+        portals: Vec<[[f32; 3]; 4]>,
     },
     /// A mesh light: the triangles of `SceneDesc::objects[object]` emit (its transform,
     /// material and trace sets are the object's; the light's own are not used).

@@ -550,7 +550,7 @@ def DomeLight "Sky" { float inputs:intensity = 0.5 }
         }
         ref k => panic!("{k:?}"),
     }
-    assert!(matches!(by("Sky").kind, LightKind::Dome { map: None }));
+    assert!(matches!(by("Sky").kind, LightKind::Dome { map: None, .. }));
 }
 
 #[test]

@@ -3,6 +3,7 @@
 
 use crate::geometry::shapes::{self, ShapePrims};
 use crate::geometry::{Accel, Prim};
+use crate::light::portal::Portal;
 use crate::light::spherical_rect::Rect;
 use crate::light::triangles::Shaping;
 use crate::light::{
@@ -115,7 +116,20 @@ pub fn light_shape(l: &LightDesc) -> Result<(LightShape, Option<ShapePrims>, Vec
             });
             (shape.into(), None, color)
         }
-        LightKind::Dome { map } => {
+        LightKind::Dome { map, portals } => {
+            let portals = portals
+                .iter()
+                .enumerate()
+                .map(|(k, corners)| {
+                    Portal::new(corners.map(v3)).ok_or_else(|| {
+                        l.origin.error(format!(
+                            "portal {} of the dome: its four corners must make a flat \
+                             parallelogram of some area, in order round it",
+                            k + 1
+                        ))
+                    })
+                })
+                .collect::<Result<Vec<_>, _>>()?;
             let map = match map {
                 None => None,
                 Some((path, origin)) => {
@@ -126,7 +140,7 @@ pub fn light_shape(l: &LightDesc) -> Result<(LightShape, Option<ShapePrims>, Vec
                     }
                 }
             };
-            (Dome { map }.into(), None, color)
+            (Dome { map, portals }.into(), None, color)
         }
     })
 }

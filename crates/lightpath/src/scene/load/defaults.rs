@@ -99,7 +99,10 @@ pub fn framing_camera(desc: &SceneDesc) -> CameraDesc {
 /// A white dome of radiance 1 (light group `dome`).
 pub fn dome(source: &str) -> LightDesc {
     LightDesc {
-        kind: LightKind::Dome { map: None },
+        kind: LightKind::Dome {
+            map: None,
+            portals: Vec::new(),
+        },
         name: Some("dome".into()),
         groups: vec!["dome".into()],
         color: [1.0; 3],

@@ -128,7 +128,7 @@ fn place_light(l: &mut LightDesc, xf: &Affine3A) {
         | LightKind::Disk { .. }
         | LightKind::Sphere { .. }
         | LightKind::Cylinder { .. } => {}
-        LightKind::Dome { .. } => {}
+        LightKind::Dome { portals, .. } => portals.iter_mut().flatten().for_each(point),
     }
     l.transform = *xf * l.transform;
 }

@@ -356,6 +356,8 @@ struct LightDesc {
     cone_softness: Option<f32>,
     /// Dome: an equirectangular EXR, relative to the scene file.
     map: Option<Spanned<String>>,
+    /// Dome: the openings it lights an interior through, four corners each.
+    portals: Option<Vec<[[f32; 3]; 4]>>,
     /// Mesh: the name of the object(s) whose surface emits.
     object: Option<Spanned<String>>,
     segments: Option<u32>,
@@ -994,7 +996,8 @@ fn light(src: &Source, l: &Spanned<LightDesc>) -> Result<d::LightDesc, SceneErro
         "dome" => {
             let map = l.map.as_ref().map(|f| (src.dir.join(f.get_ref()), src.origin(Some(f.span()))));
             // Without a colour the dome is white: strength alone.
-            (d::LightKind::Dome { map }, l.radiance.unwrap_or([1.0; 3]))
+            let portals = l.portals.clone().unwrap_or_default();
+            (d::LightKind::Dome { map, portals }, l.radiance.unwrap_or([1.0; 3]))
         }
         other => {
             return Err(src.error(

@@ -376,7 +376,14 @@ impl Loader {
             _ => {
                 // Dome lights.
                 let map = self.dome_map(prim)?;
-                (LightKind::Dome { map }, world, l)
+                (
+                    LightKind::Dome {
+                        map,
+                        portals: Vec::new(),
+                    },
+                    world,
+                    l,
+                )
             }
         })
     }
