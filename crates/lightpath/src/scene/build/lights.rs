@@ -117,19 +117,7 @@ pub fn light_shape(l: &LightDesc) -> Result<(LightShape, Option<ShapePrims>, Vec
             (shape.into(), None, color)
         }
         LightKind::Dome { map, portals } => {
-            let portals = portals
-                .iter()
-                .enumerate()
-                .map(|(k, corners)| {
-                    Portal::new(corners.map(v3)).ok_or_else(|| {
-                        l.origin.error(format!(
-                            "portal {} of the dome: its four corners must make a flat \
-                             parallelogram of some area, in order round it",
-                            k + 1
-                        ))
-                    })
-                })
-                .collect::<Result<Vec<_>, _>>()?;
+            let portals = dome_portals(portals, &l.origin)?;
             let map = match map {
                 None => None,
                 Some((path, origin)) => {
@@ -185,6 +173,24 @@ fn check_light_numbers(l: &LightDesc) -> Result<(), SceneError> {
 /// The rotation of a dome's `rotate`/`matrix` (None: none). Scale is divided out and the
 /// translation ignored (the dome is infinitely far); a shear is an error, since it would
 /// not keep solid angles.
+/// A dome's portals from their corners; an error names the one that is not a flat
+/// parallelogram.
+fn dome_portals(corners: &[[[f32; 3]; 4]], origin: &Origin) -> Result<Vec<Portal>, SceneError> {
+    corners
+        .iter()
+        .enumerate()
+        .map(|(k, c)| {
+            Portal::new(c.map(Vec3A::from)).ok_or_else(|| {
+                origin.error(format!(
+                    "portal {} of the dome: its four corners must make a flat \
+                     parallelogram of some area, in order round it",
+                    k + 1
+                ))
+            })
+        })
+        .collect()
+}
+
 fn dome_rotation(xf: &glam::Affine3A, origin: &Origin) -> Result<Option<glam::Mat3A>, SceneError> {
     let m = xf.matrix3;
     if m == glam::Mat3A::IDENTITY {
