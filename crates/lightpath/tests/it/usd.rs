@@ -1980,3 +1980,71 @@ def DistantLight "Sun"
     // The penumbra (±tan 5° · 1 m) spans most of the view.
     assert!(in_penumbra >= w / 2, "{in_penumbra}");
 }
+
+/// A DomeLight's `portals` relationship names PortalLights: each becomes one of the
+/// dome's portals, its rectangle (`width` × `height`, default the unit square) placed by
+/// its transform; a target that is no PortalLight is warned about and left out. A dome
+/// without portals keeps none.
+#[test]
+fn a_dome_light_reads_its_portal_lights() {
+    let dir = Scratch::new("usd-portals");
+    let path = write(
+        &dir,
+        "portals.usda",
+        r#"#usda 1.0
+(
+    upAxis = "Y"
+    metersPerUnit = 1
+)
+def DomeLight_1 "Sky"
+{
+    float inputs:intensity = 2
+    rel portals = [</Window>, </Door>, </Nothing>]
+}
+def PortalLight "Window"
+{
+    float inputs:width = 2
+    float inputs:height = 0.5
+    double3 xformOp:translate = (3, 1, 0)
+    float3 xformOp:rotateXYZ = (0, 90, 0)
+    uniform token[] xformOpOrder = ["xformOp:translate", "xformOp:rotateXYZ"]
+}
+def PortalLight "Door"
+{
+    double3 xformOp:translate = (0, 0, -2)
+    uniform token[] xformOpOrder = ["xformOp:translate"]
+}
+def DomeLight "Plain"
+{
+}
+"#,
+    );
+    let desc = load(&path);
+    let portals = |name: &str| match &desc
+        .lights
+        .iter()
+        .find(|l| l.name.as_deref() == Some(name))
+        .unwrap()
+        .kind
+    {
+        LightKind::Dome { portals, .. } => portals.clone(),
+        other => panic!("{name} is {other:?}"),
+    };
+    let sky = portals("Sky");
+    assert_eq!(sky.len(), 2, "{sky:?}");
+    let near = |a: [f32; 3], b: [f32; 3]| a.iter().zip(&b).all(|(x, y)| (x - y).abs() < 1e-5);
+    // The window: 2 wide along local X, turned 90° about Y (local X → −Z), at (3, 1, 0).
+    let window = sky[0];
+    assert!(near(window[0], [3.0, 0.75, 1.0]), "{window:?}");
+    assert!(near(window[2], [3.0, 1.25, -1.0]), "{window:?}");
+    // The door: the unit square at z = −2.
+    assert!(near(sky[1][0], [-0.5, -0.5, -2.0]) && near(sky[1][2], [0.5, 0.5, -2.0]));
+    assert!(portals("Plain").is_empty());
+    assert!(
+        desc.warnings.iter().any(|w| w.contains("/Nothing")),
+        "{:?}",
+        desc.warnings
+    );
+    // Portals are no lights of their own.
+    assert_eq!(desc.lights.len(), 2);
+}

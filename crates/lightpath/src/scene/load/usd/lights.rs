@@ -374,7 +374,18 @@ impl Loader {
                 )
             }
             _ => {
-                // Dome lights.
+                // Dome lights; their portals are filled in once every prim is read
+                // (`resolve_portals`).
+                let targets: Vec<String> = prim
+                    .relationship("portals")
+                    .targets()
+                    .unwrap_or_default()
+                    .iter()
+                    .map(|p| p.as_str().to_string())
+                    .collect();
+                if !targets.is_empty() {
+                    self.dome_portals.push((self.desc.lights.len(), targets));
+                }
                 let map = self.dome_map(prim)?;
                 (
                     LightKind::Dome {
@@ -386,6 +397,39 @@ impl Loader {
                 )
             }
         })
+    }
+
+    /// A PortalLight: the rectangle `width` × `height` (default 1 × 1, the schema's unit
+    /// square before the sizes were added) in its local XY plane, placed by `world`.
+    pub(super) fn portal(&mut self, prim: &Prim, world: Affine3A) {
+        let w = self.light_number(prim, "width", 1.0) * 0.5;
+        let h = self.light_number(prim, "height", 1.0) * 0.5;
+        let corners = [(-w, -h), (w, -h), (w, h), (-w, h)]
+            .map(|(x, y)| world.transform_point3a(Vec3A::new(x, y, 0.0)).into());
+        self.portal_corners
+            .insert(prim.path().as_str().to_string(), corners);
+    }
+
+    /// Gives each dome the rectangles of the PortalLights its `portals` relationship
+    /// names; a target that is no PortalLight read here is warned about and left out.
+    pub(super) fn resolve_portals(&mut self) {
+        for (li, targets) in std::mem::take(&mut self.dome_portals) {
+            let mut found = Vec::new();
+            for t in &targets {
+                match self.portal_corners.get(t) {
+                    Some(c) => found.push(*c),
+                    None => self.desc.warnings.push(format!(
+                        "{}: the dome's portal {t} is not a PortalLight that is read; it is left out",
+                        self.file
+                    )),
+                }
+            }
+            if let Some(LightKind::Dome { portals, .. }) =
+                self.desc.lights.get_mut(li).map(|l| &mut l.kind)
+            {
+                *portals = found;
+            }
+        }
     }
 
     fn light_bool_default(&self, prim: &Prim, name: &str, default: bool) -> bool {

@@ -99,6 +99,10 @@ struct Loader {
     emissive: HashMap<String, [f32; 3]>,
     /// Each of `desc.cameras`' horizontal and vertical apertures and focal length.
     apertures: Vec<(f32, f32, f32)>,
+    /// PortalLight prim path → its rectangle's world corners (lights.rs).
+    portal_corners: HashMap<String, [[f32; 3]; 4]>,
+    /// Each dome of `desc.lights` (its index) with the paths its `portals` names.
+    dome_portals: Vec<(usize, Vec<String>)>,
 }
 
 impl Loader {
@@ -152,6 +156,8 @@ impl Loader {
             settings_camera: None,
             emissive: HashMap::new(),
             apertures: Vec::new(),
+            portal_corners: HashMap::new(),
+            dome_portals: Vec::new(),
         };
         loader.render_settings(options)?;
         Ok(loader)
@@ -202,6 +208,7 @@ impl Loader {
                 .push(format!("{}: composition: {e}", self.file));
         }
         self.pick_camera()?;
+        self.resolve_portals();
         Ok(self.desc)
     }
 
@@ -294,8 +301,9 @@ impl Loader {
             {
                 self.light(prim, &ty, world)?;
             }
+            "PortalLight" if !ctx.prototype => self.portal(prim, world),
             "RectLight" | "DiskLight" | "SphereLight" | "DistantLight" | "DomeLight"
-            | "DomeLight_1" | "CylinderLight" | "Camera" => {
+            | "DomeLight_1" | "CylinderLight" | "PortalLight" | "Camera" => {
                 self.warn(prim, "lights and cameras inside instances are not read");
             }
             "" | "Xform" | "Scope" | "SkelRoot" => {}
