@@ -282,6 +282,27 @@ struct Walk {
     specular: u32,
 }
 
+impl Walk {
+    /// A subpath's first ray, from `origin` (the light's point `p0`, or a hair off it)
+    /// along `dir`, carrying `beta`.
+    fn start(origin: Vec3A, p0: Vec3A, dir: Vec3A, beta: Vec3A) -> Walk {
+        Walk {
+            ray: Ray {
+                origin,
+                dir,
+                tmax: f32::INFINITY,
+            },
+            prev_p: p0,
+            beta,
+            dvcm_pre: 0.0,
+            dvc_pre: 0.0,
+            travelled: 0.0,
+            diffuse: 0,
+            specular: 0,
+        }
+    }
+}
+
 /// The sample's light subpath: traced at the first camera vertex that joins; kept by the
 /// worker between samples (`Sink::light_path`) so that its buffers are reused.
 #[derive(Default)]
@@ -326,6 +347,16 @@ impl LightPath {
             state = before.class_out.map_or(state, |c| a.step(state, c));
         }
         a.step(state, light)
+    }
+
+    /// The subpath starts at light `li` (its normal there, zero for a point, a spot or a
+    /// light at infinity; its start's density; whether it is delta; whether at infinity).
+    fn begin(&mut self, li: u32, light_ng: Vec3A, density: f32, delta: bool, at_infinity: bool) {
+        self.li = li;
+        self.light_ng = light_ng;
+        self.density = density;
+        self.delta = delta;
+        self.at_infinity = at_infinity;
     }
 
     /// A new camera path: the subpath is traced again when first joined.
@@ -698,27 +729,15 @@ impl Tracer<'_> {
         if le == Vec3A::ZERO {
             return None;
         }
-        lp.li = li;
-        lp.light_ng = n;
-        lp.density = conn.density[li as usize];
-        lp.delta = false;
-        lp.at_infinity = false;
+        lp.begin(li, n, conn.density[li as usize], false, false);
         // pdf_area = 1 / area, pdf_dir = cos θ0 / (π · sides): the cosines cancel.
         let sides = if two_sided { 2.0 } else { 1.0 };
-        Some(Walk {
-            ray: Ray {
-                origin: p0 + ns * scene.epsilon,
-                dir,
-                tmax: f32::INFINITY,
-            },
-            prev_p: p0,
-            beta: le * (area * PI * sides / pmf),
-            dvcm_pre: 0.0,
-            dvc_pre: 0.0,
-            travelled: 0.0,
-            diffuse: 0,
-            specular: 0,
-        })
+        Some(Walk::start(
+            p0 + ns * scene.epsilon,
+            p0,
+            dir,
+            le * (area * PI * sides / pmf),
+        ))
     }
 
     /// The start from point or spot light `li`: a direction uniform over the sphere, or
@@ -747,25 +766,8 @@ impl Tracer<'_> {
         if intensity == Vec3A::ZERO {
             return None;
         }
-        lp.li = li;
-        lp.light_ng = Vec3A::ZERO;
-        lp.density = conn.density[li as usize];
-        lp.delta = true;
-        lp.at_infinity = false;
-        Some(Walk {
-            ray: Ray {
-                origin: p0,
-                dir,
-                tmax: f32::INFINITY,
-            },
-            prev_p: p0,
-            beta: intensity / lp.density,
-            dvcm_pre: 0.0,
-            dvc_pre: 0.0,
-            travelled: 0.0,
-            diffuse: 0,
-            specular: 0,
-        })
+        lp.begin(li, Vec3A::ZERO, conn.density[li as usize], true, false);
+        Some(Walk::start(p0, p0, dir, intensity / lp.density))
     }
 
     /// The start from distant light or dome `li`: a direction as its light sample picks
@@ -793,25 +795,14 @@ impl Tracer<'_> {
         let frame = Frame::new(dir);
         let p0 = center - dir * (radius * 1.01 + self.scene.epsilon)
             + (frame.s * d.x + frame.t * d.y) * radius;
-        lp.li = li;
-        lp.light_ng = Vec3A::ZERO;
-        lp.density = conn.density[li as usize] * ls.pdf;
-        lp.delta = ls.delta;
-        lp.at_infinity = true;
-        Some(Walk {
-            ray: Ray {
-                origin: p0,
-                dir,
-                tmax: f32::INFINITY,
-            },
-            prev_p: p0,
-            beta: ls.radiance / lp.density,
-            dvcm_pre: 0.0,
-            dvc_pre: 0.0,
-            travelled: 0.0,
-            diffuse: 0,
-            specular: 0,
-        })
+        lp.begin(
+            li,
+            Vec3A::ZERO,
+            conn.density[li as usize] * ls.pdf,
+            ls.delta,
+            true,
+        );
+        Some(Walk::start(p0, p0, dir, ls.radiance / lp.density))
     }
 
     /// Where `walk`'s ray lands: light vertex `j`, kept in `lp`; `false` where the

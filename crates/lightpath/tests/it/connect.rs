@@ -215,6 +215,26 @@ fn room_lit_by(lights: &str) -> String {
     format!("{}{}", &without_ball[..start], lights)
 }
 
+/// The room lit as `lit` (named `scene` in messages) agrees with path tracing per bounce
+/// and per light of `lights` (their `L` events), and light after two bounces has at most
+/// `ratio` of path tracing's standard error with the joins.
+fn assert_lights_converge(scene: &str, lit: &str, lights: &[&str], ratio: f64) {
+    let mut extra = bounces();
+    let mut names = vec!["beauty", "b1", "b2", "b3"];
+    for &light in lights {
+        extra.push(AovSpec::new(light, &format!("C.*<L.'{light}'>")));
+        names.push(light);
+    }
+    let (plain, joined) = assert_means_agree(scene, lit, &names, extra);
+    let spread = |runs: &[Vec<f64>]| mean_and_se(&runs.iter().map(|r| r[2]).collect::<Vec<_>>()).1;
+    assert!(
+        spread(&joined) < ratio * spread(&plain),
+        "{scene}: two bounces' standard error with connections {} against {}",
+        spread(&joined),
+        spread(&plain)
+    );
+}
+
 /// Sphere lights start subpaths as area lights do (a point uniform on the sphere, a
 /// cosine direction outwards): a room lit by a small bulb under the plate and a larger
 /// one in a corner agrees per bounce and per light with path tracing, and light after
@@ -227,19 +247,8 @@ fn sphere_light_subpaths_converge() {
          [[lights]]\ntype = \"sphere\"\nname = \"globe\"\ncenter = [0.7, -0.7, -0.7]\n\
          radius = 0.2\nradiance = [2, 2, 2]\n",
     );
-    let mut extra = bounces();
-    extra.push(AovSpec::new("bulb", "C.*<L.'bulb'>"));
-    extra.push(AovSpec::new("globe", "C.*<L.'globe'>"));
-    let names = ["beauty", "b1", "b2", "b3", "bulb", "globe"];
-    let (plain, joined) = assert_means_agree("sphere lights", &lit, &names, extra);
-    let spread = |runs: &[Vec<f64>]| mean_and_se(&runs.iter().map(|r| r[2]).collect::<Vec<_>>()).1;
     // Measured 0.15.
-    assert!(
-        spread(&joined) < 0.5 * spread(&plain),
-        "two bounces' standard error with connections {} against {}",
-        spread(&joined),
-        spread(&plain)
-    );
+    assert_lights_converge("sphere lights", &lit, &["bulb", "globe"], 0.5);
 }
 
 /// Light subpaths start at point and spot lights too: the room (without its glass ball)
@@ -256,18 +265,7 @@ fn point_and_spot_light_subpaths_converge() {
          [[lights]]\ntype = \"point\"\nname = \"bulb\"\nposition = [0.7, -0.7, -0.7]\n\
          intensity = [0.4, 0.4, 0.4]\n",
     );
-    let mut extra = bounces();
-    extra.push(AovSpec::new("spot", "C.*<L.'spot'>"));
-    extra.push(AovSpec::new("bulb", "C.*<L.'bulb'>"));
-    let names = ["beauty", "b1", "b2", "b3", "spot", "bulb"];
-    let (plain, joined) = assert_means_agree("point lights", &lit, &names, extra);
-    let spread = |runs: &[Vec<f64>]| mean_and_se(&runs.iter().map(|r| r[2]).collect::<Vec<_>>()).1;
-    assert!(
-        spread(&joined) < 0.5 * spread(&plain),
-        "two bounces' standard error with connections {} against {}",
-        spread(&joined),
-        spread(&plain)
-    );
+    assert_lights_converge("point lights", &lit, &["spot", "bulb"], 0.5);
 }
 
 /// Distant lights start subpaths on a disc round the scene (connect.rs): the room, its
@@ -283,19 +281,8 @@ fn distant_light_subpaths_converge() {
          [[lights]]\ntype = \"distant\"\nname = \"key\"\ndirection = [-0.3, -0.5, -1]\n\
          irradiance = [0.5, 0.5, 0.5]\n",
     );
-    let mut extra = bounces();
-    extra.push(AovSpec::new("sun", "C.*<L.'sun'>"));
-    extra.push(AovSpec::new("key", "C.*<L.'key'>"));
-    let names = ["beauty", "b1", "b2", "b3", "sun", "key"];
-    let (plain, joined) = assert_means_agree("distant lights", &lit, &names, extra);
-    let spread = |runs: &[Vec<f64>]| mean_and_se(&runs.iter().map(|r| r[2]).collect::<Vec<_>>()).1;
     // Measured 0.41.
-    assert!(
-        spread(&joined) < 0.7 * spread(&plain),
-        "two bounces' standard error with connections {} against {}",
-        spread(&joined),
-        spread(&plain)
-    );
+    assert_lights_converge("distant lights", &lit, &["sun", "key"], 0.7);
 }
 
 /// A dome starts subpaths as a distant light does, its direction drawn by its map (so
@@ -333,16 +320,8 @@ fn dome_light_subpaths_converge() {
         "[[lights]]\ntype = \"dome\"\nname = \"sky\"\nmap = {:?}\ncamera_visible = false\n",
         map.to_str().unwrap()
     ));
-    let names = ["beauty", "b1", "b2", "b3"];
-    let (plain, joined) = assert_means_agree("dome", &lit, &names, bounces());
-    let spread = |runs: &[Vec<f64>]| mean_and_se(&runs.iter().map(|r| r[2]).collect::<Vec<_>>()).1;
     // Measured 0.55.
-    assert!(
-        spread(&joined) < 0.85 * spread(&plain),
-        "two bounces' standard error with connections {} against {}",
-        spread(&joined),
-        spread(&plain)
-    );
+    assert_lights_converge("dome", &lit, &["sky"], 0.85);
 }
 
 /// Connections add paths through every lobe pair's own events: the standard partition
