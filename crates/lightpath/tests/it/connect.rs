@@ -222,7 +222,7 @@ fn assert_lights_converge(scene: &str, lit: &str, lights: &[&str], ratio: f64) {
     let mut extra = bounces();
     let mut names = vec!["beauty", "b1", "b2", "b3"];
     for &light in lights {
-        extra.push(AovSpec::new(light, &format!("C.*<L.'{light}'>")));
+        extra.push(AovSpec::new(light, format!("C.*<L.'{light}'>")));
         names.push(light);
     }
     let (plain, joined) = assert_means_agree(scene, lit, &names, extra);
