@@ -1110,7 +1110,8 @@ camera_visible = false
 }
 
 /// A portal whose corners do not make a flat parallelogram is a scene error that names
-/// the file, the light and the portal, not a panic or a silently wrong light.
+/// the file, the light and the portal, not a panic or a silently wrong light; so are
+/// more portals than a light sample should look at.
 #[test]
 fn a_bent_portal_is_a_scene_error() {
     let text = "[[lights]]\ntype = \"dome\"\n\
@@ -1125,4 +1126,13 @@ fn a_bent_portal_is_a_scene_error() {
         err.contains("bent.toml") && err.contains("portal 2"),
         "{err}"
     );
+    let many = format!(
+        "[[lights]]\ntype = \"dome\"\nportals = [{}]\n",
+        vec!["[[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0]]"; 257].join(", ")
+    );
+    let desc = source("many.toml", &many).parse().unwrap();
+    match Scene::build(&desc, &aov::assemble(vec![])) {
+        Ok(_) => panic!("257 portals were accepted"),
+        Err(e) => assert!(e.to_string().contains("at most 256"), "{e}"),
+    }
 }

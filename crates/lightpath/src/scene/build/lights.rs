@@ -173,9 +173,18 @@ fn check_light_numbers(l: &LightDesc) -> Result<(), SceneError> {
 /// The rotation of a dome's `rotate`/`matrix` (None: none). Scale is divided out and the
 /// translation ignored (the dome is infinitely far); a shear is an error, since it would
 /// not keep solid angles.
+/// The most portals a dome takes: each light sample of it looks at every one.
+pub const MAX_PORTALS: usize = 256;
+
 /// A dome's portals from their corners; an error names the one that is not a flat
-/// parallelogram.
+/// parallelogram, or says there are too many.
 fn dome_portals(corners: &[[[f32; 3]; 4]], origin: &Origin) -> Result<Vec<Portal>, SceneError> {
+    if corners.len() > MAX_PORTALS {
+        return Err(origin.error(format!(
+            "the dome has {} portals: at most {MAX_PORTALS} (each light sample looks at every one)",
+            corners.len()
+        )));
+    }
     corners
         .iter()
         .enumerate()
