@@ -374,18 +374,8 @@ impl Loader {
                 )
             }
             _ => {
-                // Dome lights; their portals are filled in once every prim is read
-                // (`resolve_portals`).
-                let targets: Vec<String> = prim
-                    .relationship("portals")
-                    .targets()
-                    .unwrap_or_default()
-                    .iter()
-                    .map(|p| p.as_str().to_string())
-                    .collect();
-                if !targets.is_empty() {
-                    self.dome_portals.push((self.desc.lights.len(), targets));
-                }
+                // Dome lights; their portals are filled in once every prim is read.
+                self.note_portals(prim);
                 let map = self.dome_map(prim)?;
                 (
                     LightKind::Dome {
@@ -408,6 +398,21 @@ impl Loader {
             .map(|(x, y)| world.transform_point3a(Vec3A::new(x, y, 0.0)).into());
         self.portal_corners
             .insert(prim.path().as_str().to_string(), corners);
+    }
+
+    /// Notes the paths the dome's `portals` relationship names, for `resolve_portals`
+    /// (the dome is the next light of `desc.lights`).
+    fn note_portals(&mut self, prim: &Prim) {
+        let targets: Vec<String> = prim
+            .relationship("portals")
+            .targets()
+            .unwrap_or_default()
+            .iter()
+            .map(|p| p.as_str().to_string())
+            .collect();
+        if !targets.is_empty() {
+            self.dome_portals.push((self.desc.lights.len(), targets));
+        }
     }
 
     /// Gives each dome the rectangles of the PortalLights its `portals` relationship
