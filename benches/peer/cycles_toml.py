@@ -120,6 +120,7 @@ def build(scene_toml, args):
         if l["type"] == "dome":
             bg.inputs["Color"].default_value = (*l.get("radiance", [1, 1, 1]), 1)
             bg.inputs["Strength"].default_value = 1.0
+            world.cycles_visibility.camera = l.get("camera_visible", True)
             if args.no_portals:
                 continue
             for k, c in enumerate(l.get("portals", [])):
