@@ -15,13 +15,12 @@ OpenEXR module; not a CI dependency.
 
 import argparse
 import os
-import resource
 import statistics
-import subprocess
 import sys
 
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), ".."))
 from benchlib.exr import channels, rgb  # noqa: E402
+from benchlib.run import render_cpu as render  # noqa: E402
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 ROOT = os.path.dirname(os.path.dirname(HERE))
@@ -43,16 +42,6 @@ SCENES = [
     ("cornell-classic", f"{ROOT}/scenes/cornell-classic.toml",
      f"{ROOT}/benches/peer/ref/cornell_ref.exr", ["--spp", "64"]),
 ]
-
-
-def render(binary, scene, out, seed, extra):
-    """Renders; returns the child's CPU seconds."""
-    before = resource.getrusage(resource.RUSAGE_CHILDREN)
-    subprocess.run([binary, "render", scene, "-o", out, "--quiet", "--aovs", "none",
-                    "--threads", "2", "--seed", str(seed)] + extra,
-                   check=True, capture_output=True)
-    after = resource.getrusage(resource.RUSAGE_CHILDREN)
-    return (after.ru_utime + after.ru_stime) - (before.ru_utime + before.ru_stime)
 
 
 def main():

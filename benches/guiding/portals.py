@@ -14,13 +14,12 @@ dependency.
 
 import argparse
 import os
-import resource
 import statistics
-import subprocess
 import sys
 
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), ".."))
 from benchlib.exr import channels, rgb  # noqa: E402
+from benchlib.run import render_cpu as render  # noqa: E402
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 # (name, scene without the portal, the same with it)
@@ -28,16 +27,6 @@ SCENES = [
     ("skyroom", f"{HERE}/skyroom.toml", f"{HERE}/skyroom_portal.toml"),
     ("hall_sky", f"{HERE}/hall_sky.toml", f"{HERE}/hall_sky_portal.toml"),
 ]
-
-
-def render(binary, scene, out, seed, extra):
-    """Renders; returns the child's CPU seconds."""
-    before = resource.getrusage(resource.RUSAGE_CHILDREN)
-    subprocess.run([binary, "render", scene, "-o", out, "--quiet", "--aovs", "none",
-                    "--threads", "2", "--seed", str(seed)] + extra,
-                   check=True, capture_output=True)
-    after = resource.getrusage(resource.RUSAGE_CHILDREN)
-    return (after.ru_utime + after.ru_stime) - (before.ru_utime + before.ru_stime)
 
 
 def main():

@@ -144,12 +144,7 @@ impl Connect {
         }
         // Each light's index, power, and the measure its start is uniform in (module
         // doc): area × π × emitting sides, or the solid angle a point or spot emits into.
-        let (lo, hi) = scene.accel.bounds();
-        let disc = if lo.x.is_finite() {
-            (0.5 * (lo + hi), scene.scene_radius)
-        } else {
-            (Vec3A::ZERO, scene.scene_radius)
-        };
+        let disc = (scene.scene_center, scene.scene_radius);
         let mut chosen = Vec::new();
         for (li, light) in scene.lights[..scene.first_glow_light as usize]
             .iter()

@@ -93,21 +93,38 @@ impl Portal {
         }
     }
 
-    /// A direction from `p` (normal `n`) through the portal; `None` from its plane.
+    /// A direction from `p` (normal `n`) through the portal and this portal's `pdf` of
+    /// it; `None` from its plane.
     #[inline]
-    fn sample(&self, p: Vec3A, n: Vec3A, u: Vec2) -> Option<Vec3A> {
+    fn sample(&self, p: Vec3A, n: Vec3A, u: Vec2) -> Option<(Vec3A, f32)> {
         let height = (p - self.p0).dot(self.n);
         let scale = self.p0.abs().max_element() + self.e1.length() + self.e2.length();
         if height.abs() <= 1e-5 * scale {
             return None;
         }
-        let q = match self.rect.as_ref().and_then(|r| r.seen(p, n)) {
-            Some(seen) => seen.sample(u).0,
-            None => self.p0 + self.e1 * u.x + self.e2 * u.y,
+        let (q, seen_pdf) = match self.rect.as_ref().and_then(|r| r.seen(p, n)) {
+            Some(seen) => {
+                let (q, pdf) = seen.sample(u);
+                (q, Some(pdf))
+            }
+            None => (self.p0 + self.e1 * u.x + self.e2 * u.y, None),
         };
         let d = q - p;
         let len = d.length();
-        (len > 0.0 && len.is_finite()).then(|| d / len)
+        if !(len > 0.0 && len.is_finite()) {
+            return None;
+        }
+        let wi = d / len;
+        // The same density `pdf` gives, without seeing the rectangle again.
+        let pdf = seen_pdf.unwrap_or_else(|| {
+            let cos = self.n.dot(wi).abs();
+            if cos == 0.0 {
+                0.0
+            } else {
+                len * len / (cos * self.area)
+            }
+        });
+        Some((wi, pdf))
     }
 }
 
@@ -121,8 +138,12 @@ pub fn sample(portals: &[Portal], p: Vec3A, n: Vec3A, u: Vec2) -> Option<(Vec3A,
     let x = u.x * count as f32;
     let k = (x as usize).min(count - 1);
     let u = Vec2::new((x - k as f32).clamp(0.0, 1.0 - f32::EPSILON), u.y);
-    let wi = portals[k].sample(p, n, u)?;
-    let pdf = pdf(portals, p, n, wi);
+    let (wi, own) = portals[k].sample(p, n, u)?;
+    let others: f32 = (portals.iter().enumerate())
+        .filter(|&(j, _)| j != k)
+        .map(|(_, q)| q.pdf(p, n, wi))
+        .sum();
+    let pdf = (own + others) / count as f32;
     (pdf > 0.0 && pdf.is_finite()).then_some((wi, pdf))
 }
 

@@ -117,6 +117,8 @@ pub struct Scene {
     pub camera_class: ClassId,
     /// `L` with no labels: the unit light data lobes are evaluated under.
     pub data_light_class: ClassId,
+    /// The centre and radius of a sphere round every primitive.
+    pub scene_center: Vec3A,
     pub scene_radius: f32,
     /// Ray offset against self-intersection, scaled to the scene.
     pub epsilon: f32,

@@ -362,17 +362,17 @@ impl GeometryBuilder {
 
 /// Half the diagonal of the scene's bounds (1 if it has none), and the ray offset against
 /// self-intersection scaled to it.
-pub fn scene_size(accel: &Accel) -> (f32, f32) {
+pub fn scene_size(accel: &Accel) -> (Vec3A, f32, f32) {
     let (mut lo, mut hi) = (Vec3A::splat(f32::INFINITY), Vec3A::splat(f32::NEG_INFINITY));
     for p in accel.prims() {
         let (a, b) = p.bounds();
         lo = lo.min(a);
         hi = hi.max(b);
     }
-    let scene_radius = if lo.x.is_finite() {
-        0.5 * (hi - lo).length()
+    let (center, scene_radius) = if lo.x.is_finite() {
+        (0.5 * (lo + hi), 0.5 * (hi - lo).length())
     } else {
-        1.0
+        (Vec3A::ZERO, 1.0)
     };
-    (scene_radius, RAY_EPSILON * scene_radius.max(1.0))
+    (center, scene_radius, RAY_EPSILON * scene_radius.max(1.0))
 }

@@ -43,7 +43,7 @@ impl Scene {
             &object_prims,
             &accel,
         );
-        let (scene_radius, epsilon) = geometry::scene_size(&accel);
+        let (scene_center, scene_radius, epsilon) = geometry::scene_size(&accel);
         let light_select = LightSelector::build(
             desc.render.light_selection,
             &lights,
@@ -93,6 +93,7 @@ impl Scene {
             data_light_class: classes.data_light,
             automaton,
             aovs,
+            scene_center,
             scene_radius,
             epsilon,
             light_groups,
