@@ -13,7 +13,10 @@ Python 3.11); not a CI dependency. Steps, each skipped when its output exists:
 1. builds OUT_DIR/<scene>.glb for each scene in Blender and exports it with Blender's glTF
    exporter (lights as KHR_lights_punctual);
 2. renders each renderer's reference (--ref-spp, seed 1000) of each scene: Cycles imports
-   the .glb as a Blender user would (`cycles` below), Lightpath renders the file;
+   the .glb as a Blender user would (`cycles` below), Lightpath renders the file; then
+   renders each reference's glint windows again at --glint-spp (default 262144: the
+   pixels round a glint in either reference, where 4096 samples hold a sub-pixel glint's
+   few hits) and uses those pixels instead;
 3. for each seed and scene, alternately, Cycles and Lightpath at --spp on 2 threads.
 
 Cycles: CPU, 2 threads, its light tree, no denoiser, no adaptive sampling, every bounce
@@ -40,8 +43,9 @@ and where Lightpath's 64-spp squared error sits (per object, and the share of it
 worst pixels). Writes OUT_DIR/results_<settings>.json; --reuse reports again from the
 images and timings already there. The scene `heldout` is reported apart.
 
-`python real_scenes.py cycles FILE.glb OUT.exr SPP SEED DEPTH CLAMP FILTER_GLOSSY FILTER_WIDTH REPEAT` is the Cycles
-step alone (the script runs it in a subprocess, one Blender session per render).
+`python real_scenes.py cycles FILE.glb OUT.exr SPP SEED DEPTH CLAMP FILTER_GLOSSY FILTER_WIDTH REPEAT [X0,Y0,X1,Y1]`
+is the Cycles step alone (the script runs it in a subprocess, one Blender session per
+render; the window is a render border).
 """
 
 import argparse
@@ -159,9 +163,11 @@ def build(out_dir, name, spec):
                               export_cameras=True, export_lights=True, export_yup=True)
 
 
-def cycles(glb, out, spp, seed, depth, clamp, filter_glossy, filter_width, repeat):
+def cycles(glb, out, spp, seed, depth, clamp, filter_glossy, filter_width, repeat, window=None):
     """Renders GLB with Cycles as a Blender user who imports it would; prints the seconds of
-    each render (the last is the one to quote: the first loads the kernels)."""
+    each render (the last is the one to quote: the first loads the kernels). `window`
+    (x0, y0, x1, y1 in pixels from the top left, end exclusive): only those pixels (a
+    render border), the rest of the frame black."""
     import bpy
     from benchlib.blender import black_world
 
@@ -204,16 +210,22 @@ def cycles(glb, out, spp, seed, depth, clamp, filter_glossy, filter_width, repea
     imf.file_format = "OPEN_EXR_MULTILAYER"
     imf.color_depth = "32"
     sc.render.filepath = os.path.abspath(out)
+    if window:
+        x0, y0, x1, y1 = window
+        sc.render.use_border, sc.render.use_crop_to_border = True, False
+        sc.render.border_min_x, sc.render.border_max_x = x0 / WIDTH, x1 / WIDTH
+        sc.render.border_min_y, sc.render.border_max_y = 1 - y1 / HEIGHT, 1 - y0 / HEIGHT
     for _ in range(repeat):
         t, cpu = time.time(), time.process_time()
         bpy.ops.render.render(write_still=True)
         print(f"CYCLES_SECONDS {time.time() - t:.3f} {time.process_time() - cpu:.3f}")
 
 
-def run_cycles(glb, out, spp, seed, args, repeat):
+def run_cycles(glb, out, spp, seed, args, repeat, window=None):
     p = subprocess.run([sys.executable, os.path.abspath(__file__), "cycles", glb, out, str(spp),
                         str(seed), str(DEPTH), str(args.clamp_indirect), str(args.filter_glossy),
-                        str(args.filter_width), str(repeat)],
+                        str(args.filter_width), str(repeat)]
+                       + ([",".join(map(str, window))] if window else []),
                        check=True, capture_output=True, text=True)
     secs = [(float(line.split()[1]), float(line.split()[2])) for line in p.stdout.splitlines()
             if line.startswith("CYCLES_SECONDS")]
@@ -222,16 +234,63 @@ def run_cycles(glb, out, spp, seed, args, repeat):
     return secs[-1], objects
 
 
-def run_lightpath(glb, out, spp, seed, args):
-    """Renders GLB with Lightpath: (wall seconds, CPU seconds) of the whole process."""
+def run_lightpath(glb, out, spp, seed, args, window=None):
+    """Renders GLB with Lightpath: (wall seconds, CPU seconds) of the whole process.
+    `window`: only those pixels (`--crop`)."""
     t, cpu = time.time(), children_cpu()
     subprocess.run([args.binary, "render", glb, "-o", out, "--quiet", "--aovs", "none", "--threads", "2",
                     "--resolution", f"{WIDTH}x{HEIGHT}", "--spp", str(spp), "--seed", str(seed),
                     "--max-depth", str(DEPTH + 1), "--clamp-indirect", str(args.clamp_indirect),
                     "--regularize", str(args.regularize), "--filter", args.lightpath_filter,
-                    "--filter-width", str(args.filter_width)],
+                    "--filter-width", str(args.filter_width)]
+                   + (["--crop", ",".join(map(str, window))] if window else []),
                    check=True, capture_output=True)
     return time.time() - t, children_cpu() - cpu
+
+
+def glint_windows(a, b):
+    """Boxes (x0, y0, x1, y1) round the pixels at glints in either reference image, two
+    pixels wider than them (where the pixel filter spreads a glint), overlapping ones
+    merged."""
+    ys, xs = np.nonzero((luminance(a) >= GLINT) | (luminance(b) >= GLINT))
+    boxes = [[max(x - 2, 0), max(y - 2, 0), min(x + 3, WIDTH), min(y + 3, HEIGHT)] for y, x in zip(ys, xs)]
+    merged = True
+    while merged:
+        merged = False
+        for i in range(len(boxes)):
+            for j in range(i + 1, len(boxes)):
+                p, q = boxes[i], boxes[j]
+                if p[0] <= q[2] and q[0] <= p[2] and p[1] <= q[3] and q[1] <= p[3]:
+                    boxes[i] = [min(p[0], q[0]), min(p[1], q[1]), max(p[2], q[2]), max(p[3], q[3])]
+                    del boxes[j]
+                    merged = True
+                    break
+            if merged:
+                break
+    return [tuple(int(v) for v in b) for b in boxes]
+
+
+def converge_glints(glb, name, out, tag, renderer, ref, windows, args):
+    """The reference `ref` with its glint windows rendered again at --glint-spp (a
+    4096-sample reference holds a sub-pixel glint's few hits, so its error, not the
+    renderer's, would decide the MSE there). Cached as <ref>_glints<spp>.exr's pixels."""
+    done = f"{out}/{name}_{renderer}_{tag}_ref_glints{args.glint_spp}.npy"
+    if os.path.exists(done):
+        return np.load(done)
+    fixed = ref.copy()
+    for i, w in enumerate(windows):
+        img = f"{out}/{name}_{renderer}_{tag}_glint{i}_{args.glint_spp}.exr"
+        if renderer == "cycles":
+            run_cycles(glb, img, args.glint_spp, 1001, args, 1, w)
+        else:
+            run_lightpath(glb, img, args.glint_spp, 1001, args, w)
+        x0, y0, x1, y1 = w
+        part, _ = beauty(img, renderer)
+        # Lightpath writes the window alone (its data window); Cycles the whole frame.
+        fixed[y0:y1, x0:x1] = part if part.shape[:2] == (y1 - y0, x1 - x0) else part[y0:y1, x0:x1]
+        print(f"{name}: {renderer} reference's glint window {w} at {args.glint_spp} spp", flush=True)
+    np.save(done, fixed)
+    return fixed
 
 
 def children_cpu():
@@ -269,6 +328,9 @@ def main():
                     help="both renderers' Blackman-Harris width (Cycles' default: 1.5)")
     ap.add_argument("--lightpath-filter", choices=["blackman-harris", "box"], default="blackman-harris",
                     help="Lightpath's pixel filter (box: its own default, unlike Cycles')")
+    ap.add_argument("--glint-spp", type=int, default=262144,
+                    help="each reference's glint windows rendered again at this many samples "
+                         "(0: not; the references then hold a glint's few hits)")
     ap.add_argument("--reuse", action="store_true",
                     help="reuse the renders (and their timings in results_*.json) made before")
     ap.add_argument("--refs-only", choices=["cycles", "lightpath"],
@@ -312,6 +374,10 @@ def main():
             print(f"{name}: Lightpath reference {args.ref_spp} spp in {s:.0f} s", flush=True)
         cy, cy_ch = beauty(cy_ref, "cycles")
         lp, _ = beauty(lp_ref, "lightpath")
+        if args.glint_spp:
+            windows = glint_windows(cy, lp)
+            cy = converge_glints(glb, name, out, tags["cycles"], "cycles", cy, windows, args)
+            lp = converge_glints(glb, name, out, tags["lightpath"], "lightpath", lp, windows, args)
         refs[name] = {"cycles": cy, "lightpath": lp}
         objects[name] = np.rint(cy_ch["ViewLayer.Object Index.X"]).astype(int)
         # Off the glints and two pixels round them (where Cycles' filter spreads them).
@@ -440,7 +506,8 @@ if __name__ == "__main__":
         build(sys.argv[2], sys.argv[3], SCENES[sys.argv[3]])
     elif len(sys.argv) > 1 and sys.argv[1] == "cycles":
         glb, out, spp, seed, depth, clamp, filter_glossy, filter_width, repeat = sys.argv[2:11]
+        window = tuple(int(v) for v in sys.argv[11].split(",")) if len(sys.argv) > 11 else None
         cycles(glb, out, int(spp), int(seed), int(depth), float(clamp), float(filter_glossy),
-               float(filter_width), int(repeat))
+               float(filter_width), int(repeat), window)
     else:
         main()

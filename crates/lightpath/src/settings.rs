@@ -11,6 +11,7 @@ use crate::camera::FilterKind;
 use crate::error::SettingError;
 use crate::guiding::GuidingMode;
 use crate::integrator::connect::LightConnections;
+use crate::integrator::glints::GlintSampling;
 use crate::light::select::LightSelection;
 use crate::media::VolumeSampling;
 use crate::sampler::SamplerKind;
@@ -270,6 +271,17 @@ settings! {
                tracing), weighted by MIS over every way to make the path; for rooms lit \
                by light off a ceiling or baffle or through a door (integrator/connect.rs). \
                on or off.",
+    }
+    glint_sampling: GlintSampling = GlintSampling::On, {
+        section: Render,
+        flag: "glint-sampling",
+        range: Range::Any,
+        role: Shared,
+        header: Header::Setting,
+        help: "Sun glints: where a pinhole camera sees a smooth mirror, each camera sample \
+               also samples a film position whose reflection meets a distant light's \
+               disc (Newton's method in film space), weighed by MIS against the pixel \
+               filter's samples (integrator/glints.rs). on or off.",
     }
     frame: Option<f32> = None, {
         section: Render,
@@ -784,6 +796,7 @@ choice!(FilterKind);
 choice!(GuidingMode);
 choice!(VolumeSampling);
 choice!(LightConnections);
+choice!(GlintSampling);
 
 #[cfg(test)]
 mod tests;

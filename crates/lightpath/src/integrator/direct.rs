@@ -534,7 +534,7 @@ impl Tracer<'_> {
                     }
                     let w = self.bsdf_weight(path, li, |light| {
                         path.pdf_of(light, ray.dir, f32::INFINITY, Vec3A::ZERO)
-                    });
+                    }) * self.glint_share(out, path, li, ray.dir);
                     if scene.has_media {
                         let tr = self.lights_only_transmittance(out, path, ray, u32::MAX);
                         self.light_only_split(out, path, li, le, w, tr);
@@ -580,7 +580,7 @@ impl Tracer<'_> {
         }
     }
 
-    fn light_only_seen(
+    pub(super) fn light_only_seen(
         &self,
         out: &mut Sink,
         path: &PathState,

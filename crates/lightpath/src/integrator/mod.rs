@@ -10,6 +10,7 @@
 pub mod adaptive;
 pub mod connect;
 mod direct;
+pub mod glints;
 mod guided;
 mod light_choice;
 mod path;
@@ -75,6 +76,8 @@ struct Tracer<'a> {
     /// Light tracing's film, if the render joins light subpaths to the camera
     /// (connect/light_tracing.rs).
     splats: Option<&'a Splats>,
+    /// The distant lights glint sampling aims at (glints.rs); empty: none.
+    glint_lights: Vec<u32>,
 }
 
 /// Where a worker's paths put what they find: the sample's AOV values and counters.
@@ -97,6 +100,9 @@ struct Sink<'b> {
     /// What one join of a light vertex to the camera adds to one pixel, before it goes
     /// to the splat film (connect/light_tracing.rs); sized on first use.
     splat_acc: SampleAccumulator,
+    /// The current camera sample's film position, where its pixel samples glints
+    /// (glints.rs).
+    glint: Option<glints::GlintSample>,
 }
 
 impl<'b> Sink<'b> {
@@ -112,6 +118,7 @@ impl<'b> Sink<'b> {
             sobol: None,
             light_path: connect::LightPath::default(),
             splat_acc: SampleAccumulator::new(0),
+            glint: None,
         }
     }
 }
@@ -135,6 +142,7 @@ impl<'a> Tracer<'a> {
             light_boxes: direct::light_boxes(scene),
             connect: None,
             splats: None,
+            glint_lights: glints::glint_lights(scene),
         }
     }
 

@@ -96,7 +96,7 @@ impl PathState {
     /// `seeded`: whether the path draws from its own stream (`Tracer::path_rng`).
     /// Inlined: built in place, not returned through a copy.
     #[inline(always)]
-    fn start(scene: &crate::scene::Scene, ray: &Ray, seeded: bool) -> PathState {
+    pub(super) fn start(scene: &crate::scene::Scene, ray: &Ray, seeded: bool) -> PathState {
         let a = &scene.automaton;
         PathState {
             state: a.step(a.start(), scene.camera_class),
@@ -358,6 +358,7 @@ impl Tracer<'_> {
         for &li in &scene.escape_lights {
             let le = scene.lights[li as usize].emitted_escaped(ray.dir);
             if le != Vec3A::ZERO && self.lit(path.prev_object, li) {
+                let le = le * self.glint_share(out, path, li, ray.dir);
                 self.light_seen(out, path, li, le, |light| {
                     path.pdf_of(light, ray.dir, f32::INFINITY, Vec3A::ZERO)
                 });

@@ -7,6 +7,7 @@
 //! each pixel's sample count (the `sampleCount` channel).
 
 use super::adaptive::Moments;
+use super::glints::GlintSample;
 use super::{Sink, Tracer};
 use crate::film::Film;
 use crate::light::luminance;
@@ -104,6 +105,8 @@ impl Tracer<'_> {
         let cam = &scene.camera;
         let alpha_slot = Film::alpha_slot(job.run.len());
         let mut moments = job.moments;
+        let glint_pixel = self.glint_pixel(job.x, job.y);
+        let index = job.y as u64 * cam.width as u64 + job.x as u64;
         for s in job.first_sample + job.taken..job.first_sample + job.spp {
             let mut sampler = samplers.sample(s as u64);
             let (u_filter, u_lens) = sampler.camera_2d();
@@ -116,7 +119,14 @@ impl Tracer<'_> {
             } else {
                 0.0
             };
+            out.glint = glint_pixel.map(|pixel| GlintSample {
+                pixel,
+                film: film_pos,
+            });
             let alpha = self.trace(ray, film_pdf, &mut sampler, out);
+            if let Some(g) = out.glint {
+                self.sample_glint(out, g, index, s as u64);
+            }
             (job.after_sample)(out);
             if let Some(m) = &mut moments {
                 // The beauty is AOV 0 (aov::plan puts it first).
@@ -125,6 +135,7 @@ impl Tracer<'_> {
             out.acc.flush(job.run);
             job.run[alpha_slot] += alpha;
         }
+        out.glint = None;
         job.spp.max(job.taken)
     }
 }

@@ -10,6 +10,7 @@ mod denoise;
 mod docs;
 mod embree;
 mod farm;
+mod glints;
 mod gltf;
 mod guiding;
 mod hostile;

@@ -1,0 +1,648 @@
+//! Sun glints: a small distant light (the sun's half-degree disc) seen from the camera
+//! through smooth mirrors and glass alone, such as the sun in a chrome ball, or the
+//! sun through a glass ball seen in a chrome one (`C<RS><TS><TS>L`, the brightest
+//! pixel of the held-out glTF shot of benches/peer/real_scenes.py). A glint covers a
+//! speck of its pixel (there, one camera sample in ~1500), so pixel sampling alone
+//! leaves it missing, or a firefly, for thousands of samples.
+//!
+//! A second strategy samples film positions inside the glint:
+//! 1. It takes each of the pixel's chains: a sequence of delta events (reflect or
+//!    transmit at each vertex) that a ray through the pixel centre (or near it) can
+//!    follow and that shows a glint light's disc within the pixel filter's reach.
+//! 2. It draws a direction in that light's disc.
+//! 3. It solves for the film position whose ray leaves the chain in that direction, by
+//!    Newton's method in film space from the pixel centre.
+//!
+//! This is specular manifold sampling (Zeltner, Georgiev and Jakob, "Specular Manifold
+//! Sampling for Rendering High-Frequency Caustics and Glints", 2020) with the film
+//! position as the unknown. The iteration is the chord method: the Jacobian at the
+//! pixel centre, worked out once a pixel, serves every step.
+//!
+//! - **Density.** A film position's density is the light's direction pdf times
+//!   |∂ω/∂x|, the solid angle the chain's last ray sweeps per unit of film area. It
+//!   comes from central differences of four more camera rays.
+//! - **Weights.** Camera samples and glint samples are weighed by the power heuristic
+//!   (the balance heuristic left a 3° sun's glint through a glass ball 4 % to camera
+//!   samples, whose rare hits were most of its noise). A camera sample's density is the
+//!   pixel filter's times its delta events' choices (a glass's Fresnel choice).
+//! - **Unbiased.** A path counts for glint sampling only where Newton from the pixel
+//!   centre finds it, which a camera sample's weight checks by solving again. Where one
+//!   pixel holds several solutions, the others are left to camera samples.
+//!
+//! **Where it applies.**
+//! - Cameras and scenes: a pinhole camera; no media; no partly present surfaces.
+//! - Vertices: one-lobe materials (a smooth conductor or glass, not a smooth coat over a
+//!   base), up to [`MAX_CHAIN`] vertices before Russian roulette starts.
+//! - Lights: the first [`MAX_GLINT_LIGHTS`] distant lights with a disc.
+//!
+//! Elsewhere, camera samples alone make glints, as before.
+//!
+//! ```toml
+//! [render]
+//! glint_sampling = "on"   # on (default) | off
+//! ```
+
+use super::path::PathState;
+use super::{Sink, Tracer};
+use crate::geometry::{Hit, Ray, Visibility};
+use crate::light::LightShape;
+use crate::material::Shading;
+use crate::sampling::{Frame, Rng};
+use crate::scene::Scene;
+use glam::{Mat2, Vec2, Vec3A};
+use lpe::StateId;
+
+/// Whether renders sample film positions inside sun glints (`[render] glint_sampling`,
+/// `--glint-sampling`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum GlintSampling {
+    #[default]
+    On,
+    Off,
+}
+
+impl GlintSampling {
+    pub const NAMES: [&'static str; 2] = ["on", "off"];
+
+    pub fn parse(s: &str) -> Option<GlintSampling> {
+        match s {
+            "on" => Some(GlintSampling::On),
+            "off" => Some(GlintSampling::Off),
+            _ => None,
+        }
+    }
+
+    pub fn name(self) -> &'static str {
+        match self {
+            GlintSampling::On => "on",
+            GlintSampling::Off => "off",
+        }
+    }
+}
+
+/// Distant lights glint sampling aims at, at most: the first ones declared. The others'
+/// glints are left to camera samples.
+pub const MAX_GLINT_LIGHTS: usize = 8;
+
+/// Delta vertices in a chain, at most.
+pub const MAX_CHAIN: u32 = 4;
+
+/// (Chain, light) pairs a pixel samples, at most: the first found, shortest chains first.
+const MAX_CANDIDATES: usize = 8;
+
+/// Where a pixel's chains are looked for: its centre, then these offsets (pixels) off
+/// it, for the chains and lights the centre's ray misses.
+const STARTS: [[f32; 2]; 5] = [
+    [0.0, 0.0],
+    [0.75, 0.0],
+    [-0.75, 0.0],
+    [0.0, 0.75],
+    [0.0, -0.75],
+];
+
+/// Newton steps before a solve gives up.
+const MAX_STEPS: u32 = 10;
+
+/// Film step (pixels) of the Jacobians' differences: a power of two, so that adding it
+/// to a film position is exact.
+const FILM_STEP: f32 = 1.0 / 1024.0;
+
+/// How close (film pixels) a camera sample must be to what Newton finds from its
+/// direction for the two to be one solution.
+const SAME_SOLUTION: f32 = 1e-3;
+
+/// The distant lights glint sampling aims at: those with a disc, if the render samples
+/// glints and the scene lets it (pinhole camera, no media, no partly present surfaces).
+pub(super) fn glint_lights(scene: &Scene) -> Vec<u32> {
+    let fits = scene.settings.glint_sampling == GlintSampling::On
+        && scene.camera.aperture_radius <= 0.0
+        && !scene.has_media
+        && !scene.has_presence;
+    if !fits {
+        return Vec::new();
+    }
+    scene
+        .lights
+        .iter()
+        .enumerate()
+        .filter(|(_, l)| matches!(&l.shape, LightShape::Distant(d) if d.one_minus_cos > 0.0))
+        .map(|(i, _)| i as u32)
+        .take(MAX_GLINT_LIGHTS)
+        .collect()
+}
+
+/// A chain's delta events: `len` of them, bit k of `transmit` set where event k
+/// transmits.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+struct Chain {
+    len: u32,
+    transmit: u32,
+}
+
+impl Chain {
+    fn then(self, transmit: bool) -> Chain {
+        Chain {
+            len: self.len + 1,
+            transmit: self.transmit | ((transmit as u32) << self.len),
+        }
+    }
+}
+
+/// A chain and a light one pixel samples, and where Newton starts for it: the pixel
+/// centre's leaving direction, two directions across it in which directions near it
+/// are measured, and the inverse of the Jacobian there (film pixels per radian).
+#[derive(Clone, Copy, Debug, Default)]
+struct Candidate {
+    chain: Chain,
+    light: u32,
+    /// Where Newton starts: the pixel centre, or a point off it where the centre's ray
+    /// does not follow the chain.
+    start: Vec2,
+    leaving: Vec3A,
+    across: (Vec3A, Vec3A),
+    inverse: Mat2,
+    /// Newton's tolerance (radians).
+    tolerance: f32,
+}
+
+impl Candidate {
+    /// The chord step towards `target` from a position leaving along `leaving`.
+    fn step(&self, target: Vec3A, leaving: Vec3A) -> Vec2 {
+        let miss = target - leaving;
+        self.inverse * Vec2::new(miss.dot(self.across.0), miss.dot(self.across.1))
+    }
+}
+
+/// One pixel's candidates.
+#[derive(Clone, Copy, Debug)]
+pub(super) struct GlintPixel {
+    centre: Vec2,
+    candidates: [Candidate; MAX_CANDIDATES],
+    n: usize,
+}
+
+impl GlintPixel {
+    fn candidates(&self) -> &[Candidate] {
+        &self.candidates[..self.n]
+    }
+}
+
+/// One camera sample's film position in a pixel where glints are sampled.
+#[derive(Clone, Copy, Debug)]
+pub(super) struct GlintSample {
+    pub pixel: GlintPixel,
+    pub film: Vec2,
+}
+
+/// A camera ray through a chain: where it leaves the last vertex, and what the events
+/// made of it.
+struct Followed {
+    last: Hit,
+    /// The direction leaving the last vertex.
+    leaving: Vec3A,
+    /// The product of the events' weights (f·cos / pdf) and of their choices' pdfs.
+    weight: Vec3A,
+    choices: f32,
+    /// The automaton state after the events, the last event's pdf and shading normal.
+    state: StateId,
+    last_pdf: f32,
+    last_n: Vec3A,
+}
+
+impl Tracer<'_> {
+    /// The camera ray through film position `film` along `chain`: every vertex a
+    /// one-lobe delta material whose event there is the chain's; `None` otherwise, or
+    /// where the automaton dies or a depth limit would stop the path first.
+    fn follow(&self, film: Vec2, chain: Chain) -> Option<Followed> {
+        let scene = self.scene;
+        let settings = &scene.settings;
+        if chain.len + 1 > settings.max_depth
+            || chain.len >= settings.rr_depth
+            || settings.max_specular_depth.is_some_and(|m| chain.len > m)
+        {
+            return None;
+        }
+        let a = &scene.automaton;
+        let mut ray = scene.camera.ray(film, Vec2::splat(0.5));
+        let mut mask = Visibility::CAMERA;
+        let mut state = a.step(a.start(), scene.camera_class);
+        let (mut weight, mut choices) = (Vec3A::ONE, 1.0);
+        let mut travelled = 0.0;
+        let mut last = None;
+        for k in 0..chain.len {
+            let hit = scene.accel.intersect(&ray, 0.0, mask)?;
+            travelled += hit.t;
+            let transmit = chain.transmit >> k & 1 == 1;
+            let (event, wi) = self.delta_event(&ray, &hit, travelled, transmit)?;
+            state = a.step(
+                state,
+                scene.objects[hit.object as usize].lobe_classes[event.lobe],
+            );
+            if a.is_dead(state) {
+                return None;
+            }
+            weight *= event.weight;
+            choices *= event.pdf;
+            ray = self.spawn(&hit, wi, f32::INFINITY);
+            mask = Visibility::INDIRECT;
+            last = Some((hit, event.pdf, event.n));
+        }
+        let (last, last_pdf, last_n) = last?;
+        Some(Followed {
+            last,
+            leaving: ray.dir,
+            weight,
+            choices,
+            state,
+            last_pdf,
+            last_n,
+        })
+    }
+
+    /// The delta event of a one-lobe delta material at `hit` (`transmit`: its
+    /// transmission, else its reflection), as a camera path samples it there.
+    fn delta_event(
+        &self,
+        ray: &Ray,
+        hit: &Hit,
+        travelled: f32,
+        transmit: bool,
+    ) -> Option<(DeltaEvent, Vec3A)> {
+        let scene = self.scene;
+        let obj = &scene.objects[hit.object as usize];
+        if obj.holdout {
+            return None;
+        }
+        let material = &scene.materials[obj.material? as usize];
+        let textured;
+        let (bsdf, ns) = match &material.textured {
+            Some(t) => {
+                let cone_width = scene.camera.pixel_spread() * travelled;
+                textured = self.textured(t, hit, ray.dir, cone_width);
+                (&textured.0, textured.1)
+            }
+            None => (&material.bsdf, hit.ns),
+        };
+        if !bsdf.lone_lobe() || !bsdf.lobes().iter().all(|t| t.delta) {
+            return None;
+        }
+        let sh = self.oriented(Shading::new(bsdf, ns, hit.ng, -ray.dir), material, hit);
+        if sh.wo.z == 0.0 {
+            return None;
+        }
+        // A smooth glass reflects where its `u_lobe` falls below the Fresnel factor.
+        let u_lobe = if transmit { 1.0 - f32::EPSILON } else { 0.0 };
+        let bs = bsdf.sample_at(&sh, None, u_lobe, Vec2::ZERO)?;
+        if !bs.delta || bsdf.lobes()[bs.lobe].transmit != transmit || bs.pdf <= 0.0 {
+            return None;
+        }
+        let event = DeltaEvent {
+            lobe: bs.lobe,
+            weight: bs.weight,
+            pdf: bs.pdf,
+            n: sh.frame.n,
+        };
+        Some((event, bs.wi))
+    }
+
+    /// Whether the camera ray through `film` finds a one-lobe delta material: most
+    /// pixels' starts do not, and are done with in one ray.
+    fn sees_delta(&self, film: Vec2) -> bool {
+        let scene = self.scene;
+        let ray = scene.camera.ray(film, Vec2::splat(0.5));
+        scene
+            .accel
+            .intersect(&ray, 0.0, Visibility::CAMERA)
+            .is_some_and(|hit| self.is_delta(&hit))
+    }
+
+    /// Whether the material at `hit` may be a one-lobe delta one there.
+    fn is_delta(&self, hit: &Hit) -> bool {
+        let scene = self.scene;
+        let obj = &scene.objects[hit.object as usize];
+        obj.material.is_some_and(|m| {
+            let m = &scene.materials[m as usize];
+            // A textured material's Bsdf varies over it: it may be delta here.
+            m.textured.is_some() || (m.bsdf.lone_lobe() && m.bsdf.lobes().iter().all(|t| t.delta))
+        })
+    }
+
+    fn leaving(&self, film: Vec2, chain: Chain) -> Option<Vec3A> {
+        self.follow(film, chain).map(|f| f.leaving)
+    }
+
+    /// The candidates of pixel (`x`, `y`): the chains a ray through its centre, or
+    /// through [`STARTS`] off it, can follow, each with the glint lights whose disc it
+    /// may show within the pixel filter's reach; one start for each chain and light.
+    pub(super) fn glint_pixel(&self, x: u32, y: u32) -> Option<GlintPixel> {
+        if self.glint_lights.is_empty() {
+            return None;
+        }
+        let centre = Vec2::new(x as f32 + 0.5, y as f32 + 0.5);
+        let mut pixel = GlintPixel {
+            centre,
+            candidates: [Candidate::default(); MAX_CANDIDATES],
+            n: 0,
+        };
+        for offset in STARTS {
+            self.explore(&mut pixel, centre + Vec2::from(offset));
+        }
+        (pixel.n > 0).then_some(pixel)
+    }
+
+    /// Adds the candidates of the chains a ray through `start` follows, shortest first.
+    fn explore(&self, pixel: &mut GlintPixel, start: Vec2) {
+        if !self.sees_delta(start) {
+            return;
+        }
+        let mut chains = [Chain::default(); 2 << MAX_CHAIN];
+        let (mut head, mut tail) = (0, 0);
+        for transmit in [false, true] {
+            chains[tail] = Chain::default().then(transmit);
+            tail += 1;
+        }
+        while head < tail && pixel.n < MAX_CANDIDATES {
+            let chain = chains[head];
+            head += 1;
+            let Some(f) = self.follow(start, chain) else {
+                continue;
+            };
+            // What the leaving ray finds decides what to look at next: a delta material,
+            // longer chains; the last vertex's own object, nothing (the ray is inside a
+            // closed glass and no disc shows there); anything else or nothing, the
+            // chain's candidates (nearby, the ray may leave the scene).
+            let ray = self.spawn(&f.last, f.leaving, f32::INFINITY);
+            match self.scene.accel.intersect(&ray, 0.0, Visibility::INDIRECT) {
+                Some(h) if self.is_delta(&h) => {
+                    if chain.len < MAX_CHAIN {
+                        for transmit in [false, true] {
+                            chains[tail] = chain.then(transmit);
+                            tail += 1;
+                        }
+                    }
+                }
+                Some(h) if h.object == f.last.object => {}
+                _ => self.add_candidates(pixel, chain, start, f.leaving),
+            }
+        }
+    }
+
+    /// Adds `chain`'s candidates from `start` (leaving there along `leaving`) to
+    /// `pixel`: the glint lights not yet paired with the chain whose disc centre a chord
+    /// step predicts within the filter's reach and a pixel more.
+    fn add_candidates(&self, pixel: &mut GlintPixel, chain: Chain, start: Vec2, leaving: Vec3A) {
+        let scene = self.scene;
+        let reach = scene.filter.radius() + 1.0;
+        let mut jacobian = None;
+        for &li in &self.glint_lights {
+            let LightShape::Distant(d) = &scene.lights[li as usize].shape else {
+                continue;
+            };
+            let towards = -d.dir;
+            let paired = pixel
+                .candidates()
+                .iter()
+                .any(|c| c.chain == chain && c.light == li);
+            if pixel.n == MAX_CANDIDATES || paired || towards.dot(leaving) < 0.5 {
+                continue;
+            }
+            if jacobian.is_none() {
+                jacobian = Some(self.chord(start, chain, leaving));
+            }
+            let Some(Some((across, inverse, scale))) = jacobian else {
+                return;
+            };
+            let mut c = Candidate {
+                chain,
+                light: li,
+                start,
+                leaving,
+                across,
+                inverse,
+                tolerance: 0.0,
+            };
+            if (start + c.step(towards, leaving) - pixel.centre)
+                .abs()
+                .max_element()
+                > reach
+            {
+                continue;
+            }
+            // A thousandth of the disc's angular radius, but no finer than film positions
+            // resolve in f32.
+            let radius = (2.0 * d.one_minus_cos).sqrt();
+            let resolved = 4.0 * scale * pixel.centre.max_element().max(1.0) * f32::EPSILON;
+            c.tolerance = (1e-3 * radius).max(resolved).max(1e-6);
+            // Kept if Newton finds the disc's centre: the chord's prediction is rough
+            // where the chain bends rays strongly (through a glass ball).
+            if self.solve(pixel.centre, &c, towards).is_some() {
+                pixel.candidates[pixel.n] = c;
+                pixel.n += 1;
+            }
+        }
+    }
+
+    /// The chord Jacobian of `chain` at film position `film` (leaving along `leaving`):
+    /// the directions across `leaving`, the inverse, and the larger column's norm
+    /// (radians per pixel).
+    #[allow(clippy::type_complexity)]
+    fn chord(
+        &self,
+        film: Vec2,
+        chain: Chain,
+        leaving: Vec3A,
+    ) -> Option<((Vec3A, Vec3A), Mat2, f32)> {
+        let dx = self.leaving(film + Vec2::new(FILM_STEP, 0.0), chain)? - leaving;
+        let dy = self.leaving(film + Vec2::new(0.0, FILM_STEP), chain)? - leaving;
+        let frame = Frame::new(leaving);
+        let across = (frame.s, frame.t);
+        let jacobian = Mat2::from_cols(
+            Vec2::new(dx.dot(across.0), dx.dot(across.1)),
+            Vec2::new(dy.dot(across.0), dy.dot(across.1)),
+        ) / FILM_STEP;
+        let det = jacobian.determinant();
+        if !det.is_finite() || det.abs() < 1e-12 {
+            return None;
+        }
+        let scale = jacobian.x_axis.length().max(jacobian.y_axis.length());
+        Some((across, jacobian.inverse(), scale))
+    }
+
+    /// The film position near the pixel centre whose ray leaves candidate `c`'s chain
+    /// along `target` (within its tolerance), by Newton steps from the chord step off
+    /// the candidate's start, each at most a pixel long;
+    /// `None` if the steps leave the filter's reach, break the chain or do not converge.
+    fn solve(&self, centre: Vec2, c: &Candidate, target: Vec3A) -> Option<(Vec2, Followed)> {
+        let reach = self.scene.filter.radius();
+        let first = c.start + c.step(target, c.leaving) - centre;
+        let mut film = centre + first.clamp(Vec2::splat(-reach), Vec2::splat(reach));
+        let (mut across, mut inverse) = (c.across, c.inverse);
+        let mut last_miss = f32::INFINITY;
+        for _ in 0..MAX_STEPS {
+            if (film - centre).abs().max_element() > reach {
+                return None;
+            }
+            let f = self.follow(film, c.chain)?;
+            let miss = target - f.leaving;
+            let miss_len = miss.length();
+            if miss_len <= c.tolerance {
+                return Some((film, f));
+            }
+            // The Jacobian it has while the miss shrinks fourfold a step, a new one
+            // where it does not (two more rays).
+            if miss_len > 0.25 * last_miss {
+                (across, inverse, _) = self.chord(film, c.chain, f.leaving)?;
+            }
+            last_miss = miss_len;
+            let step = inverse * Vec2::new(miss.dot(across.0), miss.dot(across.1));
+            film += step / step.length().max(1.0);
+        }
+        None
+    }
+
+    /// |∂ω/∂x| of `chain` at film position `film`: the solid angle (steradians) its
+    /// leaving ray sweeps per pixel of film area there, by central differences.
+    fn sweep(&self, film: Vec2, chain: Chain) -> Option<f32> {
+        let h = FILM_STEP;
+        let rx = self.leaving(film + Vec2::new(h, 0.0), chain)?
+            - self.leaving(film - Vec2::new(h, 0.0), chain)?;
+        let ry = self.leaving(film + Vec2::new(0.0, h), chain)?
+            - self.leaving(film - Vec2::new(0.0, h), chain)?;
+        Some(rx.cross(ry).length() / (4.0 * h * h))
+    }
+
+    /// The camera strategy's share (the power heuristic) of a path that reached light
+    /// `li` along `dir` through delta events alone, its camera sample in a pixel where
+    /// glints are sampled; 1 where glint sampling could not have made the path.
+    #[inline(always)]
+    pub(super) fn glint_share(&self, out: &Sink, path: &PathState, li: u32, dir: Vec3A) -> f32 {
+        match out.glint {
+            Some(g) if path.only_delta && path.depth > 0 => self.camera_share(&g, path, li, dir),
+            _ => 1.0,
+        }
+    }
+
+    #[inline(never)]
+    fn camera_share(&self, g: &GlintSample, path: &PathState, li: u32, dir: Vec3A) -> f32 {
+        let pixel = &g.pixel;
+        let filter = self.scene.filter.pdf(g.film - pixel.centre);
+        if filter <= 0.0 {
+            return 1.0;
+        }
+        for c in pixel.candidates() {
+            if c.light != li || c.chain.len != path.depth {
+                continue;
+            }
+            // Which chain the path took: the one whose leaving ray is its own.
+            let Some(f) = self.follow(g.film, c.chain) else {
+                continue;
+            };
+            if f.leaving.distance(dir) > 1e-4 {
+                continue;
+            }
+            let camera = filter * f.choices;
+            return self
+                .glint_density(pixel, c, g.film, dir)
+                .map_or(1.0, |glint| {
+                    camera * camera / (camera * camera + glint * glint)
+                });
+        }
+        1.0
+    }
+
+    /// Glint sampling's density of the path through film position `film` along
+    /// candidate `c` leaving along `dir`: the light's direction pdf times the sweep. `None` (no density) where Newton from the pixel centre finds
+    /// another solution, or none.
+    fn glint_density(
+        &self,
+        pixel: &GlintPixel,
+        c: &Candidate,
+        film: Vec2,
+        dir: Vec3A,
+    ) -> Option<f32> {
+        let light = &self.scene.lights[c.light as usize];
+        let light_pdf = light.pdf_hit(Vec3A::ZERO, Vec3A::ZERO, dir, f32::INFINITY, Vec3A::ZERO);
+        if light_pdf <= 0.0 {
+            return None;
+        }
+        let (x, _) = self.solve(pixel.centre, c, dir)?;
+        if (x - film).abs().max_element() > SAME_SOLUTION {
+            return None;
+        }
+        let sweep = self.sweep(film, c.chain)?;
+        Some(sweep * light_pdf)
+    }
+
+    /// Glint sampling for one camera sample (`index`: the frame pixel, `sample` its
+    /// number): for each candidate of the pixel's, a direction in its light's disc, the
+    /// film position whose chain leaves that way, and that path to the light. Every
+    /// candidate each sample, not one chosen: a choice's noise was most of a glint's
+    /// through a glass ball where a pixel had two.
+    pub(super) fn sample_glint(&self, out: &mut Sink, g: GlintSample, index: u64, sample: u64) {
+        let mut rng = Rng::for_sample(self.seed ^ GLINT_STREAM, index, sample);
+        for c in g.pixel.candidates() {
+            self.sample_candidate(out, g.pixel.centre, c, rng.next_2d());
+        }
+    }
+
+    fn sample_candidate(&self, out: &mut Sink, centre: Vec2, c: &Candidate, u: Vec2) {
+        let scene = self.scene;
+        let light = &scene.lights[c.light as usize];
+        let Some(ls) = light.sample(Vec3A::ZERO, Vec3A::ZERO, u, scene.accel.prims()) else {
+            return;
+        };
+        if ls.delta || ls.pdf <= 0.0 {
+            return;
+        }
+        out.rays += 1;
+        let Some((film, f)) = self.solve(centre, c, ls.wi) else {
+            return;
+        };
+        let filter = scene.filter.pdf(film - centre);
+        if filter <= 0.0 || !self.lit(f.last.object, c.light) {
+            return;
+        }
+        let Some(sweep) = self.sweep(film, c.chain) else {
+            return;
+        };
+        // The power heuristic's weight over glint sampling's density, as a share of the
+        // camera strategy's estimate (the path's throughput over its filter density).
+        let (camera, glint) = (filter * f.choices, sweep * ls.pdf);
+        let share = camera * glint / (camera * camera + glint * glint);
+        let mut path = PathState::start(scene, &scene.camera.ray(film, Vec2::splat(0.5)), false);
+        path.state = f.state;
+        path.throughput = f.weight;
+        path.prev_p = f.last.p;
+        path.prev_n = f.last_n;
+        path.prev_pdf = f.last_pdf;
+        path.prev_object = f.last.object;
+        path.specular = c.chain.len;
+        path.depth = c.chain.len;
+        let ray = self.spawn(&f.last, f.leaving, f32::INFINITY);
+        let blocked = scene
+            .accel
+            .intersect(&ray, 0.0, Visibility::INDIRECT)
+            .is_some();
+        // The radiance of the direction drawn: the path leaves within `tolerance` of it.
+        let le = ls.radiance;
+        if scene.lights_only_live[scene.automaton.state_index(path.state)] {
+            self.light_only_seen(out, &path, c.light, le, share, blocked);
+        }
+        if !blocked {
+            // Through delta events no other strategy makes the path: `light_seen` weighs
+            // it 1 whatever the light pdf.
+            self.light_seen(out, &path, c.light, le * share, |_| 0.0);
+        }
+    }
+}
+
+/// A delta event at a chain's vertex.
+struct DeltaEvent {
+    lobe: usize,
+    weight: Vec3A,
+    pdf: f32,
+    n: Vec3A,
+}
+
+/// Separates glint sampling's random numbers from every other stream of a sample.
+const GLINT_STREAM: u64 = 0x6c69_6e74_676c_6e74;
