@@ -67,11 +67,12 @@ WIDTH, HEIGHT = 160, 120
 DEPTH = 16  # Cycles' bounces; Lightpath's max-depth is DEPTH + 1 segments
 # Pixels brighter than this (luminance) in either reference are the sun's glints in the
 # chrome and glass balls: a 0.526° disc of radiance ~2e4 covering a sliver of a pixel,
-# which 64 samples either miss or hit. They hold nearly all of both renderers' MSE, and
-# how much depends on the pixel filter (a 1.5-pixel Blackman-Harris spreads a glint
-# over ~9 pixels, a box keeps it in one: hence the same filter for both), so the MSE off
-# them (and two pixels round them) is reported too. The brightest lit surfaces here
-# reach ~3.
+# which 64 camera samples either miss or hit (Lightpath's glint sampling finds it in
+# every sample). How much of the MSE they hold depends on the pixel filter (a 1.5-pixel
+# Blackman-Harris spreads a glint over ~9 pixels, a box keeps it in one: hence the same
+# filter for both), so the MSE off them (and two pixels round them) is reported too, and
+# both references are rendered again there (--glint-spp). The brightest lit surfaces
+# here reach ~3.
 GLINT = 8.0
 HELD_OUT = "heldout"
 

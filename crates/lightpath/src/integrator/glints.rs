@@ -335,7 +335,8 @@ impl Tracer<'_> {
     /// through [`STARTS`] off it, can follow, each with the glint lights whose disc it
     /// may show within the pixel filter's reach; one start for each chain and light.
     pub(super) fn glint_pixel(&self, x: u32, y: u32) -> Option<GlintPixel> {
-        if self.glint_lights.is_empty() {
+        // Guiding's training passes keep no image: their glints are nobody's.
+        if self.glint_lights.is_empty() || self.learn {
             return None;
         }
         let centre = Vec2::new(x as f32 + 0.5, y as f32 + 0.5);
