@@ -571,7 +571,7 @@ impl Tracer<'_> {
             return None;
         }
         let sweep = self.sweep(film, c.chain)?;
-        Some(sweep * light_pdf)
+        Some(sweep * light_pdf).filter(|d| d.is_finite())
     }
 
     /// Glint sampling for one camera sample (`index`: the frame pixel, `sample` its
@@ -610,6 +610,9 @@ impl Tracer<'_> {
         // camera strategy's estimate (the path's throughput over its filter density).
         let (camera, glint) = (filter * f.choices, sweep * ls.pdf);
         let share = camera * glint / (camera * camera + glint * glint);
+        if !share.is_finite() {
+            return;
+        }
         let mut path = PathState::start(scene, &scene.camera.ray(film, Vec2::splat(0.5)), false);
         path.state = f.state;
         path.throughput = f.weight;

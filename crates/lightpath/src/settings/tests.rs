@@ -54,6 +54,7 @@ const EXAMPLES: &[Example] = &[
     ex("guiding", ("on", "\"on\""), ("yes", "\"yes\"")),
     ex("guiding_passes", ("5", "5"), ("13", "13")),
     ex("light_connections", ("on", "\"on\""), ("both", "\"both\"")),
+    ex("glint_sampling", ("off", "\"off\""), ("yes", "\"yes\"")),
     ex("frame", ("12.5", "12.5"), ("1e12", "1e12")),
     ex(
         "render_settings",
@@ -225,6 +226,7 @@ fn the_header_keeps_its_attribute_names_and_values() {
         ("lightpath/setting/clamp_indirect", "0"),
         ("lightpath/setting/filter", "box"),
         ("lightpath/setting/frame", "none"),
+        ("lightpath/setting/glint_sampling", "on"),
         ("lightpath/setting/guiding", "auto"),
         ("lightpath/setting/guiding_passes", "4"),
         ("lightpath/setting/light_candidates", "1"),
