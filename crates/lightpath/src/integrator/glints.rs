@@ -31,8 +31,9 @@
 //!
 //! **Where it applies.**
 //! - Cameras and scenes: a pinhole camera; no media; no partly present surfaces.
-//! - Vertices: one-lobe materials (a smooth conductor or glass, not a smooth coat over a
-//!   base), up to [`MAX_CHAIN`] vertices before Russian roulette starts.
+//! - Vertices: materials with one delta reflection or transmission (a smooth conductor
+//!   or glass, a smooth coat over a rough base: lacquer, car paint, plastic), up to
+//!   [`MAX_CHAIN`] vertices before Russian roulette starts.
 //! - Lights: the first [`MAX_GLINT_LIGHTS`] distant lights with a disc.
 //!
 //! Elsewhere, camera samples alone make glints, as before.
@@ -211,7 +212,7 @@ struct Followed {
 
 impl Tracer<'_> {
     /// The camera ray through film position `film` along `chain`: every vertex a
-    /// one-lobe delta material whose event there is the chain's; `None` otherwise, or
+    /// material with the chain's delta event there; `None` otherwise, or
     /// where the automaton dies or a depth limit would stop the path first.
     fn follow(&self, film: Vec2, chain: Chain) -> Option<Followed> {
         let scene = self.scene;
@@ -259,8 +260,9 @@ impl Tracer<'_> {
         })
     }
 
-    /// The delta event of a one-lobe delta material at `hit` (`transmit`: its
-    /// transmission, else its reflection), as a camera path samples it there.
+    /// The delta event of the material at `hit` (`transmit`: its one delta
+    /// transmission, else its one delta reflection), as a camera path samples it there
+    /// (its lobe's choice included).
     fn delta_event(
         &self,
         ray: &Ray,
@@ -283,17 +285,23 @@ impl Tracer<'_> {
             }
             None => (&material.bsdf, hit.ns),
         };
-        if !bsdf.lone_lobe() || !bsdf.lobes().iter().all(|t| t.delta) {
+        // The one delta event of the kind: with two (a smooth coat over a mirror) a
+        // camera path's event would be ambiguous from its direction.
+        let mut events = (0..bsdf.lobes().len())
+            .filter(|&k| bsdf.lobes()[k].delta && bsdf.lobes()[k].transmit == transmit);
+        let (Some(k), None) = (events.next(), events.next()) else {
             return None;
-        }
+        };
         let sh = self.oriented(Shading::new(bsdf, ns, hit.ng, -ray.dir), material, hit);
         if sh.wo.z == 0.0 {
             return None;
         }
-        // A smooth glass reflects where its `u_lobe` falls below the Fresnel factor.
-        let u_lobe = if transmit { 1.0 - f32::EPSILON } else { 0.0 };
-        let bs = bsdf.sample_at(&sh, None, u_lobe, Vec2::ZERO)?;
-        if !bs.delta || bsdf.lobes()[bs.lobe].transmit != transmit || bs.pdf <= 0.0 {
+        // A smooth glass reflects where its share of `u_lobe` falls below the Fresnel
+        // factor, and transmits above it.
+        let u_rest = if transmit { 1.0 } else { 0.0 };
+        let at = bsdf.at_wo(sh.wo);
+        let bs = bsdf.sample_event_at(&sh, at.as_ref(), k, u_rest)?;
+        if !bs.delta || bs.lobe != k || bs.pdf <= 0.0 {
             return None;
         }
         let event = DeltaEvent {
@@ -305,7 +313,7 @@ impl Tracer<'_> {
         Some((event, bs.wi))
     }
 
-    /// Whether the camera ray through `film` finds a one-lobe delta material: most
+    /// Whether the camera ray through `film` finds a material with a delta event: most
     /// pixels' starts do not, and are done with in one ray.
     fn sees_delta(&self, film: Vec2) -> bool {
         let scene = self.scene;
@@ -316,14 +324,14 @@ impl Tracer<'_> {
             .is_some_and(|hit| self.is_delta(&hit))
     }
 
-    /// Whether the material at `hit` may be a one-lobe delta one there.
+    /// Whether the material at `hit` may have a delta event there.
     fn is_delta(&self, hit: &Hit) -> bool {
         let scene = self.scene;
         let obj = &scene.objects[hit.object as usize];
         obj.material.is_some_and(|m| {
             let m = &scene.materials[m as usize];
             // A textured material's Bsdf varies over it: it may be delta here.
-            m.textured.is_some() || (m.bsdf.lone_lobe() && m.bsdf.lobes().iter().all(|t| t.delta))
+            m.textured.is_some() || m.bsdf.lobes().iter().any(|t| t.delta)
         })
     }
 

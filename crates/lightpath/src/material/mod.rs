@@ -514,6 +514,53 @@ impl Bsdf {
             let u_rest = ((u_lobe - lo) / sel[l]).min(1.0 - f32::EPSILON / 2.0);
             (l, u_rest, sel[l])
         };
+        self.sample_lobe(sh, at, l, sel_l, u_rest, u)
+    }
+
+    /// What [`sample_at`](Self::sample_at) draws when its `u_lobe` picks the lobe of
+    /// event `k` and falls `u_rest` of the way through that lobe's share: the same
+    /// sample, weight and pdf (the lobe's choice included), whichever of the lobe's
+    /// events it is. Glint sampling (integrator/glints.rs) follows a chain of delta
+    /// events with it.
+    pub fn sample_event_at(
+        &self,
+        sh: &Shading,
+        at: Option<&AtWo>,
+        k: usize,
+        u_rest: f32,
+    ) -> Option<BsdfSample> {
+        let (l, _) = *self.tag_lobe[..self.n_tags].get(k)?;
+        let l = l as usize;
+        let sel_l = if self.n_lobes == 1 {
+            1.0
+        } else {
+            self.selection(sh, at)[l]
+        };
+        if sel_l <= 0.0 {
+            return None;
+        }
+        self.sample_lobe(
+            sh,
+            at,
+            l,
+            sel_l,
+            u_rest.min(1.0 - f32::EPSILON / 2.0),
+            Vec2::ZERO,
+        )
+    }
+
+    /// Samples lobe `l`, chosen with probability `sel_l`, with `u_rest` its share of
+    /// `u_lobe`.
+    fn sample_lobe(
+        &self,
+        sh: &Shading,
+        at: Option<&AtWo>,
+        l: usize,
+        sel_l: f32,
+        u_rest: f32,
+        u: Vec2,
+    ) -> Option<BsdfSample> {
+        let wo = sh.wo;
         let ctx = SampleCtx {
             sel: sel_l,
             u_lobe: u_rest,
