@@ -149,9 +149,9 @@ impl Chain {
     }
 }
 
-/// A chain and a light one pixel samples, and where Newton starts for it: the pixel
-/// centre's leaving direction, two directions across it in which directions near it
-/// are measured, and the inverse of the Jacobian there (film pixels per radian).
+/// A chain and a light one pixel samples, and where Newton starts for it: the start's
+/// leaving direction, two directions across it in which directions near it are
+/// measured, and the inverse of the Jacobian there (film pixels per radian).
 #[derive(Clone, Copy, Debug, Default)]
 struct Candidate {
     chain: Chain,
@@ -376,10 +376,11 @@ impl Tracer<'_> {
             let Some(f) = self.follow(start, chain) else {
                 continue;
             };
-            // What the leaving ray finds decides what to look at next: a delta material,
-            // longer chains; the last vertex's own object, nothing (the ray is inside a
-            // closed glass and no disc shows there); anything else or nothing, the
-            // chain's candidates (nearby, the ray may leave the scene).
+            // What the leaving ray finds decides what to look at next: a material with a
+            // delta event, longer chains (inside a glass ball, the way out); anything
+            // else or nothing, the chain's candidates (nearby, the ray may leave the
+            // scene). A chain blocked by a mirror or glass here is left to camera samples
+            // where it is not.
             let ray = self.spawn(&f.last, f.leaving, f32::INFINITY);
             match self.scene.accel.intersect(&ray, 0.0, Visibility::INDIRECT) {
                 Some(h) if self.is_delta(&h) => {
@@ -390,7 +391,6 @@ impl Tracer<'_> {
                         }
                     }
                 }
-                Some(h) if h.object == f.last.object => {}
                 _ => self.add_candidates(pixel, chain, start, f.leaving),
             }
         }
