@@ -30,7 +30,9 @@
 //!   pixel holds several solutions, the others are left to camera samples.
 //!
 //! **Where it applies.**
-//! - Cameras and scenes: a pinhole camera; no media; no partly present surfaces.
+//! - Cameras and scenes: any camera (a thin lens's glints for each lens position, the
+//!   chains looked for with its chief ray, so a glint blurred over more than the
+//!   filter's reach is left to camera samples); no media; no partly present surfaces.
 //! - Vertices: materials with one delta reflection or transmission (a smooth conductor
 //!   or glass, a smooth coat over a rough base: lacquer, car paint, plastic), up to
 //!   [`MAX_CHAIN`] vertices before Russian roulette starts.
@@ -113,10 +115,9 @@ const FILM_STEP: f32 = 1.0 / 1024.0;
 const SAME_SOLUTION: f32 = 1e-3;
 
 /// The distant lights glint sampling aims at: those with a disc, if the render samples
-/// glints and the scene lets it (pinhole camera, no media, no partly present surfaces).
+/// glints and the scene lets it (no media, no partly present surfaces).
 pub(super) fn glint_lights(scene: &Scene) -> Vec<u32> {
     let fits = scene.settings.glint_sampling == GlintSampling::On
-        && scene.camera.aperture_radius <= 0.0
         && !scene.has_media
         && !scene.has_presence;
     if !fits {
@@ -188,12 +189,19 @@ impl GlintPixel {
     }
 }
 
-/// One camera sample's film position in a pixel where glints are sampled.
+/// One camera sample's film and lens positions in a pixel where glints are sampled:
+/// its glint samples go through the same lens position (a thin lens's), so that both
+/// strategies sample film positions for that lens position.
 #[derive(Clone, Copy, Debug)]
 pub(super) struct GlintSample {
     pub pixel: GlintPixel,
     pub film: Vec2,
+    pub lens: Vec2,
 }
+
+/// The lens position of a thin lens's chief ray (its centre), which a pixel's chains
+/// are looked for with.
+const CHIEF: Vec2 = Vec2::splat(0.5);
 
 /// A camera ray through a chain: where it leaves the last vertex, and what the events
 /// made of it.
@@ -214,7 +222,7 @@ impl Tracer<'_> {
     /// The camera ray through film position `film` along `chain`: every vertex a
     /// material with the chain's delta event there; `None` otherwise, or
     /// where the automaton dies or a depth limit would stop the path first.
-    fn follow(&self, film: Vec2, chain: Chain) -> Option<Followed> {
+    fn follow(&self, film: Vec2, lens: Vec2, chain: Chain) -> Option<Followed> {
         let scene = self.scene;
         let settings = &scene.settings;
         if chain.len + 1 > settings.max_depth
@@ -224,7 +232,7 @@ impl Tracer<'_> {
             return None;
         }
         let a = &scene.automaton;
-        let mut ray = scene.camera.ray(film, Vec2::splat(0.5));
+        let mut ray = scene.camera.ray(film, lens);
         let mut mask = Visibility::CAMERA;
         let mut state = a.step(a.start(), scene.camera_class);
         let (mut weight, mut choices) = (Vec3A::ONE, 1.0);
@@ -317,7 +325,7 @@ impl Tracer<'_> {
     /// pixels' starts do not, and are done with in one ray.
     fn sees_delta(&self, film: Vec2) -> bool {
         let scene = self.scene;
-        let ray = scene.camera.ray(film, Vec2::splat(0.5));
+        let ray = scene.camera.ray(film, CHIEF);
         scene
             .accel
             .intersect(&ray, 0.0, Visibility::CAMERA)
@@ -335,8 +343,8 @@ impl Tracer<'_> {
         })
     }
 
-    fn leaving(&self, film: Vec2, chain: Chain) -> Option<Vec3A> {
-        self.follow(film, chain).map(|f| f.leaving)
+    fn leaving(&self, film: Vec2, lens: Vec2, chain: Chain) -> Option<Vec3A> {
+        self.follow(film, lens, chain).map(|f| f.leaving)
     }
 
     /// The candidates of pixel (`x`, `y`): the chains a ray through its centre, or
@@ -373,7 +381,7 @@ impl Tracer<'_> {
         while head < tail && pixel.n < MAX_CANDIDATES {
             let chain = chains[head];
             head += 1;
-            let Some(f) = self.follow(start, chain) else {
+            let Some(f) = self.follow(start, CHIEF, chain) else {
                 continue;
             };
             // What the leaving ray finds decides what to look at next: a material with a
@@ -416,7 +424,7 @@ impl Tracer<'_> {
                 continue;
             }
             if jacobian.is_none() {
-                jacobian = Some(self.chord(start, chain, leaving));
+                jacobian = Some(self.chord(start, CHIEF, chain, leaving));
             }
             let Some(Some((across, inverse, scale))) = jacobian else {
                 return;
@@ -444,7 +452,7 @@ impl Tracer<'_> {
             c.tolerance = (1e-3 * radius).max(resolved).max(1e-6);
             // Kept if Newton finds the disc's centre: the chord's prediction is rough
             // where the chain bends rays strongly (through a glass ball).
-            if self.solve(pixel.centre, &c, towards).is_some() {
+            if self.solve(pixel.centre, &c, CHIEF, towards).is_some() {
                 pixel.candidates[pixel.n] = c;
                 pixel.n += 1;
             }
@@ -458,11 +466,12 @@ impl Tracer<'_> {
     fn chord(
         &self,
         film: Vec2,
+        lens: Vec2,
         chain: Chain,
         leaving: Vec3A,
     ) -> Option<((Vec3A, Vec3A), Mat2, f32)> {
-        let dx = self.leaving(film + Vec2::new(FILM_STEP, 0.0), chain)? - leaving;
-        let dy = self.leaving(film + Vec2::new(0.0, FILM_STEP), chain)? - leaving;
+        let dx = self.leaving(film + Vec2::new(FILM_STEP, 0.0), lens, chain)? - leaving;
+        let dy = self.leaving(film + Vec2::new(0.0, FILM_STEP), lens, chain)? - leaving;
         let frame = Frame::new(leaving);
         let across = (frame.s, frame.t);
         let jacobian = Mat2::from_cols(
@@ -481,7 +490,13 @@ impl Tracer<'_> {
     /// along `target` (within its tolerance), by Newton steps from the chord step off
     /// the candidate's start, each at most a pixel long;
     /// `None` if the steps leave the filter's reach, break the chain or do not converge.
-    fn solve(&self, centre: Vec2, c: &Candidate, target: Vec3A) -> Option<(Vec2, Followed)> {
+    fn solve(
+        &self,
+        centre: Vec2,
+        c: &Candidate,
+        lens: Vec2,
+        target: Vec3A,
+    ) -> Option<(Vec2, Followed)> {
         let reach = self.scene.filter.radius();
         let first = c.start + c.step(target, c.leaving) - centre;
         let mut film = centre + first.clamp(Vec2::splat(-reach), Vec2::splat(reach));
@@ -491,7 +506,7 @@ impl Tracer<'_> {
             if (film - centre).abs().max_element() > reach {
                 return None;
             }
-            let f = self.follow(film, c.chain)?;
+            let f = self.follow(film, lens, c.chain)?;
             let miss = target - f.leaving;
             let miss_len = miss.length();
             if miss_len <= c.tolerance {
@@ -500,7 +515,7 @@ impl Tracer<'_> {
             // The Jacobian it has while the miss shrinks fourfold a step, a new one
             // where it does not (two more rays).
             if miss_len > 0.25 * last_miss {
-                (across, inverse, _) = self.chord(film, c.chain, f.leaving)?;
+                (across, inverse, _) = self.chord(film, lens, c.chain, f.leaving)?;
             }
             last_miss = miss_len;
             let step = inverse * Vec2::new(miss.dot(across.0), miss.dot(across.1));
@@ -511,12 +526,12 @@ impl Tracer<'_> {
 
     /// |∂ω/∂x| of `chain` at film position `film`: the solid angle (steradians) its
     /// leaving ray sweeps per pixel of film area there, by central differences.
-    fn sweep(&self, film: Vec2, chain: Chain) -> Option<f32> {
+    fn sweep(&self, film: Vec2, lens: Vec2, chain: Chain) -> Option<f32> {
         let h = FILM_STEP;
-        let rx = self.leaving(film + Vec2::new(h, 0.0), chain)?
-            - self.leaving(film - Vec2::new(h, 0.0), chain)?;
-        let ry = self.leaving(film + Vec2::new(0.0, h), chain)?
-            - self.leaving(film - Vec2::new(0.0, h), chain)?;
+        let rx = self.leaving(film + Vec2::new(h, 0.0), lens, chain)?
+            - self.leaving(film - Vec2::new(h, 0.0), lens, chain)?;
+        let ry = self.leaving(film + Vec2::new(0.0, h), lens, chain)?
+            - self.leaving(film - Vec2::new(0.0, h), lens, chain)?;
         Some(rx.cross(ry).length() / (4.0 * h * h))
     }
 
@@ -543,7 +558,7 @@ impl Tracer<'_> {
                 continue;
             }
             // Which chain the path took: the one whose leaving ray is its own.
-            let Some(f) = self.follow(g.film, c.chain) else {
+            let Some(f) = self.follow(g.film, g.lens, c.chain) else {
                 continue;
             };
             if f.leaving.distance(dir) > 1e-4 {
@@ -551,7 +566,7 @@ impl Tracer<'_> {
             }
             let camera = filter * f.choices;
             return self
-                .glint_density(pixel, c, g.film, dir)
+                .glint_density(pixel, c, (g.film, g.lens), dir)
                 .map_or(1.0, |glint| {
                     camera * camera / (camera * camera + glint * glint)
                 });
@@ -559,14 +574,15 @@ impl Tracer<'_> {
         1.0
     }
 
-    /// Glint sampling's density of the path through film position `film` along
-    /// candidate `c` leaving along `dir`: the light's direction pdf times the sweep. `None` (no density) where Newton from the pixel centre finds
-    /// another solution, or none.
+    /// Glint sampling's density of the path through film position `film` (and lens
+    /// position `lens`) along candidate `c` leaving along `dir`: the light's direction
+    /// pdf times the sweep. `None` (no density) where Newton from the candidate's start
+    /// finds another solution, or none.
     fn glint_density(
         &self,
         pixel: &GlintPixel,
         c: &Candidate,
-        film: Vec2,
+        (film, lens): (Vec2, Vec2),
         dir: Vec3A,
     ) -> Option<f32> {
         let light = &self.scene.lights[c.light as usize];
@@ -574,11 +590,11 @@ impl Tracer<'_> {
         if light_pdf <= 0.0 {
             return None;
         }
-        let (x, _) = self.solve(pixel.centre, c, dir)?;
+        let (x, _) = self.solve(pixel.centre, c, lens, dir)?;
         if (x - film).abs().max_element() > SAME_SOLUTION {
             return None;
         }
-        let sweep = self.sweep(film, c.chain)?;
+        let sweep = self.sweep(film, lens, c.chain)?;
         Some(sweep * light_pdf).filter(|d| d.is_finite())
     }
 
@@ -590,11 +606,17 @@ impl Tracer<'_> {
     pub(super) fn sample_glint(&self, out: &mut Sink, g: GlintSample, index: u64, sample: u64) {
         let mut rng = Rng::for_sample(self.seed ^ GLINT_STREAM, index, sample);
         for c in g.pixel.candidates() {
-            self.sample_candidate(out, g.pixel.centre, c, rng.next_2d());
+            self.sample_candidate(out, (g.pixel.centre, g.lens), c, rng.next_2d());
         }
     }
 
-    fn sample_candidate(&self, out: &mut Sink, centre: Vec2, c: &Candidate, u: Vec2) {
+    fn sample_candidate(
+        &self,
+        out: &mut Sink,
+        (centre, lens): (Vec2, Vec2),
+        c: &Candidate,
+        u: Vec2,
+    ) {
         let scene = self.scene;
         let light = &scene.lights[c.light as usize];
         let Some(ls) = light.sample(Vec3A::ZERO, Vec3A::ZERO, u, scene.accel.prims()) else {
@@ -604,14 +626,14 @@ impl Tracer<'_> {
             return;
         }
         out.rays += 1;
-        let Some((film, f)) = self.solve(centre, c, ls.wi) else {
+        let Some((film, f)) = self.solve(centre, c, lens, ls.wi) else {
             return;
         };
         let filter = scene.filter.pdf(film - centre);
         if filter <= 0.0 || !self.lit(f.last.object, c.light) {
             return;
         }
-        let Some(sweep) = self.sweep(film, c.chain) else {
+        let Some(sweep) = self.sweep(film, lens, c.chain) else {
             return;
         };
         // The power heuristic's weight over glint sampling's density, as a share of the
@@ -621,7 +643,7 @@ impl Tracer<'_> {
         if !share.is_finite() {
             return;
         }
-        let mut path = PathState::start(scene, &scene.camera.ray(film, Vec2::splat(0.5)), false);
+        let mut path = PathState::start(scene, &scene.camera.ray(film, lens), false);
         path.state = f.state;
         path.throughput = f.weight;
         path.prev_p = f.last.p;

@@ -122,6 +122,7 @@ impl Tracer<'_> {
             out.glint = glint_pixel.map(|pixel| GlintSample {
                 pixel,
                 film: film_pos,
+                lens: u_lens,
             });
             let alpha = self.trace(ray, film_pdf, &mut sampler, out);
             if let Some(g) = out.glint {
