@@ -523,6 +523,11 @@ impl Tracer<'_> {
                     li as u32,
                     |light| path.pdf_of(light, ray.dir, t, n),
                     reached,
+                ) * self.glint_share(
+                    out,
+                    path,
+                    li as u32,
+                    (ray.dir, Some(ray.origin + ray.dir * t)),
                 );
                 self.light_only_seen(out, path, li as u32, le, w, !reached);
             }
@@ -534,7 +539,7 @@ impl Tracer<'_> {
                     }
                     let w = self.bsdf_weight(path, li, |light| {
                         path.pdf_of(light, ray.dir, f32::INFINITY, Vec3A::ZERO)
-                    }) * self.glint_share(out, path, li, ray.dir);
+                    }) * self.glint_share(out, path, li, (ray.dir, None));
                     if scene.has_media {
                         let tr = self.lights_only_transmittance(out, path, ray, u32::MAX);
                         self.light_only_split(out, path, li, le, w, tr);

@@ -1,5 +1,5 @@
-//! Sun glints: a small distant light (the sun's half-degree disc) seen from the camera
-//! through smooth mirrors and glass alone, such as the sun in a chrome ball, or the
+//! Sun glints: a small distant light (the sun's half-degree disc) or sphere light (a
+//! bulb) seen from the camera through smooth mirrors and glass alone, such as the sun in a chrome ball, or the
 //! sun through a glass ball seen in a chrome one (`C<RS><TS><TS>L`, the brightest
 //! pixel of the held-out glTF shot of benches/peer/real_scenes.py). A glint covers a
 //! speck of its pixel (there, one camera sample in ~1500), so pixel sampling alone
@@ -9,9 +9,10 @@
 //! 1. It takes each of the pixel's chains: a sequence of delta events (reflect or
 //!    transmit at each vertex) that a ray through the pixel centre (or near it) can
 //!    follow and that shows a glint light's disc within the pixel filter's reach.
-//! 2. It draws a direction in that light's disc.
-//! 3. It solves for the film position whose ray leaves the chain in that direction, by
-//!    Newton's method in film space from the pixel centre.
+//! 2. It draws a direction in that light's disc, or a point on the sphere light (as its
+//!    light samples from the chain's last vertex at the start draw it).
+//! 3. It solves for the film position whose ray leaves the chain in that direction, or
+//!    towards that point, by Newton's method in film space from the pixel centre.
 //!
 //! This is specular manifold sampling (Zeltner, Georgiev and Jakob, "Specular Manifold
 //! Sampling for Rendering High-Frequency Caustics and Glints", 2020) with the film
@@ -19,8 +20,9 @@
 //! pixel centre, worked out once a pixel, serves every step.
 //!
 //! - **Density.** A film position's density is the light's direction pdf times
-//!   |∂ω/∂x|, the solid angle the chain's last ray sweeps per unit of film area. It
-//!   comes from central differences of four more camera rays.
+//!   |∂ω/∂x|, the solid angle the chain's last ray sweeps per unit of film area (for a
+//!   sphere light, the solid angle, seen from the start's last vertex, of where that ray
+//!   meets it). It comes from finite differences of four more camera rays.
 //! - **Weights.** Camera samples and glint samples are weighed by the power heuristic
 //!   (the balance heuristic left a 3° sun's glint through a glass ball 4 % to camera
 //!   samples, whose rare hits were most of its noise). A camera sample's density is the
@@ -36,7 +38,7 @@
 //! - Vertices: materials with one delta reflection or transmission (a smooth conductor
 //!   or glass, a smooth coat over a rough base: lacquer, car paint, plastic), up to
 //!   [`MAX_CHAIN`] vertices before Russian roulette starts.
-//! - Lights: the first [`MAX_GLINT_LIGHTS`] distant lights with a disc.
+//! - Lights: the first [`MAX_GLINT_LIGHTS`] distant lights with a disc and sphere lights.
 //!
 //! Elsewhere, camera samples alone make glints, as before.
 //!
@@ -47,7 +49,7 @@
 
 use super::path::PathState;
 use super::{Sink, Tracer};
-use crate::geometry::{Hit, Ray, Visibility};
+use crate::geometry::{sphere_intersect, Hit, Ray, Visibility};
 use crate::light::LightShape;
 use crate::material::Shading;
 use crate::sampling::{Frame, Rng};
@@ -83,8 +85,8 @@ impl GlintSampling {
     }
 }
 
-/// Distant lights glint sampling aims at, at most: the first ones declared. The others'
-/// glints are left to camera samples.
+/// Lights glint sampling aims at, at most: the first ones declared. The others' glints
+/// are left to camera samples.
 pub const MAX_GLINT_LIGHTS: usize = 8;
 
 /// Delta vertices in a chain, at most.
@@ -114,8 +116,9 @@ const FILM_STEP: f32 = 1.0 / 1024.0;
 /// direction for the two to be one solution.
 const SAME_SOLUTION: f32 = 1e-3;
 
-/// The distant lights glint sampling aims at: those with a disc, if the render samples
-/// glints and the scene lets it (no media, no partly present surfaces).
+/// The lights glint sampling aims at: distant lights with a disc and sphere lights, if
+/// the render samples glints and the scene lets it (no media, no partly present
+/// surfaces).
 pub(super) fn glint_lights(scene: &Scene) -> Vec<u32> {
     let fits = scene.settings.glint_sampling == GlintSampling::On
         && !scene.has_media
@@ -127,7 +130,11 @@ pub(super) fn glint_lights(scene: &Scene) -> Vec<u32> {
         .lights
         .iter()
         .enumerate()
-        .filter(|(_, l)| matches!(&l.shape, LightShape::Distant(d) if d.one_minus_cos > 0.0))
+        .filter(|(_, l)| match &l.shape {
+            LightShape::Distant(d) => d.one_minus_cos > 0.0,
+            LightShape::Sphere(s) => s.radius > 0.0,
+            _ => false,
+        })
         .map(|(i, _)| i as u32)
         .take(MAX_GLINT_LIGHTS)
         .collect()
@@ -160,6 +167,8 @@ struct Candidate {
     /// Where Newton starts: the pixel centre, or a point off it where the centre's ray
     /// does not follow the chain.
     start: Vec2,
+    /// The start's last vertex: where a sphere light's points are drawn as seen from.
+    from: Vec3A,
     leaving: Vec3A,
     across: (Vec3A, Vec3A),
     inverse: Mat2,
@@ -399,23 +408,28 @@ impl Tracer<'_> {
                         }
                     }
                 }
-                _ => self.add_candidates(pixel, chain, start, f.leaving),
+                _ => self.add_candidates(pixel, chain, (start, f.last.p), f.leaving),
             }
         }
     }
 
-    /// Adds `chain`'s candidates from `start` (leaving there along `leaving`) to
-    /// `pixel`: the glint lights not yet paired with the chain whose disc centre a chord
-    /// step predicts within the filter's reach and a pixel more.
-    fn add_candidates(&self, pixel: &mut GlintPixel, chain: Chain, start: Vec2, leaving: Vec3A) {
-        let scene = self.scene;
-        let reach = scene.filter.radius() + 1.0;
+    /// Adds `chain`'s candidates from `start` (its last vertex at `from`, leaving
+    /// along `leaving`) to `pixel`: the glint lights not yet paired with the chain whose
+    /// centre a chord step predicts within the filter's reach and a pixel more.
+    fn add_candidates(
+        &self,
+        pixel: &mut GlintPixel,
+        chain: Chain,
+        (start, from): (Vec2, Vec3A),
+        leaving: Vec3A,
+    ) {
+        let reach = self.scene.filter.radius() + 1.0;
         let mut jacobian = None;
         for &li in &self.glint_lights {
-            let LightShape::Distant(d) = &scene.lights[li as usize].shape else {
+            let Some((aim, angular_radius)) = self.light_centre(li, from) else {
                 continue;
             };
-            let towards = -d.dir;
+            let towards = self.leaving_towards(li, aim, from);
             let paired = pixel
                 .candidates()
                 .iter()
@@ -433,6 +447,7 @@ impl Tracer<'_> {
                 chain,
                 light: li,
                 start,
+                from,
                 leaving,
                 across,
                 inverse,
@@ -445,17 +460,39 @@ impl Tracer<'_> {
             {
                 continue;
             }
-            // A thousandth of the disc's angular radius, but no finer than film positions
-            // resolve in f32.
-            let radius = (2.0 * d.one_minus_cos).sqrt();
+            // A thousandth of the light's angular radius, but no finer than film
+            // positions resolve in f32.
             let resolved = 4.0 * scale * pixel.centre.max_element().max(1.0) * f32::EPSILON;
-            c.tolerance = (1e-3 * radius).max(resolved).max(1e-6);
-            // Kept if Newton finds the disc's centre: the chord's prediction is rough
+            c.tolerance = (1e-3 * angular_radius).max(resolved).max(1e-6);
+            // Kept if Newton finds the light's centre: the chord's prediction is rough
             // where the chain bends rays strongly (through a glass ball).
-            if self.solve(pixel.centre, &c, CHIEF, towards).is_some() {
+            if self.solve(pixel.centre, &c, CHIEF, aim).is_some() {
                 pixel.candidates[pixel.n] = c;
                 pixel.n += 1;
             }
+        }
+    }
+
+    /// Glint light `li`'s centre as seen from `from`: the direction of a distant light's
+    /// disc or a sphere light's centre (the aim Newton takes towards it), and its
+    /// angular radius.
+    fn light_centre(&self, li: u32, from: Vec3A) -> Option<(Vec3A, f32)> {
+        match &self.scene.lights[li as usize].shape {
+            LightShape::Distant(d) => Some((-d.dir, (2.0 * d.one_minus_cos).sqrt())),
+            LightShape::Sphere(s) => {
+                let d = s.center.distance(from);
+                (d > s.radius).then(|| (s.center, (s.radius / d).asin()))
+            }
+            _ => None,
+        }
+    }
+
+    /// The direction a chain's last vertex at `from` must leave along to meet `aim`: a
+    /// distant light's aim is a direction, a sphere light's a point on it.
+    fn leaving_towards(&self, li: u32, aim: Vec3A, from: Vec3A) -> Vec3A {
+        match &self.scene.lights[li as usize].shape {
+            LightShape::Sphere(_) => (aim - from).normalize_or_zero(),
+            _ => aim,
         }
     }
 
@@ -487,7 +524,8 @@ impl Tracer<'_> {
     }
 
     /// The film position near the pixel centre whose ray leaves candidate `c`'s chain
-    /// along `target` (within its tolerance), by Newton steps from the chord step off
+    /// towards `aim` (a distant light's direction, a point on a sphere light; within
+    /// its tolerance), by Newton steps from the chord step off
     /// the candidate's start, each at most a pixel long;
     /// `None` if the steps leave the filter's reach, break the chain or do not converge.
     fn solve(
@@ -495,10 +533,11 @@ impl Tracer<'_> {
         centre: Vec2,
         c: &Candidate,
         lens: Vec2,
-        target: Vec3A,
+        aim: Vec3A,
     ) -> Option<(Vec2, Followed)> {
         let reach = self.scene.filter.radius();
-        let first = c.start + c.step(target, c.leaving) - centre;
+        let first =
+            c.start + c.step(self.leaving_towards(c.light, aim, c.from), c.leaving) - centre;
         let mut film = centre + first.clamp(Vec2::splat(-reach), Vec2::splat(reach));
         let (mut across, mut inverse) = (c.across, c.inverse);
         let mut last_miss = f32::INFINITY;
@@ -507,7 +546,7 @@ impl Tracer<'_> {
                 return None;
             }
             let f = self.follow(film, lens, c.chain)?;
-            let miss = target - f.leaving;
+            let miss = self.leaving_towards(c.light, aim, f.last.p) - f.leaving;
             let miss_len = miss.length();
             if miss_len <= c.tolerance {
                 return Some((film, f));
@@ -524,30 +563,100 @@ impl Tracer<'_> {
         None
     }
 
-    /// |∂ω/∂x| of `chain` at film position `film`: the solid angle (steradians) its
-    /// leaving ray sweeps per pixel of film area there, by central differences.
-    fn sweep(&self, film: Vec2, lens: Vec2, chain: Chain) -> Option<f32> {
+    /// How fast candidate `c`'s chain sweeps over its light at film position `film`,
+    /// per pixel of film area, by finite differences: the solid angle (steradians) of
+    /// its leaving ray for a distant light; for a sphere light, of the direction from the
+    /// candidate's `from` to where its leaving ray meets the sphere. (In solid angle from
+    /// `from`, the measure a sphere light's points are drawn in, their density is the
+    /// same over the sphere: a point found within Newton's tolerance of the one drawn
+    /// has the drawn one's density. Per unit area it falls to zero at the rim.)
+    fn sweep(&self, film: Vec2, lens: Vec2, c: &Candidate) -> Option<f32> {
         let h = FILM_STEP;
-        let rx = self.leaving(film + Vec2::new(h, 0.0), lens, chain)?
-            - self.leaving(film - Vec2::new(h, 0.0), lens, chain)?;
-        let ry = self.leaving(film + Vec2::new(0.0, h), lens, chain)?
-            - self.leaving(film - Vec2::new(0.0, h), lens, chain)?;
-        Some(rx.cross(ry).length() / (4.0 * h * h))
+        let at = |x: Vec2| -> Option<Vec3A> {
+            let f = self.follow(x, lens, c.chain)?;
+            match &self.scene.lights[c.light as usize].shape {
+                LightShape::Sphere(s) => {
+                    let t = sphere_intersect(
+                        s.center,
+                        s.radius,
+                        f.last.p,
+                        f.leaving,
+                        0.0,
+                        f32::INFINITY,
+                    );
+                    t.is_finite()
+                        .then(|| (f.last.p + f.leaving * t - c.from).normalize())
+                }
+                _ => Some(f.leaving),
+            }
+        };
+        // Central differences, or one-sided ones where a side leaves the light (at a
+        // sphere's rim) or breaks the chain.
+        let centre = at(film);
+        let axis = |e: Vec2| -> Option<Vec3A> {
+            match (at(film + e * h), at(film - e * h)) {
+                (Some(a), Some(b)) => Some((a - b) / (2.0 * h)),
+                (Some(a), None) => Some((a - centre?) / h),
+                (None, Some(b)) => Some((centre? - b) / h),
+                (None, None) => None,
+            }
+        };
+        Some(axis(Vec2::X)?.cross(axis(Vec2::Y)?).length())
+    }
+
+    /// The density with which glint sampling draws `aim` for candidate `c`: a distant
+    /// light's direction pdf, or a sphere light's solid-angle density of that point of
+    /// its surface as its light samples from the candidate's `from` draw it (0 for a
+    /// point on its far side).
+    fn aim_pdf(&self, c: &Candidate, aim: Vec3A) -> f32 {
+        let light = &self.scene.lights[c.light as usize];
+        match &light.shape {
+            LightShape::Sphere(s) => {
+                let to = aim - c.from;
+                let d = to.length();
+                if d.is_nan() || d <= 0.0 {
+                    return 0.0;
+                }
+                let dir = to / d;
+                let near = sphere_intersect(s.center, s.radius, c.from, dir, 0.0, f32::INFINITY);
+                // Drawn points are on the side facing `from`: the ray's first hit.
+                if (near - d).abs() > 1e-3 * d {
+                    return 0.0;
+                }
+                light.pdf_hit(c.from, Vec3A::ZERO, dir, d, (aim - s.center) / s.radius)
+            }
+            _ => light.pdf_hit(Vec3A::ZERO, Vec3A::ZERO, aim, f32::INFINITY, Vec3A::ZERO),
+        }
     }
 
     /// The camera strategy's share (the power heuristic) of a path that reached light
-    /// `li` along `dir` through delta events alone, its camera sample in a pixel where
-    /// glints are sampled; 1 where glint sampling could not have made the path.
+    /// `li` along `dir` (at `point` on it, for a light with a surface) through delta
+    /// events alone, its camera sample in a pixel where glints are sampled; 1 where
+    /// glint sampling could not have made the path.
     #[inline(always)]
-    pub(super) fn glint_share(&self, out: &Sink, path: &PathState, li: u32, dir: Vec3A) -> f32 {
+    pub(super) fn glint_share(
+        &self,
+        out: &Sink,
+        path: &PathState,
+        li: u32,
+        (dir, point): (Vec3A, Option<Vec3A>),
+    ) -> f32 {
         match out.glint {
-            Some(g) if path.only_delta && path.depth > 0 => self.camera_share(&g, path, li, dir),
+            Some(g) if path.only_delta && path.depth > 0 => {
+                self.camera_share(&g, path, li, (dir, point))
+            }
             _ => 1.0,
         }
     }
 
     #[inline(never)]
-    fn camera_share(&self, g: &GlintSample, path: &PathState, li: u32, dir: Vec3A) -> f32 {
+    fn camera_share(
+        &self,
+        g: &GlintSample,
+        path: &PathState,
+        li: u32,
+        (dir, point): (Vec3A, Option<Vec3A>),
+    ) -> f32 {
         let pixel = &g.pixel;
         let filter = self.scene.filter.pdf(g.film - pixel.centre);
         if filter <= 0.0 {
@@ -565,8 +674,9 @@ impl Tracer<'_> {
                 continue;
             }
             let camera = filter * f.choices;
+            let aim = point.unwrap_or(dir);
             return self
-                .glint_density(pixel, c, (g.film, g.lens), dir)
+                .glint_density(pixel, c, (g.film, g.lens), aim)
                 .map_or(1.0, |glint| {
                     camera * camera / (camera * camera + glint * glint)
                 });
@@ -575,34 +685,34 @@ impl Tracer<'_> {
     }
 
     /// Glint sampling's density of the path through film position `film` (and lens
-    /// position `lens`) along candidate `c` leaving along `dir`: the light's direction
-    /// pdf times the sweep. `None` (no density) where Newton from the candidate's start
-    /// finds another solution, or none.
+    /// position `lens`) along candidate `c` to `aim` (a direction, or a point on a
+    /// sphere light): the aim's density times the sweep. `None` (no density) where
+    /// Newton from the candidate's start finds another solution, or none.
     fn glint_density(
         &self,
         pixel: &GlintPixel,
         c: &Candidate,
         (film, lens): (Vec2, Vec2),
-        dir: Vec3A,
+        aim: Vec3A,
     ) -> Option<f32> {
-        let light = &self.scene.lights[c.light as usize];
-        let light_pdf = light.pdf_hit(Vec3A::ZERO, Vec3A::ZERO, dir, f32::INFINITY, Vec3A::ZERO);
-        if light_pdf <= 0.0 {
+        let aim_pdf = self.aim_pdf(c, aim);
+        if aim_pdf <= 0.0 {
             return None;
         }
-        let (x, _) = self.solve(pixel.centre, c, lens, dir)?;
+        let (x, _) = self.solve(pixel.centre, c, lens, aim)?;
         if (x - film).abs().max_element() > SAME_SOLUTION {
             return None;
         }
-        let sweep = self.sweep(film, lens, c.chain)?;
-        Some(sweep * light_pdf).filter(|d| d.is_finite())
+        let sweep = self.sweep(film, lens, c)?;
+        Some(sweep * aim_pdf).filter(|d| d.is_finite())
     }
 
     /// Glint sampling for one camera sample (`index`: the frame pixel, `sample` its
-    /// number): for each candidate of the pixel's, a direction in its light's disc, the
-    /// film position whose chain leaves that way, and that path to the light. Every
-    /// candidate each sample, not one chosen: a choice's noise was most of a glint's
-    /// through a glass ball where a pixel had two.
+    /// number): for each candidate of the pixel's, an aim at its light (a direction in a
+    /// distant light's disc, a point on a sphere light), the film position whose chain
+    /// leaves that way, and that path to the light. Every candidate each sample, not one
+    /// chosen: a choice's noise was most of a glint's through a glass ball where a pixel
+    /// had two.
     pub(super) fn sample_glint(&self, out: &mut Sink, g: GlintSample, index: u64, sample: u64) {
         let mut rng = Rng::for_sample(self.seed ^ GLINT_STREAM, index, sample);
         for c in g.pixel.candidates() {
@@ -619,28 +729,45 @@ impl Tracer<'_> {
     ) {
         let scene = self.scene;
         let light = &scene.lights[c.light as usize];
-        let Some(ls) = light.sample(Vec3A::ZERO, Vec3A::ZERO, u, scene.accel.prims()) else {
+        let Some(ls) = light.sample(c.from, Vec3A::ZERO, u, scene.accel.prims()) else {
             return;
         };
         if ls.delta || ls.pdf <= 0.0 {
             return;
         }
+        let sphere = matches!(light.shape, LightShape::Sphere(_));
+        let aim = if sphere {
+            c.from + ls.wi * ls.dist
+        } else {
+            ls.wi
+        };
         out.rays += 1;
-        let Some((film, f)) = self.solve(centre, c, lens, ls.wi) else {
+        let Some((film, f)) = self.solve(centre, c, lens, aim) else {
             return;
         };
         let filter = scene.filter.pdf(film - centre);
         if filter <= 0.0 || !self.lit(f.last.object, c.light) {
             return;
         }
-        let Some(sweep) = self.sweep(film, lens, c.chain) else {
+        // What the leaving ray meets: the sky beyond a distant light's disc, or the
+        // sphere light's own surface.
+        let ray = self.spawn(&f.last, f.leaving, f32::INFINITY);
+        let found = scene.accel.intersect(&ray, 0.0, Visibility::INDIRECT);
+        let (blocked, aim, le) = match (sphere, found) {
+            (false, found) => (found.is_some(), aim, ls.radiance),
+            (true, Some(h)) if scene.objects[h.object as usize].light == Some(c.light) => {
+                (false, h.p, light.emitted_at(h.ng, ray.dir))
+            }
+            (true, _) => (true, aim, ls.radiance),
+        };
+        let Some(sweep) = self.sweep(film, lens, c) else {
             return;
         };
         // The power heuristic's weight over glint sampling's density, as a share of the
         // camera strategy's estimate (the path's throughput over its filter density).
-        let (camera, glint) = (filter * f.choices, sweep * ls.pdf);
+        let (camera, glint) = (filter * f.choices, sweep * self.aim_pdf(c, aim));
         let share = camera * glint / (camera * camera + glint * glint);
-        if !share.is_finite() {
+        if !share.is_finite() || glint <= 0.0 {
             return;
         }
         let mut path = PathState::start(scene, &scene.camera.ray(film, lens), false);
@@ -652,13 +779,6 @@ impl Tracer<'_> {
         path.prev_object = f.last.object;
         path.specular = c.chain.len;
         path.depth = c.chain.len;
-        let ray = self.spawn(&f.last, f.leaving, f32::INFINITY);
-        let blocked = scene
-            .accel
-            .intersect(&ray, 0.0, Visibility::INDIRECT)
-            .is_some();
-        // The radiance of the direction drawn: the path leaves within `tolerance` of it.
-        let le = ls.radiance;
         if scene.lights_only_live[scene.automaton.state_index(path.state)] {
             self.light_only_seen(out, &path, c.light, le, share, blocked);
         }

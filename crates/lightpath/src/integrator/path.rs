@@ -358,7 +358,7 @@ impl Tracer<'_> {
         for &li in &scene.escape_lights {
             let le = scene.lights[li as usize].emitted_escaped(ray.dir);
             if le != Vec3A::ZERO && self.lit(path.prev_object, li) {
-                let le = le * self.glint_share(out, path, li, ray.dir);
+                let le = le * self.glint_share(out, path, li, (ray.dir, None));
                 self.light_seen(out, path, li, le, |light| {
                     path.pdf_of(light, ray.dir, f32::INFINITY, Vec3A::ZERO)
                 });
@@ -390,6 +390,7 @@ impl Tracer<'_> {
             let light = &scene.lights[li as usize];
             let le = light.emitted_at(hit.ng, ray.dir);
             if le != Vec3A::ZERO && self.lit(path.prev_object, li) {
+                let le = le * self.glint_share(out, path, li, (ray.dir, Some(hit.p)));
                 self.light_seen(out, path, li, le, |light| {
                     path.pdf_of(light, ray.dir, hit.t + path.travelled, hit.ng)
                 });
