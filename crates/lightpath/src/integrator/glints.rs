@@ -1,7 +1,8 @@
 //! Sun glints: a small distant light (the sun's half-degree disc) or sphere light (a
-//! bulb) seen from the camera through smooth mirrors and glass alone, such as the sun in a chrome ball, or the
-//! sun through a glass ball seen in a chrome one (`C<RS><TS><TS>L`, the brightest
-//! pixel of the held-out glTF shot of benches/peer/real_scenes.py). A glint covers a
+//! bulb) seen from the camera through smooth mirrors and glass alone, such as the sun
+//! in a chrome ball, or the sun through a glass ball seen in a chrome one
+//! (`C<RS><TS><TS>L`, the brightest pixel of the held-out glTF shot of
+//! benches/peer/real_scenes.py). A glint covers a
 //! speck of its pixel (there, one camera sample in ~1500), so pixel sampling alone
 //! leaves it missing, or a firefly, for thousands of samples.
 //!
@@ -12,12 +13,13 @@
 //! 2. It draws a direction in that light's disc, or a point on the sphere light (as its
 //!    light samples from the chain's last vertex at the start draw it).
 //! 3. It solves for the film position whose ray leaves the chain in that direction, or
-//!    towards that point, by Newton's method in film space from the pixel centre.
+//!    towards that point, by Newton's method in film space from the chain's start.
 //!
 //! This is specular manifold sampling (Zeltner, Georgiev and Jakob, "Specular Manifold
 //! Sampling for Rendering High-Frequency Caustics and Glints", 2020) with the film
-//! position as the unknown. The iteration is the chord method: the Jacobian at the
-//! pixel centre, worked out once a pixel, serves every step.
+//! position as the unknown. The first step is a chord step with the Jacobian at the
+//! start, worked out once a pixel; the next take a fresh Jacobian wherever the miss does
+//! not shrink fourfold (through a glass ball the chord alone oscillated).
 //!
 //! - **Density.** A film position's density is the light's direction pdf times
 //!   |∂ω/∂x|, the solid angle the chain's last ray sweeps per unit of film area (for a
@@ -27,8 +29,8 @@
 //!   (the balance heuristic left a 3° sun's glint through a glass ball 4 % to camera
 //!   samples, whose rare hits were most of its noise). A camera sample's density is the
 //!   pixel filter's times its delta events' choices (a glass's Fresnel choice).
-//! - **Unbiased.** A path counts for glint sampling only where Newton from the pixel
-//!   centre finds it, which a camera sample's weight checks by solving again. Where one
+//! - **Unbiased.** A path counts for glint sampling only where Newton from its chain's
+//!   start finds it, which a camera sample's weight checks by solving again. Where one
 //!   pixel holds several solutions, the others are left to camera samples.
 //!
 //! **Where it applies.**
