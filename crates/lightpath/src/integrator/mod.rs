@@ -101,8 +101,9 @@ struct Sink<'b> {
     /// to the splat film (connect/light_tracing.rs); sized on first use.
     splat_acc: SampleAccumulator,
     /// The current camera sample's film position, where its pixel samples glints
-    /// (glints.rs).
+    /// (glints.rs), and that pixel's chains.
     glint: Option<glints::GlintSample>,
+    glint_pixel: glints::GlintPixel,
 }
 
 impl<'b> Sink<'b> {
@@ -119,6 +120,7 @@ impl<'b> Sink<'b> {
             light_path: connect::LightPath::default(),
             splat_acc: SampleAccumulator::new(0),
             glint: None,
+            glint_pixel: glints::GlintPixel::default(),
         }
     }
 }

@@ -105,7 +105,13 @@ impl Tracer<'_> {
         let cam = &scene.camera;
         let alpha_slot = Film::alpha_slot(job.run.len());
         let mut moments = job.moments;
-        let glint_pixel = self.glint_pixel(job.x, job.y);
+        let glints = match self.glint_pixel(job.x, job.y) {
+            Some(pixel) => {
+                out.glint_pixel = pixel;
+                true
+            }
+            None => false,
+        };
         let index = job.y as u64 * cam.width as u64 + job.x as u64;
         for s in job.first_sample + job.taken..job.first_sample + job.spp {
             let mut sampler = samplers.sample(s as u64);
@@ -119,8 +125,7 @@ impl Tracer<'_> {
             } else {
                 0.0
             };
-            out.glint = glint_pixel.map(|pixel| GlintSample {
-                pixel,
+            out.glint = glints.then_some(GlintSample {
                 film: film_pos,
                 lens: u_lens,
             });

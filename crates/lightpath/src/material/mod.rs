@@ -550,7 +550,8 @@ impl Bsdf {
     }
 
     /// Samples lobe `l`, chosen with probability `sel_l`, with `u_rest` its share of
-    /// `u_lobe`.
+    /// `u_lobe`. Inlined: `sample_at`'s body, as it was before glint sampling shared it.
+    #[inline(always)]
     fn sample_lobe(
         &self,
         sh: &Shading,
