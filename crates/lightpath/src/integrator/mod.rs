@@ -76,7 +76,8 @@ struct Tracer<'a> {
     /// Light tracing's film, if the render joins light subpaths to the camera
     /// (connect/light_tracing.rs).
     splats: Option<&'a Splats>,
-    /// The distant lights glint sampling aims at (glints.rs); empty: none.
+    /// The lights glint sampling aims at (small distant and sphere lights, glints.rs);
+    /// empty: none.
     glint_lights: Vec<u32>,
 }
 
